@@ -1,0 +1,296 @@
+/// \file cli/commands.cpp
+/// \brief The `plab` subcommands.
+#include "commands.hpp"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "plab/datasets.hpp"
+#include "plab/diff.hpp"
+#include "plab/errors.hpp"
+#include "plab/generate.hpp"
+#include "plab/io.hpp"
+#include "plab/runtime.hpp"
+#include "project.hpp"
+
+namespace plab::cli {
+namespace fs = std::filesystem;
+namespace {
+
+int g_status = 0;
+
+std::string two_digits(const std::string& stage) {
+  return stage.size() == 1 ? "0" + stage : stage;
+}
+
+void check_impl(const std::string& impl) {
+  if (impl != "solution" && impl != "student")
+    throw std::runtime_error("--impl must be 'solution' or 'student', not '" + impl + "'");
+}
+
+/// The stage program, or a clear error saying why there is none.
+std::string require_stage(const std::string& id, const std::string& impl) {
+  bool exists = false;
+  std::string known;
+  for (const auto& s : stages(impl)) {
+    exists = exists || s.id == id;
+    known += (known.empty() ? "" : ", ") + s.id;
+  }
+  const std::string tree = impl == "solution" ? "solutions/" : "stages/";
+  if (!exists)
+    throw std::runtime_error("there is no stage " + id + " in " + tree + " (stages: " +
+                             (known.empty() ? "none" : known) + ")");
+  const std::string program = stage_program(id, impl);
+  if (!fs::exists(program))
+    throw std::runtime_error("stage " + id + " (" + impl + ") is not built: its code in " + tree +
+                             " did not compile. See the errors with: cmake --build " + build_dir() +
+                             " --target plab-run-" + id + "-" + impl);
+  return program;
+}
+
+double wall_seconds(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::string temp_path(const std::string& stem) {
+  const fs::path dir = fs::path(build_dir()) / "tmp";
+  fs::create_directories(dir);
+  return (dir / (stem + "." + std::to_string(getpid()))).string();
+}
+
+void write_text(const std::string& path, const std::string& text) {
+  OutputFile f(path);
+  std::fwrite(text.data(), 1, text.size(), f.get());
+  f.commit();
+}
+
+}  // namespace
+
+int exit_status() { return g_status; }
+
+void add_run(CLI::App& app) {
+  struct Args {
+    std::string stage, impl, scene, out, digest;
+    int threads = 0;
+    std::uint64_t seed = kDefaultSeed;
+    bool quiet = false;
+  };
+  auto a = std::make_shared<Args>();
+  auto* c = app.add_subcommand("run", "Simulate SCENE with one stage; output to stdout (or --out), "
+                                      "a timing summary to stderr.");
+  c->add_option("--stage", a->stage, "stage number, e.g. 01")->required();
+  c->add_option("--impl", a->impl,
+                "solution (solutions/) or student (stages/); default: solution when solutions/ "
+                "exists, otherwise student");
+  c->add_option("--threads", a->threads, "threads for stages that use them");
+  c->add_option("--out", a->out, "write the output to this file (only when the run succeeds)");
+  c->add_option("--digest", a->digest, "write one state digest per step to this file");
+  c->add_option("--seed", a->seed, "seed for scenes without particle lines")->capture_default_str();
+  c->add_flag("--quiet", a->quiet, "no timing summary");
+  c->add_option("scene", a->scene, "scene file")->required()->check(CLI::ExistingFile);
+  c->callback([a] {
+    const std::string impl = a->impl.empty() ? default_impl() : a->impl;
+    check_impl(impl);
+    std::vector<std::string> args{require_stage(two_digits(a->stage), impl), a->scene, "--seed",
+                                  std::to_string(a->seed)};
+    if (a->threads > 0) args.insert(args.end(), {"--threads", std::to_string(a->threads)});
+    if (!a->out.empty()) args.insert(args.end(), {"--out", a->out});
+    if (!a->digest.empty()) args.insert(args.end(), {"--digest", a->digest});
+    if (a->quiet) args.emplace_back("--quiet");
+    exec_program(args);
+  });
+}
+
+void add_gen(CLI::App& app) {
+  auto g = std::make_shared<GenParams>();
+  auto mode = std::make_shared<std::string>("print");
+  auto speed = std::make_shared<std::string>();
+  auto out = std::make_shared<std::string>();
+  g->seed = kDefaultSeed;
+  auto* c = app.add_subcommand("gen", "Write a random scene (MODEL.md's Generation): the same bits "
+                                      "on every platform for the same arguments.");
+  c->add_option("--n", g->n, "number of particles")->required()->check(CLI::PositiveNumber);
+  c->add_option("--l", g->L, "box side L")->required()->check(CLI::PositiveNumber);
+  c->add_option("--r", g->r, "radius r")->required()->check(CLI::PositiveNumber);
+  c->add_option("--steps", g->steps, "steps S")->required()->check(CLI::NonNegativeNumber);
+  c->add_option("--mode", *mode, "print or perf")->check(CLI::IsMember({"print", "perf"}))
+      ->capture_default_str();
+  c->add_option("--seed", g->seed, "generator seed")->capture_default_str();
+  c->add_option("--speed", *speed, "speed range MIN:MAX (default: L/(8r) to L/4)");
+  c->add_option("--out", *out, "write the scene to this file instead of stdout");
+  c->callback([g, mode, speed, out] {
+    Scene s;
+    s.box = Box{g->L, g->r};
+    if (!(s.box.L > 2 * s.box.r)) throw std::runtime_error("--l must be larger than 2 * --r");
+    s.steps = g->steps;
+    s.mode = *mode == "perf" ? Mode::kPerf : Mode::kPrint;
+    SpeedRange range = default_speeds(s.box);
+    if (!speed->empty()) {
+      const auto colon = speed->find(':');
+      try {
+        if (colon == std::string::npos) throw std::invalid_argument("no colon");
+        range = SpeedRange{std::stod(speed->substr(0, colon)), std::stod(speed->substr(colon + 1))};
+      } catch (const std::exception&) {
+        throw std::runtime_error("--speed expects MIN:MAX, e.g. 1:5, not '" + *speed + "'");
+      }
+      if (!(range.min >= 0 && range.max >= range.min))
+        throw std::runtime_error("--speed needs 0 <= MIN <= MAX");
+    }
+    s.particles = generate(s.box, static_cast<std::size_t>(g->n), g->seed, range);
+    write_text(*out, format_scene(s));
+  });
+}
+
+void add_diff(CLI::App& app) {
+  auto files = std::make_shared<std::vector<std::string>>();
+  auto* c = app.add_subcommand("diff", "Compare two outputs (or digest files): exit 0 when equal, "
+                                       "otherwise show the first differing step, particle and "
+                                       "field, and count the differing lines.");
+  c->add_option("files", *files, "EXPECTED ACTUAL")->required()->expected(2)
+      ->check(CLI::ExistingFile);
+  c->callback([files] {
+    const auto d = first_difference(read_file((*files)[0]), read_file((*files)[1]));
+    if (!d) {
+      std::printf("equal\n");
+      return;
+    }
+    std::printf("%s\n", d->describe().c_str());
+    g_status = 1;
+  });
+}
+
+void add_golden(CLI::App& app) {
+  auto check = std::make_shared<bool>(false);
+  auto only = std::make_shared<std::vector<std::string>>();
+  auto* c = app.add_subcommand("golden", "Regenerate every golden file (and generated scene) from "
+                                         "the reference solution, or --check that the committed "
+                                         "ones are what it produces now.");
+  c->add_flag("--check", *check, "compare instead of writing; exit 1 if anything drifted");
+  c->add_option("--only", *only, "only these scenes (names from datasets/manifest.json)");
+  c->callback([check, only] {
+    const Manifest m = load_manifest(source_dir() + "/datasets");
+    const std::string ref = require_stage(m.reference_stage, "solution");
+    int drifted = 0;
+    int done = 0;
+    for (const Dataset& d : m.datasets) {
+      if (!only->empty() && std::find(only->begin(), only->end(), d.name) == only->end()) continue;
+      const auto t0 = std::chrono::steady_clock::now();
+      std::printf("%-28s N=%-6lld ", d.name.c_str(), d.particles);
+      std::fflush(stdout);
+      std::vector<std::string> problems;
+      if (d.gen) {
+        const std::string scene = format_scene(generate_scene(*d.gen));
+        if (!*check) {
+          write_text(m.scene_path(d), scene);
+        } else if (!fs::exists(m.scene_path(d)) || read_file(m.scene_path(d)) != scene) {
+          problems.push_back("scene file differs from what the generator makes now");
+        }
+      }
+      const std::string out = temp_path(d.name + ".out");
+      const std::string dig = temp_path(d.name + ".digest");
+      const int rc = run_program({ref, m.scene_path(d), "--quiet", "--out", out, "--digest", dig});
+      if (rc != 0) throw std::runtime_error("the reference failed on " + m.scene_path(d));
+      for (const auto& [made, golden] : {std::pair{out, m.golden_path(d)}, {dig, m.digest_path(d)}}) {
+        if (!*check) {
+          fs::rename(made, golden);
+          continue;
+        }
+        const std::string want = fs::exists(golden) ? read_file(golden) : std::string();
+        if (const auto diff = first_difference(want, read_file(made)))
+          problems.push_back(fs::path(golden).filename().string() + ": " + diff->describe());
+        fs::remove(made);
+      }
+      ++done;
+      drifted += problems.empty() ? 0 : 1;
+      std::printf("%s (%.1f s)\n", problems.empty() ? (*check ? "ok" : "written") : "DRIFTED",
+                  wall_seconds(t0));
+      for (const auto& p : problems) std::printf("    %s\n", p.c_str());
+    }
+    std::printf("%d scenes %s, %d drifted (reference: stage %s solution)\n", done,
+                *check ? "checked" : "written", drifted, m.reference_stage.c_str());
+    g_status = drifted ? 1 : 0;
+  });
+}
+
+void add_test(CLI::App& app) {
+  auto impl = std::make_shared<std::string>();
+  auto stage = std::make_shared<std::string>();
+  auto long_too = std::make_shared<bool>(false);
+  auto* c = app.add_subcommand("test", "Run the test suite (GoogleTest through CTest). Default: "
+                                       "the kit, the solutions and the starting-point checks in "
+                                       "the instructor's copy; the kit and your stages otherwise.");
+  c->add_option("--impl", *impl, "solution or student (default as for run)");
+  c->add_option("--stage", *stage, "only this stage's tests, e.g. 01");
+  c->add_flag("--long", *long_too, "also the long tests (large scenes, several minutes)");
+  c->callback([impl, stage, long_too] {
+    const std::string which = impl->empty() ? default_impl() : *impl;
+    check_impl(which);
+    std::vector<std::string> args{"ctest", "--test-dir", build_dir(), "--output-on-failure",
+                                  "-j", "2"};
+    if (!stage->empty()) {
+      args.insert(args.end(), {"-L", "^stage" + two_digits(*stage) + "$", "-L", "^" + which + "$"});
+    } else if (which == "solution") {
+      args.insert(args.end(), {"-L", "^(kit|solution|starting-point)$"});
+    } else {
+      args.insert(args.end(), {"-L", "^(kit|student)$"});
+    }
+    if (!*long_too) args.insert(args.end(), {"-LE", "^long$"});
+    g_status = run_program(args);
+  });
+}
+
+void add_docs(CLI::App& app) {
+  auto* c = app.add_subcommand("docs", "Build the HTML docs (Doxygen with Graphviz; warnings are "
+                                       "errors) into build/docs/html.");
+  c->callback([] {
+    g_status = run_program({"cmake", "--build", build_dir(), "--target", "docs"});
+    if (g_status == 0) std::printf("docs: %s/docs/html/index.html\n", build_dir().c_str());
+  });
+}
+
+void add_demo(CLI::App& app) {
+  auto* c = app.add_subcommand("demo", "Run the reference solutions on the course scenes and a "
+                                       "random 1000-particle scene, check them against the golden "
+                                       "files, and print the timings.");
+  c->callback([] {
+    const Manifest m = load_manifest(source_dir() + "/datasets");
+    std::printf("%-16s %6s %5s  %-6s %10s  %s\n", "scene", "N", "S", "stage", "time (s)",
+                "golden");
+    int failures = 0;
+    for (const Dataset& d : m.datasets) {
+      if (d.origin != "course" && d.name != "random-1000") continue;
+      const Scene scene = parse_scene(read_file(m.scene_path(d)), m.scene_path(d));
+      for (const StageDir& s : stages("solution")) {
+        if (s.id == "01" && d.size != "small") continue;  // O(N^3): the demo keeps it to small scenes
+        const std::string program = stage_program(s.id, "solution");
+        if (!fs::exists(program)) continue;
+        const std::string out = temp_path(d.name + ".demo");
+        const auto t0 = std::chrono::steady_clock::now();
+        const int rc = run_program({program, m.scene_path(d), "--quiet", "--out", out});
+        const double t = wall_seconds(t0);
+        std::string verdict = "FAILED (exit " + std::to_string(rc) + ")";
+        if (rc == 0) {
+          const auto diff = first_difference(read_file(m.golden_path(d)), read_file(out));
+          verdict = diff ? "DIFFERS: " + diff->describe() : "identical";
+          fs::remove(out);
+        }
+        failures += verdict == "identical" ? 0 : 1;
+        std::printf("%-16s %6lld %5lld  %-6s %10.3f  %s\n", d.name.c_str(), d.particles,
+                    scene.steps, s.id.c_str(), t, verdict.c_str());
+        std::fflush(stdout);
+      }
+    }
+    std::printf(failures ? "%d runs differ from the golden files\n"
+                         : "every run is identical to its golden file\n",
+                failures);
+    g_status = failures ? 1 : 0;
+  });
+}
+
+}  // namespace plab::cli

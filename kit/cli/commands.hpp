@@ -1,0 +1,20 @@
+/// \file cli/commands.hpp
+/// \brief The `plab` subcommands, each registered on the CLI11 app by one function.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace plab::cli {
+
+void add_run(CLI::App& app);     //!< `plab run`: simulate a scene with one stage
+void add_gen(CLI::App& app);     //!< `plab gen`: write a reproducible random scene
+void add_diff(CLI::App& app);    //!< `plab diff`: where two outputs first differ
+void add_golden(CLI::App& app);  //!< `plab golden`: regenerate or check the golden files
+void add_test(CLI::App& app);    //!< `plab test`: run the test suite with CTest
+void add_docs(CLI::App& app);    //!< `plab docs`: build the HTML docs with Doxygen
+void add_demo(CLI::App& app);    //!< `plab demo`: the reference on the course and demo scenes
+
+/// The exit status the chosen subcommand asked for.
+int exit_status();
+
+}  // namespace plab::cli

@@ -1,0 +1,27 @@
+/// \file cli/main.cpp
+/// \brief `plab`: the kit's command line (run, gen, diff, golden, test, docs, demo).
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+
+#include "commands.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"plab: the particle-lab kit. Simulate scenes with any stage, make scenes, compare "
+               "outputs, check golden files, run the tests, build the docs."};
+  app.require_subcommand(1);
+  plab::cli::add_run(app);
+  plab::cli::add_gen(app);
+  plab::cli::add_diff(app);
+  plab::cli::add_golden(app);
+  plab::cli::add_test(app);
+  plab::cli::add_docs(app);
+  plab::cli::add_demo(app);
+  try {
+    CLI11_PARSE(app, argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  }
+  return plab::cli::exit_status();
+}

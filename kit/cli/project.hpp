@@ -1,0 +1,35 @@
+/// \file cli/project.hpp
+/// \brief Where things are (source tree, build tree, stage programs) and running other programs.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace plab::cli {
+
+/// The project's source folder (where `stages/`, `solutions/`, `datasets/` live).
+std::string source_dir();
+/// The build folder the CLI was built in.
+std::string build_dir();
+/// The folder holding the CLI and the stage programs.
+std::string bin_dir();
+
+/// One stage found in the source tree.
+struct StageDir {
+  std::string id;    //!< two digits, e.g. `01`
+  std::string name;  //!< e.g. `naive`
+};
+/// The stages of one tree (`solution` or `student`), in order.
+std::vector<StageDir> stages(const std::string& impl);
+/// `solution` when the kit has `solutions/` (the instructor's copy), `student` otherwise.
+std::string default_impl();
+/// The program that runs stage `id` of `impl` (it may not exist if the stage did not compile).
+std::string stage_program(const std::string& id, const std::string& impl);
+
+/// Runs a program and waits; stdout goes to `stdout_path` when given. Returns the exit status
+/// (128 + signal when killed by a signal, 127 when it could not be started).
+int run_program(const std::vector<std::string>& args, const std::string& stdout_path = "");
+/// Replaces this process with the program (does not return unless it fails).
+[[noreturn]] void exec_program(const std::vector<std::string>& args);
+
+}  // namespace plab::cli

@@ -1,0 +1,38 @@
+/// \file driver.hpp
+/// \brief The kit's driver: runs a stage's step() over a scene, printing and timing.
+#pragma once
+
+#include <cstdio>
+#include <string>
+
+#include "plab/io.hpp"
+#include "plab/scene.hpp"
+
+namespace plab {
+
+/// A stage's step function (see stage.hpp).
+using StepFn = void (*)(const Box&, Particles&);
+
+/// What a run measured.
+struct RunStats {
+  double step_seconds = 0;     //!< time spent inside step() (not reading or printing)
+  double total_seconds = 0;    //!< the whole simulation, printing included
+  long long pair_events = 0;   //!< pair collisions counted over the run
+  long long wall_events = 0;   //!< wall collisions counted over the run
+};
+
+/// Options of a run.
+struct RunOptions {
+  std::FILE* digest = nullptr;  //!< where to write one digest line per step (optional)
+  bool progress = false;        //!< show progress on stderr
+};
+
+/// Runs `scene` with `step`, writing MODEL.md's output to `out`: in print mode the blocks of steps
+/// 0..S-1 then the final block (step S, with `pc wc`); in perf mode the step-0 block and the final
+/// block (only the final block when S = 0).
+RunStats simulate(Scene scene, StepFn step, OutputWriter& out, const RunOptions& options = {});
+
+/// Runs a scene and returns its whole output as text (for tests).
+std::string simulate_to_string(const Scene& scene, StepFn step);
+
+}  // namespace plab

@@ -1,0 +1,231 @@
+/// \file model.hpp
+/// \brief The simulation model of MODEL.md, written once: every formula every stage uses.
+///
+/// Each function is a small inline function marked ::PLAB_HD, so the same code compiles for the
+/// CPU and, under nvcc, for the GPU. Every stage and every test calls these functions; no stage
+/// types a formula again. Bit-identical results across stages and devices follow from three
+/// rules: every operation below is one IEEE-754 double operation evaluated in the order written,
+/// the project is compiled without FMA contraction (`-ffp-contract=off`, nvcc `--fmad=false`),
+/// and nothing is compiled with fast-math. See \ref model_page for the equations.
+#pragma once
+
+#include <math.h>  // sqrt, usable in both host and device code
+
+#if defined(__CUDACC__)
+/// Marks a function as callable from host and device code (empty outside nvcc).
+#define PLAB_HD __host__ __device__
+#else
+#define PLAB_HD
+#endif
+
+namespace plab::model {
+
+/// Positive infinity: the time of an event that never happens.
+PLAB_HD inline double never() { return __builtin_huge_val(); }
+
+/// The two kinds of event; the value is the second component of the event key.
+enum EventKind : int {
+  kWall = 0,  //!< a particle hits a wall (wins ties against pairs)
+  kPair = 1,  //!< two particles collide
+};
+
+/// One candidate event: a small plain struct, ordered by key_less().
+struct Event {
+  double t;  //!< time from the step start, in steps
+  int kind;  //!< ::kWall or ::kPair
+  int lo;    //!< particle index (wall) or lower index of the pair
+  int hi;    //!< same as `lo` for a wall, higher index for a pair
+};
+
+/// The strict total order of MODEL.md: by time, then wall before pair, then indices.
+PLAB_HD inline bool key_less(const Event& a, const Event& b) {
+  if (a.t != b.t) return a.t < b.t;
+  if (a.kind != b.kind) return a.kind < b.kind;
+  if (a.lo != b.lo) return a.lo < b.lo;
+  return a.hi < b.hi;
+}
+
+/// A wall event for particle `p` at time `t`.
+PLAB_HD inline Event wall_event_key(double t, int p) { return Event{t, kWall, p, p}; }
+/// A pair event for particles `i < j` at time `t`.
+PLAB_HD inline Event pair_event_key(double t, int i, int j) { return Event{t, kPair, i, j}; }
+
+/// Time for a centre at `pos` moving at `v` along one axis to reach a wall, start-of-step form:
+/// \f$ t = (pos - r)/(0 - v) \f$ if \f$v < 0\f$, else \f$ ((L - pos) - r)/v \f$; \f$+\infty\f$ if \f$v = 0\f$.
+PLAB_HD inline double axis_wall_time(double pos, double v, double L, double r) {
+  if (v == 0) return never();
+  return (v < 0) ? (pos - r) / (0 - v) : ((L - pos) - r) / v;
+}
+
+/// The wall times of one particle along each axis.
+struct WallTimes {
+  double tx;  //!< time to reach a wall along x (steps; may be negative, +inf if vx == 0)
+  double ty;  //!< time to reach a wall along y
+};
+
+/// Both axis wall times of a particle, from the start-of-step state.
+PLAB_HD inline WallTimes wall_times(double x, double y, double vx, double vy, double L, double r) {
+  return WallTimes{axis_wall_time(x, vx, L, r), axis_wall_time(y, vy, L, r)};
+}
+
+/// The wall time of a particle: \f$ t_w = \min(t_x, t_y) \f$, written `(ty < tx) ? ty : tx`.
+PLAB_HD inline double wall_time(WallTimes w) { return (w.ty < w.tx) ? w.ty : w.tx; }
+
+/// The wall time of a particle from its start-of-step state.
+PLAB_HD inline double wall_time(double x, double y, double vx, double vy, double L, double r) {
+  return wall_time(wall_times(x, y, vx, vy, L, r));
+}
+
+/// Pair time of particles `i < j` (pass `i` first): the earliest \f$t\f$ with
+/// \f$ |\Delta p + t \Delta v| = 2r \f$, from
+/// \f$ c = (\Delta x^2 + \Delta y^2) - (4r)r \f$, \f$ b = 2(\Delta x \Delta v_x + \Delta y \Delta v_y) \f$,
+/// \f$ a = \Delta v_x^2 + \Delta v_y^2 \f$, \f$ D = b^2 - (4a)c \f$.
+/// Returns \f$ t_1 = (-\sqrt D - b)/(2a) \f$ when positive, 0 when the pair overlaps now
+/// (\f$ t_1 \le 0 < t_2 \f$), and +inf when there is no event (\f$a = 0\f$, \f$D < 0\f$, or both roots past).
+PLAB_HD inline double pair_time(double xi, double yi, double vxi, double vyi,
+                                double xj, double yj, double vxj, double vyj, double r) {
+  const double dx = xi - xj;
+  const double dy = yi - yj;
+  const double dvx = vxi - vxj;
+  const double dvy = vyi - vyj;
+  const double c = (dx * dx + dy * dy) - (4 * r) * r;
+  const double b = 2 * (dx * dvx + dy * dvy);
+  const double a = dvx * dvx + dvy * dvy;
+  const double disc = b * b - (4 * a) * c;
+  if (a == 0 || disc < 0) return never();
+  const double t1 = (-sqrt(disc) - b) / (2 * a);
+  if (t1 > 0) return t1;
+  const double t2 = (sqrt(disc) - b) / (2 * a);
+  if (t2 > 0) return 0.0;
+  return never();
+}
+
+/// Whether an event at time `t` happens in this step (the window is half-open: \f$ t < 1 \f$).
+PLAB_HD inline bool in_step(double t) { return t < 1; }
+
+/// A particle without an event moves a whole step: \f$ x \leftarrow x + v_x,\ y \leftarrow y + v_y \f$.
+PLAB_HD inline void free_move(double& x, double& y, double vx, double vy) {
+  x = x + vx;
+  y = y + vy;
+}
+
+/// Applies a wall event to one particle (branchy form of MODEL.md), from its start-of-step state:
+/// move to the first wall, reflect, then move on for the rest of the step, stopping at the second
+/// wall if it is reached; at an exact corner both axes reflect. Increments `wc`.
+PLAB_HD inline void wall_event(double& x, double& y, double& vx, double& vy, long long& wc,
+                               double L, double r) {
+  const WallTimes w = wall_times(x, y, vx, vy, L, r);
+  const double tx = w.tx;
+  const double ty = w.ty;
+  if (tx < ty) {
+    x = x + tx * vx;
+    y = y + tx * vy;
+    vx = -vx;
+    const double m = (ty < 1) ? (ty - tx) : (1 - tx);
+    x = x + m * vx;
+    y = y + m * vy;
+  } else if (tx == ty) {
+    x = x + tx * vx;
+    y = y + tx * vy;
+    vx = -vx;
+    vy = -vy;
+    x = x + (1 - tx) * vx;
+    y = y + (1 - tx) * vy;
+  } else {
+    x = x + ty * vx;
+    y = y + ty * vy;
+    vy = -vy;
+    const double m = (tx < 1) ? (tx - ty) : (1 - ty);
+    x = x + m * vx;
+    y = y + m * vy;
+  }
+  wc = wc + 1;
+}
+
+/// The branchless wall event (used by the CUDA stages): \f$ e = \min(t_x, t_y) \f$, reflect every
+/// axis whose time equals \f$e\f$, then move \f$ \min(1, t_{later}) - e \f$ with \f$ t_{later} = 1 \f$
+/// at a corner. Gives the same bits as wall_event(); the tests check it.
+PLAB_HD inline void wall_event_branchless(double& x, double& y, double& vx, double& vy,
+                                          long long& wc, double L, double r) {
+  const WallTimes w = wall_times(x, y, vx, vy, L, r);
+  const double e = wall_time(w);
+  const bool flip_x = (w.tx == e);
+  const bool flip_y = (w.ty == e);
+  const double later = (flip_x && flip_y) ? 1.0 : (flip_x ? w.ty : w.tx);
+  const double m = ((later < 1) ? later : 1.0) - e;
+  x = x + e * vx;
+  y = y + e * vy;
+  vx = flip_x ? -vx : vx;
+  vy = flip_y ? -vy : vy;
+  x = x + m * vx;
+  y = y + m * vy;
+  wc = wc + 1;
+}
+
+/// Time along one axis to a wall after a pair collision (note the association `((L - r) - pos)`,
+/// which differs from axis_wall_time() and rounds differently: both are the original's).
+PLAB_HD inline double axis_rest_wall_time(double pos, double v, double L, double r) {
+  if (v == 0) return never();
+  return (v < 0) ? (pos - r) / (0 - v) : ((L - r) - pos) / v;
+}
+
+/// Moves a particle for the rest of the step after a collision at time `t`, stopping at a wall
+/// if one is reached before the step ends.
+PLAB_HD inline void rest_of_step(double& x, double& y, double vx, double vy, double t,
+                                 double L, double r) {
+  const double wx = axis_rest_wall_time(x, vx, L, r);
+  const double wy = axis_rest_wall_time(y, vy, L, r);
+  const double rest = 1 - t;
+  const double move = (wx >= rest && wy >= rest) ? rest : ((wy < wx) ? wy : wx);
+  x = x + move * vx;
+  y = y + move * vy;
+}
+
+/// A velocity component that equals zero is stored as +0.0.
+PLAB_HD inline double positive_zero(double v) { return (v == 0) ? 0.0 : v; }
+
+/// Applies the pair event of particles `i < j` at time `t`, from their start-of-step state:
+/// move both to time `t`, exchange the velocity components along the normal
+/// \f$ n = (p_i - p_j)/|p_i - p_j| \f$ (equal masses), then finish the step with rest_of_step().
+/// When the centres coincide at `t` the event is dropped: both move freely, nothing is counted.
+/// \return true when the collision happened (and `pci`, `pcj` were incremented).
+PLAB_HD inline bool pair_event(double& xi, double& yi, double& vxi, double& vyi, long long& pci,
+                               double& xj, double& yj, double& vxj, double& vyj, long long& pcj,
+                               double t, double L, double r) {
+  double pxi = xi + t * vxi;
+  double pyi = yi + t * vyi;
+  double pxj = xj + t * vxj;
+  double pyj = yj + t * vyj;
+  double nx = pxi - pxj;
+  double ny = pyi - pyj;
+  const double m = sqrt(nx * nx + ny * ny);
+  if (m == 0) {
+    free_move(xi, yi, vxi, vyi);
+    free_move(xj, yj, vxj, vyj);
+    return false;
+  }
+  nx = nx / m;
+  ny = ny / m;
+  const double tx = -ny;
+  const double ty = nx;
+  const double ain = nx * vxi + ny * vyi;
+  const double ait = tx * vxi + ty * vyi;
+  const double ajn = nx * vxj + ny * vyj;
+  const double ajt = tx * vxj + ty * vyj;
+  // Equal masses: the normal components are exchanged (ajn goes to i, ain to j).
+  vxi = positive_zero(ajn * nx + ait * tx);
+  vyi = positive_zero(ajn * ny + ait * ty);
+  vxj = positive_zero(ain * nx + ajt * tx);
+  vyj = positive_zero(ain * ny + ajt * ty);
+  rest_of_step(pxi, pyi, vxi, vyi, t, L, r);
+  rest_of_step(pxj, pyj, vxj, vyj, t, L, r);
+  xi = pxi;
+  yi = pyi;
+  xj = pxj;
+  yj = pyj;
+  pci = pci + 1;
+  pcj = pcj + 1;
+  return true;
+}
+
+}  // namespace plab::model

@@ -1,0 +1,71 @@
+/// \file plan.hpp
+/// \brief The events chosen for one step (at most one per particle), and applying them.
+#pragma once
+
+#include <vector>
+
+#include "plab/model.hpp"
+#include "plab/scene.hpp"
+
+namespace plab {
+
+/// Each particle's event for this step, one array per field.
+struct Plan {
+  static constexpr int kFree = -1;  //!< `partner[i]`: no event, particle `i` moves freely
+  static constexpr int kWall = -2;  //!< `partner[i]`: particle `i` hits a wall
+  std::vector<int> partner;   //!< kFree, kWall, or the index of the other particle of a pair
+  std::vector<double> time;   //!< the event time (pairs; unused otherwise)
+
+  /// Clears the plan for `n` particles: every particle free.
+  void reset(std::size_t n) {
+    partner.assign(n, kFree);
+    time.assign(n, 0.0);
+  }
+  /// Whether particle `i` already has an event.
+  [[nodiscard]] bool taken(int i) const { return partner[i] != kFree; }
+  /// Records an accepted event (wall or pair) for its particles.
+  void accept(const model::Event& e) {
+    if (e.kind == model::kWall) {
+      partner[e.lo] = kWall;
+    } else {
+      partner[e.lo] = e.hi;
+      partner[e.hi] = e.lo;
+      time[e.lo] = e.t;
+      time[e.hi] = e.t;
+    }
+  }
+};
+
+/// Applies particle `i`'s planned event. A pair is applied by its lower index only, so calling
+/// this for every `i` in any order, or in parallel, writes each particle exactly once.
+inline void apply_one(const Box& box, Particles& p, const Plan& plan, int i) {
+  const int j = plan.partner[i];
+  if (j == Plan::kFree) {
+    model::free_move(p.x[i], p.y[i], p.vx[i], p.vy[i]);
+  } else if (j == Plan::kWall) {
+    model::wall_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], box.L, box.r);
+  } else if (i < j) {
+    model::pair_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.pc[i], p.x[j], p.y[j], p.vx[j], p.vy[j],
+                      p.pc[j], plan.time[i], box.L, box.r);
+  }
+}
+
+/// Applies every planned event (sequentially).
+inline void apply(const Box& box, Particles& p, const Plan& plan) {
+  const int n = static_cast<int>(p.size());
+  for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);
+}
+
+/// The wall event of particle `i` as a candidate, from its start-of-step state.
+inline model::Event wall_candidate(const Box& box, const Particles& p, int i) {
+  return model::wall_event_key(model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r), i);
+}
+
+/// The pair event of particles `i < j` as a candidate, from their start-of-step state.
+inline model::Event pair_candidate(const Box& box, const Particles& p, int i, int j) {
+  return model::pair_event_key(model::pair_time(p.x[i], p.y[i], p.vx[i], p.vy[i], p.x[j], p.y[j],
+                                                p.vx[j], p.vy[j], box.r),
+                               i, j);
+}
+
+}  // namespace plab

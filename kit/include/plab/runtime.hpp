@@ -1,0 +1,39 @@
+/// \file runtime.hpp
+/// \brief What programs around the stages need: all-or-nothing output files, threads, terminals.
+#pragma once
+
+#include <cstdio>
+#include <string>
+
+namespace plab {
+
+/// An output file written under a temporary name and renamed into place by commit(), so a run
+/// that fails never leaves a partial file that looks complete. An empty path means stdout.
+class OutputFile {
+ public:
+  /// Opens `path` for writing (stdout when empty, or nothing when empty and `optional`).
+  /// \throws InputError when the file cannot be created
+  explicit OutputFile(const std::string& path, bool optional = false);
+  ~OutputFile();
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
+  /// The stream to write to (null when optional and not asked for).
+  [[nodiscard]] std::FILE* get() const { return file_; }
+  /// Closes the file and moves it into place.
+  /// \throws InputError when writing failed (disk full, ...)
+  void commit();
+
+ private:
+  std::string path_;
+  std::string temp_;
+  std::FILE* file_ = nullptr;
+};
+
+/// Sets the number of OpenMP threads (0: leave the default, all cores). No-op without OpenMP.
+void set_threads(int threads);
+/// The number of threads a parallel region would use now (1 without OpenMP).
+int get_threads();
+/// Whether stderr is a terminal (progress is shown only there).
+bool stderr_is_terminal();
+
+}  // namespace plab

@@ -1,0 +1,55 @@
+/// \file runner/main.cpp
+/// \brief The program built for each stage (`plab-run-NN-IMPL`): reads a scene, runs the stage's
+/// step() with the kit's driver, writes the output. `plab run` starts it.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <string>
+
+#include "plab/driver.hpp"
+#include "plab/errors.hpp"
+#include "plab/generate.hpp"
+#include "plab/io.hpp"
+#include "plab/runtime.hpp"
+#include "plab/stage.hpp"
+
+int main(int argc, char** argv) {
+  std::string scene_path, out_path, digest_path;
+  int threads = 0;
+  std::uint64_t seed = plab::kDefaultSeed;
+  bool quiet = false;
+  CLI::App app{"Runs stage " PLAB_STAGE_ID " (" PLAB_IMPL ") on a scene and writes MODEL.md's output."};
+  app.add_option("scene", scene_path, "scene file (MODEL.md's input format)")->required();
+  app.add_option("--out", out_path, "write the output here instead of stdout (all or nothing)");
+  app.add_option("--digest", digest_path, "write one state digest per step to this file");
+  app.add_option("--threads", threads, "threads for stages that use them (default: all cores)");
+  app.add_option("--seed", seed, "seed for scenes without particle lines")->capture_default_str();
+  app.add_flag("--quiet", quiet, "no timing summary on stderr");
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    plab::set_threads(threads);
+    const plab::Scene scene = plab::load_scene(scene_path, seed);
+    plab::OutputFile out(out_path);
+    plab::OutputFile digest(digest_path, /*optional=*/true);
+    plab::OutputWriter writer(out.get());
+    const plab::RunStats stats = plab::simulate(
+        scene, plab::step, writer, {digest.get(), !quiet && plab::stderr_is_terminal()});
+    out.commit();
+    digest.commit();
+    if (!quiet)
+      std::fprintf(stderr,
+                   "stage %s (%s): N=%zu S=%lld threads=%d: %.3f s in steps (%.3f ms/step), "
+                   "%.3f s total; %lld pair and %lld wall collisions\n",
+                   PLAB_STAGE_ID, PLAB_IMPL, scene.particles.size(), scene.steps,
+                   plab::get_threads(), stats.step_seconds,
+                   scene.steps ? 1e3 * stats.step_seconds / scene.steps : 0.0, stats.total_seconds,
+                   stats.pair_events, stats.wall_events);
+    return 0;
+  } catch (const plab::NotDone& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 3;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  }
+}

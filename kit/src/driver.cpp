@@ -1,0 +1,79 @@
+/// \file driver.cpp
+/// \brief The loop every stage runs in: print, step, time, repeat.
+#include "plab/driver.hpp"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <numeric>
+
+namespace plab {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+long long sum(const std::vector<long long>& v) { return std::accumulate(v.begin(), v.end(), 0LL); }
+
+/// Progress on stderr, at most a few times a second, only after the run has taken a moment.
+class Progress {
+ public:
+  Progress(bool on, long long total) : on_(on), total_(total), start_(Clock::now()) {}
+  void update(long long done) {
+    if (!on_) return;
+    const double t = seconds_since(start_);
+    if (t < 1.0 || t - last_ < 0.25) return;
+    last_ = t;
+    std::fprintf(stderr, "\r  step %lld/%lld (%.0f%%), %.1f s, about %.0f s left ", done, total_,
+                 100.0 * done / total_, t, t / done * (total_ - done));
+    shown_ = true;
+  }
+  ~Progress() {
+    if (shown_) std::fprintf(stderr, "\r%60s\r", "");
+  }
+
+ private:
+  bool on_;
+  long long total_;
+  Clock::time_point start_;
+  double last_ = 0;
+  bool shown_ = false;
+};
+
+}  // namespace
+
+RunStats simulate(Scene scene, StepFn step, OutputWriter& out, const RunOptions& options) {
+  RunStats stats;
+  const auto t0 = Clock::now();
+  Particles& p = scene.particles;
+  const long long steps = scene.steps;
+  const long long pc0 = sum(p.pc);
+  const long long wc0 = sum(p.wc);
+  Progress progress(options.progress, steps);
+  if (options.digest) std::fputs(digest_line(0, digest(p)).c_str(), options.digest);
+  for (long long s = 0; s < steps; ++s) {
+    if (scene.mode == Mode::kPrint || s == 0) out.block(s, p, false);
+    const auto ts = Clock::now();
+    step(scene.box, p);
+    stats.step_seconds += seconds_since(ts);
+    if (options.digest) std::fputs(digest_line(s + 1, digest(p)).c_str(), options.digest);
+    progress.update(s + 1);
+  }
+  out.block(steps, p, true);
+  out.flush();
+  stats.pair_events = (sum(p.pc) - pc0) / 2;
+  stats.wall_events = sum(p.wc) - wc0;
+  stats.total_seconds = seconds_since(t0);
+  return stats;
+}
+
+std::string simulate_to_string(const Scene& scene, StepFn step) {
+  OutputWriter out(nullptr);
+  simulate(scene, step, out);
+  return out.text();
+}
+
+}  // namespace plab

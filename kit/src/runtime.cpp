@@ -1,0 +1,67 @@
+/// \file runtime.cpp
+/// \brief Output files renamed into place, thread control, terminal detection.
+#include "plab/runtime.hpp"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
+
+#include "plab/errors.hpp"
+
+namespace plab {
+
+OutputFile::OutputFile(const std::string& path, bool optional) : path_(path) {
+  if (path.empty()) {
+    file_ = optional ? nullptr : stdout;
+    return;
+  }
+  temp_ = path + ".partial";
+  file_ = std::fopen(temp_.c_str(), "wb");
+  if (!file_) throw InputError(path + ": cannot create the file (" + std::strerror(errno) + ")");
+}
+
+OutputFile::~OutputFile() {
+  if (!temp_.empty() && file_) {
+    std::fclose(file_);
+    std::remove(temp_.c_str());
+  }
+}
+
+void OutputFile::commit() {
+  if (!file_) return;
+  if (temp_.empty()) {
+    if (std::fflush(file_) != 0) throw InputError("cannot write the output: " + std::string(std::strerror(errno)));
+    return;
+  }
+  const bool ok = std::fflush(file_) == 0 && std::ferror(file_) == 0;
+  std::fclose(file_);
+  file_ = nullptr;
+  if (!ok || std::rename(temp_.c_str(), path_.c_str()) != 0) {
+    std::remove(temp_.c_str());
+    throw InputError(path_ + ": cannot write the file (" + std::strerror(errno) + ")");
+  }
+  temp_.clear();
+}
+
+void set_threads([[maybe_unused]] int threads) {
+#if defined(_OPENMP)
+  if (threads > 0) omp_set_num_threads(threads);
+#endif
+}
+
+int get_threads() {
+#if defined(_OPENMP)
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+
+bool stderr_is_terminal() { return isatty(STDERR_FILENO) != 0; }
+
+}  // namespace plab
