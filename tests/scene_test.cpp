@@ -43,6 +43,8 @@ const BadCase kBad[] = {
     {"y_outside", "1\n10\n1\n5\nprint\n0 5 9.0001 1 1\n", "6: expected a centre y inside [r, L-r] = [1.000000, 9.000000], found '9.0001'"},
 };
 
+void PrintTo(const BadCase& c, std::ostream* os) { *os << c.name; }
+
 class BadScene : public testing::TestWithParam<BadCase> {};
 
 TEST_P(BadScene, NamesFileLineAndWhatWasExpected) {
