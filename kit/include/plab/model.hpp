@@ -1,7 +1,7 @@
 /// \file model.hpp
 /// \brief The simulation model of MODEL.md, written once: every formula every stage uses.
 ///
-/// Each function is a small inline function marked ::PLAB_HD, so the same code compiles for the
+/// Each function is a small inline function marked `PLAB_HD`, so the same code compiles for the
 /// CPU and, under nvcc, for the GPU. Every stage and every test calls these functions; no stage
 /// types a formula again. Bit-identical results across stages and devices follow from three
 /// rules: every operation below is one IEEE-754 double operation evaluated in the order written,
@@ -32,7 +32,7 @@ enum EventKind : int {
 /// One candidate event: a small plain struct, ordered by key_less().
 struct Event {
   double t;  //!< time from the step start, in steps
-  int kind;  //!< ::kWall or ::kPair
+  int kind;  //!< plab::model::kWall or plab::model::kPair
   int lo;    //!< particle index (wall) or lower index of the pair
   int hi;    //!< same as `lo` for a wall, higher index for a pair
 };
