@@ -18,6 +18,7 @@
 #include "plab/driver.hpp"
 #include "plab/generate.hpp"
 #include "plab/io.hpp"
+#include "plab/runtime.hpp"
 #include "plab/stage.hpp"
 
 namespace plab {
@@ -116,10 +117,20 @@ TEST_P(AgainstOtherStage, SameText) {
   }
   const std::string command = other + " --quiet --out " + out_file + " " + scene_file;
   ASSERT_EQ(std::system(command.c_str()), 0) << command;
-  expect_same(plab::read_file(out_file), run_here(scene).output,
-              "stage " PLAB_OTHER_ID " on a fresh scene (plab gen --n " + std::to_string(g.n) +
-                  " --l " + std::to_string(g.L) + " --r " + std::to_string(g.r) + " --steps " +
-                  std::to_string(g.steps) + " --seed " + std::to_string(g.seed) + ")");
+  const std::string expected = plab::read_file(out_file);
+  // 1, 2 and 3 threads (an odd count catches chunking bugs), and each OpenMP schedule.
+  for (const char* schedule : {"static", "dynamic,1", "guided"}) {
+    plab::set_schedule(schedule);
+    for (int threads : {1, 2, 3}) {
+      plab::set_threads(threads);
+      expect_same(expected, run_here(scene).output,
+                  "stage " PLAB_OTHER_ID " on a fresh scene with " + std::to_string(threads) +
+                      " threads, schedule " + schedule + " (plab gen --n " + std::to_string(g.n) +
+                      " --l " + std::to_string(g.L) + " --r " + std::to_string(g.r) +
+                      " --steps " + std::to_string(g.steps) + " --seed " + std::to_string(g.seed) +
+                      ")");
+    }
+  }
   std::filesystem::remove(scene_file);
   std::filesystem::remove(out_file);
 }

@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -76,7 +77,7 @@ int exit_status() { return g_status; }
 
 void add_run(CLI::App& app) {
   struct Args {
-    std::string stage, impl, scene, out, digest;
+    std::string stage, impl, scene, out, digest, schedule;
     int threads = 0;
     std::uint64_t seed = kDefaultSeed;
     bool quiet = false;
@@ -89,6 +90,7 @@ void add_run(CLI::App& app) {
                 "solution (solutions/) or student (stages/); default: solution when solutions/ "
                 "exists, otherwise student");
   c->add_option("--threads", a->threads, "threads for stages that use them");
+  c->add_option("--schedule", a->schedule, "OpenMP schedule: static, dynamic or guided[,CHUNK]");
   c->add_option("--out", a->out, "write the output to this file (only when the run succeeds)");
   c->add_option("--digest", a->digest, "write one state digest per step to this file");
   c->add_option("--seed", a->seed, "seed for scenes without particle lines")->capture_default_str();
@@ -100,6 +102,7 @@ void add_run(CLI::App& app) {
     std::vector<std::string> args{require_stage(two_digits(a->stage), impl), a->scene, "--seed",
                                   std::to_string(a->seed)};
     if (a->threads > 0) args.insert(args.end(), {"--threads", std::to_string(a->threads)});
+    if (!a->schedule.empty()) args.insert(args.end(), {"--schedule", a->schedule});
     if (!a->out.empty()) args.insert(args.end(), {"--out", a->out});
     if (!a->digest.empty()) args.insert(args.end(), {"--digest", a->digest});
     if (a->quiet) args.emplace_back("--quiet");
@@ -290,6 +293,87 @@ void add_demo(CLI::App& app) {
                          : "every run is identical to its golden file\n",
                 failures);
     g_status = failures ? 1 : 0;
+  });
+}
+
+void add_bench(CLI::App& app) {
+  struct Args {
+    std::vector<std::string> stages, schedules{"dynamic,16"};
+    std::vector<int> threads{1};
+    std::vector<long long> n{1000, 2000, 4000};
+    long long steps = 500;
+    int runs = 3;
+    std::string csv, impl;
+    std::uint64_t seed = 1;
+  };
+  auto a = std::make_shared<Args>();
+  auto* c = app.add_subcommand("bench", "Time stages on scenes like the 2019 report's (L = 20000, "
+                                        "r = 1, MODEL.md's speeds, perf mode): median of several "
+                                        "whole-process runs, spread, and speedup over 1 thread.");
+  c->add_option("--stage", a->stages, "stages, e.g. 02,03")->required()->delimiter(',');
+  c->add_option("--threads", a->threads, "thread counts, e.g. 1,2")->delimiter(',')
+      ->capture_default_str();
+  c->add_option("--n", a->n, "particle counts")->delimiter(',')->capture_default_str();
+  c->add_option("--steps", a->steps, "steps S")->capture_default_str();
+  c->add_option("--runs", a->runs, "timed runs per configuration")->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  c->add_option("--schedule", a->schedules, "OpenMP schedules to compare, e.g. static dynamic,16 "
+                                            "guided")->capture_default_str();
+  c->add_option("--seed", a->seed, "scene seed")->capture_default_str();
+  c->add_option("--impl", a->impl, "solution or student (default as for run)");
+  c->add_option("--csv", a->csv, "also write the table as CSV to this file");
+  c->callback([a] {
+    const std::string impl = a->impl.empty() ? default_impl() : a->impl;
+    check_impl(impl);
+    std::string csv = "stage,impl,n,steps,threads,schedule,runs,median_s,min_s,max_s,speedup\n";
+    std::printf("%-5s %6s %5s %7s %-11s %10s %9s %8s\n", "stage", "N", "S", "threads", "schedule",
+                "median s", "spread", "speedup");
+    for (const long long n : a->n) {
+      const std::string scene = temp_path("bench-" + std::to_string(n) + "-" +
+                                          std::to_string(a->steps) + "-" + std::to_string(a->seed) +
+                                          ".in");
+      GenParams g{n, 20000, 1, a->steps, Mode::kPerf, a->seed};
+      write_text(scene, format_scene(generate_scene(g)));
+      for (const std::string& raw : a->stages) {
+        const std::string id = two_digits(raw);
+        const std::string program = require_stage(id, impl);
+        for (const std::string& schedule : a->schedules) {
+          double one_thread = 0;
+          for (const int threads : a->threads) {
+            std::vector<double> t;
+            for (int k = 0; k < a->runs; ++k) {
+              if (stderr_is_terminal())
+                std::fprintf(stderr, "\r  stage %s N=%lld threads=%d run %d/%d ", id.c_str(), n,
+                             threads, k + 1, a->runs);
+              const auto t0 = std::chrono::steady_clock::now();
+              const int rc = run_program({program, scene, "--quiet", "--out", "/dev/null",
+                                          "--threads", std::to_string(threads), "--schedule",
+                                          schedule});
+              if (rc != 0) throw std::runtime_error("stage " + id + " failed on " + scene);
+              t.push_back(wall_seconds(t0));
+            }
+            if (stderr_is_terminal()) std::fprintf(stderr, "\r%60s\r", "");
+            std::sort(t.begin(), t.end());
+            const double median = t[t.size() / 2];
+            if (threads == 1) one_thread = median;
+            const double spread = (t.back() - t.front()) / median;
+            char speedup[32] = "-";
+            if (one_thread > 0) std::snprintf(speedup, sizeof speedup, "%.2f", one_thread / median);
+            std::printf("%-5s %6lld %5lld %7d %-11s %10.3f %8.1f%% %8s\n", id.c_str(), n, a->steps,
+                        threads, schedule.c_str(), median, 100 * spread, speedup);
+            std::fflush(stdout);
+            char row[256];
+            std::snprintf(row, sizeof row, "%s,%s,%lld,%lld,%d,\"%s\",%d,%.6f,%.6f,%.6f,%s\n",
+                          id.c_str(), impl.c_str(), n, a->steps, threads, schedule.c_str(),
+                          a->runs, median, t.front(), t.back(), speedup);
+            csv += row;
+          }
+        }
+      }
+    }
+    if (!a->csv.empty()) write_text(a->csv, csv);
+    std::printf("times are whole-process wall seconds (scene reading included, output to "
+                "/dev/null); spread = (max - min) / median over %d runs\n", a->runs);
   });
 }
 

@@ -13,6 +13,7 @@ void add_golden(CLI::App& app);  //!< `plab golden`: regenerate or check the gol
 void add_test(CLI::App& app);    //!< `plab test`: run the test suite with CTest
 void add_docs(CLI::App& app);    //!< `plab docs`: build the HTML docs with Doxygen
 void add_demo(CLI::App& app);    //!< `plab demo`: the reference on the course and demo scenes
+void add_bench(CLI::App& app);   //!< `plab bench`: timings, medians, speedups, CSV
 
 /// The exit status the chosen subcommand asked for.
 int exit_status();

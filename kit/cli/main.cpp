@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   plab::cli::add_test(app);
   plab::cli::add_docs(app);
   plab::cli::add_demo(app);
+  plab::cli::add_bench(app);
   try {
     CLI11_PARSE(app, argc, argv);
   } catch (const std::exception& e) {

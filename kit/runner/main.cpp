@@ -14,6 +14,7 @@
 
 int main(int argc, char** argv) {
   std::string scene_path, out_path, digest_path;
+  std::string schedule = "dynamic,16";
   int threads = 0;
   std::uint64_t seed = plab::kDefaultSeed;
   bool quiet = false;
@@ -22,12 +23,16 @@ int main(int argc, char** argv) {
   app.add_option("--out", out_path, "write the output here instead of stdout (all or nothing)");
   app.add_option("--digest", digest_path, "write one state digest per step to this file");
   app.add_option("--threads", threads, "threads for stages that use them (default: all cores)");
+  app.add_option("--schedule", schedule,
+                 "OpenMP schedule of the stage's schedule(runtime) loops: static, dynamic or "
+                 "guided, with an optional ,CHUNK")->capture_default_str();
   app.add_option("--seed", seed, "seed for scenes without particle lines")->capture_default_str();
   app.add_flag("--quiet", quiet, "no timing summary on stderr");
   CLI11_PARSE(app, argc, argv);
 
   try {
     plab::set_threads(threads);
+    plab::set_schedule(schedule);
     const plab::Scene scene = plab::load_scene(scene_path, seed);
     plab::OutputFile out(out_path);
     plab::OutputFile digest(digest_path, /*optional=*/true);

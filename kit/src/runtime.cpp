@@ -54,6 +54,28 @@ void set_threads([[maybe_unused]] int threads) {
 #endif
 }
 
+void set_schedule(const std::string& schedule) {
+  if (schedule.empty()) return;
+  const auto comma = schedule.find(',');
+  const std::string kind = schedule.substr(0, comma);
+  int chunk = 0;
+  if (comma != std::string::npos) {
+    try {
+      chunk = std::stoi(schedule.substr(comma + 1));
+    } catch (const std::exception&) {
+      chunk = -1;
+    }
+  }
+  if ((kind != "static" && kind != "dynamic" && kind != "guided") || chunk < 0)
+    throw InputError("--schedule: expected static, dynamic or guided with an optional ,CHUNK "
+                     "(e.g. dynamic,16), found '" + schedule + "'");
+#if defined(_OPENMP)
+  const omp_sched_t k = kind == "static" ? omp_sched_static
+                        : kind == "dynamic" ? omp_sched_dynamic : omp_sched_guided;
+  omp_set_schedule(k, chunk);
+#endif
+}
+
 int get_threads() {
 #if defined(_OPENMP)
   return omp_get_max_threads();

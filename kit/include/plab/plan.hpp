@@ -23,6 +23,16 @@ struct Plan {
   }
   /// Whether particle `i` already has an event.
   [[nodiscard]] bool taken(int i) const { return partner[i] != kFree; }
+  /// Records an accepted event for particle `i` only (the other particle of a pair records it
+  /// itself): parallel loops where each iteration writes only its own particle use this.
+  void accept_for(int i, const model::Event& e) {
+    if (e.kind == model::kWall) {
+      partner[i] = kWall;
+    } else {
+      partner[i] = (e.lo == i) ? e.hi : e.lo;
+      time[i] = e.t;
+    }
+  }
   /// Records an accepted event (wall or pair) for its particles.
   void accept(const model::Event& e) {
     if (e.kind == model::kWall) {

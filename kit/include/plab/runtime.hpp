@@ -31,6 +31,9 @@ class OutputFile {
 
 /// Sets the number of OpenMP threads (0: leave the default, all cores). No-op without OpenMP.
 void set_threads(int threads);
+/// Sets the OpenMP schedule of `schedule(runtime)` loops from `KIND[,CHUNK]` (KIND: static,
+/// dynamic, guided; empty: leave it). \throws InputError for anything else.
+void set_schedule(const std::string& schedule);
 /// The number of threads a parallel region would use now (1 without OpenMP).
 int get_threads();
 /// Whether stderr is a terminal (progress is shown only there).
