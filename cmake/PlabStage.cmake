@@ -1,12 +1,13 @@
-# plab_add_stage(SOURCES file... [TEST_MAX_N n])
+# plab_add_stage(SOURCES file... [TEST_MAX_N n] [GPU])
 #
 # Called from each stage folder's CMakeLists.txt (stages/NN-name or solutions/NN-name). Adds:
 #   plab_stage_NN_IMPL   a library with the stage's step() (IMPL: student or solution)
 #   plab-run-NN-IMPL     the program `plab run --stage NN --impl IMPL` starts
 # and records the stage so that tests/ adds its tests. TEST_MAX_N: the largest scene its golden
-# tests run (stage 01 is O(N^3) per step by design).
+# tests run (stage 01 is O(N^3) per step by design). GPU: a CUDA stage (its sources define
+# plab::make_stepper(); PLAB_GPU_STAGE is set for it and its users), skipped without nvcc.
 function(plab_add_stage)
-  cmake_parse_arguments(S "" "TEST_MAX_N" "SOURCES" ${ARGN})
+  cmake_parse_arguments(S "GPU" "TEST_MAX_N" "SOURCES" ${ARGN})
   get_filename_component(folder ${CMAKE_CURRENT_SOURCE_DIR} NAME)
   get_filename_component(tree ${CMAKE_CURRENT_SOURCE_DIR} DIRECTORY)
   get_filename_component(tree ${tree} NAME)
@@ -17,6 +18,10 @@ function(plab_add_stage)
   else()
     set(impl student)
   endif()
+  if(S_GPU AND NOT PLAB_HAVE_CUDA)
+    message(STATUS "stage ${id} (${impl}): skipped, no CUDA compiler")
+    return()
+  endif()
   if(NOT S_TEST_MAX_N)
     set(S_TEST_MAX_N 1000000000)
   endif()
@@ -25,11 +30,17 @@ function(plab_add_stage)
   add_library(${lib} STATIC ${S_SOURCES})
   target_link_libraries(${lib} PUBLIC plab::kit)
   target_compile_definitions(${lib} PRIVATE PLAB_STAGE_ID="${id}")
+  set(kind cpu)
+  if(S_GPU)
+    set(kind gpu)
+    target_link_libraries(${lib} PUBLIC plab::cuda)
+    target_compile_definitions(${lib} PUBLIC PLAB_GPU_STAGE=1)
+  endif()
 
   set(program plab-run-${id}-${impl})
   add_executable(${program} ${PROJECT_SOURCE_DIR}/kit/runner/main.cpp)
-  target_link_libraries(${program} PRIVATE ${lib} CLI11::CLI11)
+  target_link_libraries(${program} PRIVATE ${lib} CLI11::CLI11 nlohmann_json::nlohmann_json)
   target_compile_definitions(${program} PRIVATE PLAB_STAGE_ID="${id}" PLAB_IMPL="${impl}")
 
-  set_property(GLOBAL APPEND PROPERTY PLAB_STAGES "${id}:${name}:${impl}:${S_TEST_MAX_N}")
+  set_property(GLOBAL APPEND PROPERTY PLAB_STAGES "${id}:${name}:${impl}:${S_TEST_MAX_N}:${kind}")
 endfunction()

@@ -20,6 +20,15 @@
 #include "plab/io.hpp"
 #include "plab/runtime.hpp"
 #include "plab/stage.hpp"
+#if PLAB_GPU_STAGE
+#include "plab/cuda/check.hpp"
+/// CUDA stages: every test skips, with the runtime's reason, where no GPU can be used.
+#define PLAB_SKIP_WITHOUT_DEVICE()                                                   \
+  if (const std::string why = plab::cuda::missing_device(); !why.empty())           \
+  GTEST_SKIP() << "no CUDA device (" << why << "): stage " PLAB_STAGE_ID " not run"
+#else
+#define PLAB_SKIP_WITHOUT_DEVICE() static_cast<void>(0)
+#endif
 
 namespace plab {
 // Readable test parameters in GoogleTest's messages.
@@ -42,7 +51,7 @@ Result run_here(const plab::Scene& scene) {
   std::size_t len = 0;
   std::FILE* mem = open_memstream(&buf, &len);
   plab::OutputWriter out(nullptr);
-  plab::simulate(scene, plab::step, out, {mem, false});
+  plab::simulate(scene, plab::make_stepper, out, {mem, false});
   std::fclose(mem);
   Result r{out.text(), std::string(buf, len)};
   std::free(buf);
@@ -71,6 +80,7 @@ std::string test_name(const testing::TestParamInfo<plab::Dataset>& info) {
 
 /// Runs a dataset and compares with its golden output and digests.
 void check_golden(const plab::Dataset& d) {
+  PLAB_SKIP_WITHOUT_DEVICE();
   if (d.particles > PLAB_TEST_MAX_N)
     GTEST_SKIP() << "N = " << d.particles << " is above this stage's test limit of "
                  << PLAB_TEST_MAX_N << " (see its CMakeLists.txt)";
@@ -99,14 +109,15 @@ GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(LongGolden);
 /// Fresh random scenes: this stage must print what another stage's solution prints.
 class AgainstOtherStage : public testing::TestWithParam<plab::GenParams> {};
 
-TEST_P(AgainstOtherStage, SameText) {
+/// Writes `scene` to a file, runs the other stage's solution on it, and checks that this stage
+/// prints the same text in each of its variants: 1, 2 and 3 threads (an odd count catches
+/// chunking bugs) under each OpenMP schedule on the CPU; each PLAB_CUDA_OFF switch on the GPU.
+void expect_same_as_other(const plab::Scene& scene, const std::string& how_made) {
   const std::string other = PLAB_OTHER_PROGRAM;
   if (other.empty()) GTEST_SKIP() << "no other stage's solution is built to compare with";
-  plab::GenParams g = GetParam();
-  g.seed = std::random_device{}();
-  const plab::Scene scene = plab::generate_scene(g);
   const auto dir = std::filesystem::temp_directory_path();
-  const std::string stem = (dir / ("plab-" + std::to_string(getpid()) + "-" + std::to_string(g.seed))).string();
+  const std::string stem = (dir / ("plab-" + std::to_string(getpid()) + "-" +
+                                   std::to_string(std::random_device{}()))).string();
   const std::string scene_file = stem + ".in";
   const std::string out_file = stem + ".out";
   {
@@ -118,21 +129,56 @@ TEST_P(AgainstOtherStage, SameText) {
   const std::string command = other + " --quiet --out " + out_file + " " + scene_file;
   ASSERT_EQ(std::system(command.c_str()), 0) << command;
   const std::string expected = plab::read_file(out_file);
-  // 1, 2 and 3 threads (an odd count catches chunking bugs), and each OpenMP schedule.
+#if PLAB_GPU_STAGE
+  for (const char* off : {"", "graph", "streams", "branchless", "graph,streams,branchless"}) {
+    setenv("PLAB_CUDA_OFF", off, 1);
+    expect_same(expected, run_here(scene).output,
+                "stage " PLAB_OTHER_ID " with PLAB_CUDA_OFF=" + std::string(off) + " on " + how_made);
+  }
+  unsetenv("PLAB_CUDA_OFF");
+#else
   for (const char* schedule : {"static", "dynamic,1", "guided"}) {
     plab::set_schedule(schedule);
     for (int threads : {1, 2, 3}) {
       plab::set_threads(threads);
       expect_same(expected, run_here(scene).output,
-                  "stage " PLAB_OTHER_ID " on a fresh scene with " + std::to_string(threads) +
-                      " threads, schedule " + schedule + " (plab gen --n " + std::to_string(g.n) +
-                      " --l " + std::to_string(g.L) + " --r " + std::to_string(g.r) +
-                      " --steps " + std::to_string(g.steps) + " --seed " + std::to_string(g.seed) +
-                      ")");
+                  "stage " PLAB_OTHER_ID " with " + std::to_string(threads) + " threads, schedule " +
+                      schedule + " on " + how_made);
     }
   }
+#endif
   std::filesystem::remove(scene_file);
   std::filesystem::remove(out_file);
+}
+
+TEST_P(AgainstOtherStage, SameText) {
+  PLAB_SKIP_WITHOUT_DEVICE();
+  plab::GenParams g = GetParam();
+  g.seed = std::random_device{}();
+  expect_same_as_other(plab::generate_scene(g),
+                       "a fresh scene (plab gen --n " + std::to_string(g.n) + " --l " +
+                           std::to_string(g.L) + " --r " + std::to_string(g.r) + " --steps " +
+                           std::to_string(g.steps) + " --seed " + std::to_string(g.seed) + ")");
+}
+
+/// One particle at rest with 24 others converging on it from a ring (overlapping each other):
+/// 24 pair events for one particle in a step, more than a GPU stage's first allocation of slots.
+TEST(AgainstOtherStage, CrowdedParticle) {
+  PLAB_SKIP_WITHOUT_DEVICE();
+  plab::Scene scene;
+  scene.box = {40, 1};
+  scene.steps = 6;
+  scene.particles.resize(25);
+  plab::Particles& p = scene.particles;
+  p.x[0] = p.y[0] = 20;
+  for (int k = 1; k <= 24; ++k) {
+    const double a = 2 * M_PI * k / 24;
+    p.x[k] = 20 + 6 * std::cos(a);
+    p.y[k] = 20 + 6 * std::sin(a);
+    p.vx[k] = -5 * std::cos(a);
+    p.vy[k] = -5 * std::sin(a);
+  }
+  expect_same_as_other(scene, "a crowded particle (24 pair events in one step)");
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -143,8 +189,10 @@ INSTANTIATE_TEST_SUITE_P(
     [](const auto& info) { return "scene" + std::to_string(info.index); });
 
 TEST(Invariants, EnergyConservedFiniteCountersGrow) {
+  PLAB_SKIP_WITHOUT_DEVICE();
   const plab::Scene scene = plab::generate_scene({80, 60, 1, 1, plab::Mode::kPerf, 77});
   plab::Particles p = scene.particles;
+  const auto stage = plab::make_stepper(scene.box, p);
   auto energy = [&p] {
     double e = 0;
     for (std::size_t i = 0; i < p.size(); ++i) e += p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i];
@@ -153,7 +201,8 @@ TEST(Invariants, EnergyConservedFiniteCountersGrow) {
   const double e0 = energy();
   long long events = 0;
   for (int s = 0; s < 100; ++s) {
-    plab::step(scene.box, p);
+    stage->step();
+    stage->read(p);
     for (std::size_t i = 0; i < p.size(); ++i)
       ASSERT_TRUE(std::isfinite(p.x[i]) && std::isfinite(p.y[i]) && std::isfinite(p.vx[i]) &&
                   std::isfinite(p.vy[i]))

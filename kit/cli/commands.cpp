@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <sstream>
 #include <string>
+#include <nlohmann/json.hpp>
 #include <vector>
 
 #include "plab/datasets.hpp"
@@ -325,9 +326,12 @@ void add_bench(CLI::App& app) {
   c->callback([a] {
     const std::string impl = a->impl.empty() ? default_impl() : a->impl;
     check_impl(impl);
-    std::string csv = "stage,impl,n,steps,threads,schedule,runs,median_s,min_s,max_s,speedup\n";
-    std::printf("%-5s %6s %5s %7s %-11s %10s %9s %8s\n", "stage", "N", "S", "threads", "schedule",
-                "median s", "spread", "speedup");
+    std::string csv =
+        "stage,impl,n,steps,threads,schedule,runs,median_s,min_s,max_s,speedup,step_median_s,"
+        "step_min_s,step_max_s,timer,device\n";
+    std::printf("%-5s %6s %5s %7s %-11s %10s %9s %8s %10s %9s  %s\n", "stage", "N", "S", "threads",
+                "schedule", "median s", "spread", "speedup", "in steps", "ms/step", "device");
+    const std::string report = temp_path("bench-report.json");
     for (const long long n : a->n) {
       const std::string scene = temp_path("bench-" + std::to_string(n) + "-" +
                                           std::to_string(a->steps) + "-" + std::to_string(a->seed) +
@@ -340,7 +344,8 @@ void add_bench(CLI::App& app) {
         for (const std::string& schedule : a->schedules) {
           double one_thread = 0;
           for (const int threads : a->threads) {
-            std::vector<double> t;
+            std::vector<double> t, steps_t;
+            nlohmann::json last;
             for (int k = 0; k < a->runs; ++k) {
               if (stderr_is_terminal())
                 std::fprintf(stderr, "\r  stage %s N=%lld threads=%d run %d/%d ", id.c_str(), n,
@@ -348,32 +353,51 @@ void add_bench(CLI::App& app) {
               const auto t0 = std::chrono::steady_clock::now();
               const int rc = run_program({program, scene, "--quiet", "--out", "/dev/null",
                                           "--threads", std::to_string(threads), "--schedule",
-                                          schedule});
-              if (rc != 0) throw std::runtime_error("stage " + id + " failed on " + scene);
+                                          schedule, "--report", report});
+              if (rc != 0)
+                throw std::runtime_error("stage " + id + " failed (exit " + std::to_string(rc) +
+                                         ") on " + scene);
               t.push_back(wall_seconds(t0));
+              last = nlohmann::json::parse(read_file(report));
+              steps_t.push_back(last.at("step_seconds").get<double>());
             }
             if (stderr_is_terminal()) std::fprintf(stderr, "\r%60s\r", "");
             std::sort(t.begin(), t.end());
+            std::sort(steps_t.begin(), steps_t.end());
             const double median = t[t.size() / 2];
-            if (threads == 1) one_thread = median;
+            const double step_median = steps_t[steps_t.size() / 2];
+            const std::string device = last.at("device").get<std::string>();
+            const std::string timer = last.at("timer").get<std::string>();
+            const bool gpu = device != "cpu";
+            if (threads == a->threads.front()) one_thread = median;
             const double spread = (t.back() - t.front()) / median;
             char speedup[32] = "-";
-            if (one_thread > 0) std::snprintf(speedup, sizeof speedup, "%.2f", one_thread / median);
-            std::printf("%-5s %6lld %5lld %7d %-11s %10.3f %8.1f%% %8s\n", id.c_str(), n, a->steps,
-                        threads, schedule.c_str(), median, 100 * spread, speedup);
+            if (one_thread > 0 && !gpu)
+              std::snprintf(speedup, sizeof speedup, "%.2f", one_thread / median);
+            std::printf("%-5s %6lld %5lld %7s %-11s %10.3f %8.1f%% %8s %10.4f %9.4f  %s (%s)\n",
+                        id.c_str(), n, a->steps, gpu ? "-" : std::to_string(threads).c_str(),
+                        gpu ? "-" : schedule.c_str(), median, 100 * spread, speedup, step_median,
+                        a->steps ? 1e3 * step_median / a->steps : 0.0, device.c_str(),
+                        timer.c_str());
             std::fflush(stdout);
-            char row[256];
-            std::snprintf(row, sizeof row, "%s,%s,%lld,%lld,%d,\"%s\",%d,%.6f,%.6f,%.6f,%s\n",
-                          id.c_str(), impl.c_str(), n, a->steps, threads, schedule.c_str(),
-                          a->runs, median, t.front(), t.back(), speedup);
+            char row[512];
+            std::snprintf(row, sizeof row,
+                          "%s,%s,%lld,%lld,%d,\"%s\",%d,%.6f,%.6f,%.6f,%s,%.6f,%.6f,%.6f,%s,\"%s\"\n",
+                          id.c_str(), impl.c_str(), n, a->steps, threads, schedule.c_str(), a->runs,
+                          median, t.front(), t.back(), speedup, step_median, steps_t.front(),
+                          steps_t.back(), timer.c_str(), device.c_str());
             csv += row;
+            if (gpu) break;  // threads and schedules are CPU settings
           }
         }
       }
     }
     if (!a->csv.empty()) write_text(a->csv, csv);
-    std::printf("times are whole-process wall seconds (scene reading included, output to "
-                "/dev/null); spread = (max - min) / median over %d runs\n", a->runs);
+    std::printf("median s: whole-process wall seconds (start-up, scene reading and, on a GPU, "
+                "context creation included; output to /dev/null); spread = (max - min) / median "
+                "over %d runs; speedup: over the first thread count; in steps: the median of the "
+                "stage's own time in steps (host clock on the CPU, CUDA events on a GPU)\n",
+                a->runs);
   });
 }
 

@@ -3,6 +3,7 @@
 /// step() with the kit's driver, writes the output. `plab run` starts it.
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "plab/driver.hpp"
@@ -13,7 +14,7 @@
 #include "plab/stage.hpp"
 
 int main(int argc, char** argv) {
-  std::string scene_path, out_path, digest_path;
+  std::string scene_path, out_path, digest_path, report_path;
   std::string schedule = "dynamic,16";
   int threads = 0;
   std::uint64_t seed = plab::kDefaultSeed;
@@ -27,6 +28,8 @@ int main(int argc, char** argv) {
                  "OpenMP schedule of the stage's schedule(runtime) loops: static, dynamic or "
                  "guided, with an optional ,CHUNK")->capture_default_str();
   app.add_option("--seed", seed, "seed for scenes without particle lines")->capture_default_str();
+  app.add_option("--report", report_path,
+                 "write the run's timing as JSON to this file (what plab bench reads)");
   app.add_flag("--quiet", quiet, "no timing summary on stderr");
   CLI11_PARSE(app, argc, argv);
 
@@ -38,18 +41,34 @@ int main(int argc, char** argv) {
     plab::OutputFile digest(digest_path, /*optional=*/true);
     plab::OutputWriter writer(out.get());
     const plab::RunStats stats = plab::simulate(
-        scene, plab::step, writer, {digest.get(), !quiet && plab::stderr_is_terminal()});
+        scene, plab::make_stepper, writer, {digest.get(), !quiet && plab::stderr_is_terminal()});
     out.commit();
     digest.commit();
+    if (!report_path.empty()) {
+      plab::OutputFile report(report_path);
+      const nlohmann::json j = {
+          {"stage", PLAB_STAGE_ID},         {"impl", PLAB_IMPL},
+          {"n", scene.particles.size()},    {"steps", scene.steps},
+          {"threads", plab::get_threads()}, {"device", stats.device},
+          {"timer", stats.timer},           {"step_seconds", stats.step_seconds},
+          {"total_seconds", stats.total_seconds},
+          {"pair_events", stats.pair_events}, {"wall_events", stats.wall_events}};
+      const std::string text = j.dump(2) + "\n";
+      std::fputs(text.c_str(), report.get());
+      report.commit();
+    }
     if (!quiet)
       std::fprintf(stderr,
-                   "stage %s (%s): N=%zu S=%lld threads=%d: %.3f s in steps (%.3f ms/step), "
-                   "%.3f s total; %lld pair and %lld wall collisions\n",
-                   PLAB_STAGE_ID, PLAB_IMPL, scene.particles.size(), scene.steps,
-                   plab::get_threads(), stats.step_seconds,
-                   scene.steps ? 1e3 * stats.step_seconds / scene.steps : 0.0, stats.total_seconds,
-                   stats.pair_events, stats.wall_events);
+                   "stage %s (%s) on %s: N=%zu S=%lld threads=%d: %.3f s in steps (%.3f ms/step, "
+                   "%s), %.3f s total; %lld pair and %lld wall collisions\n",
+                   PLAB_STAGE_ID, PLAB_IMPL, stats.device.c_str(), scene.particles.size(),
+                   scene.steps, plab::get_threads(), stats.step_seconds,
+                   scene.steps ? 1e3 * stats.step_seconds / scene.steps : 0.0,
+                   stats.timer.c_str(), stats.total_seconds, stats.pair_events, stats.wall_events);
     return 0;
+  } catch (const plab::NoDevice& e) {
+    std::fprintf(stderr, "stage %s: %s\n", PLAB_STAGE_ID, e.what());
+    return 4;
   } catch (const plab::NotDone& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 3;

@@ -45,7 +45,7 @@ class Progress {
 
 }  // namespace
 
-RunStats simulate(Scene scene, StepFn step, OutputWriter& out, const RunOptions& options) {
+RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOptions& options) {
   RunStats stats;
   const auto t0 = Clock::now();
   Particles& p = scene.particles;
@@ -54,20 +54,41 @@ RunStats simulate(Scene scene, StepFn step, OutputWriter& out, const RunOptions&
   const long long wc0 = sum(p.wc);
   Progress progress(options.progress, steps);
   if (options.digest) std::fputs(digest_line(0, digest(p)).c_str(), options.digest);
+  const std::unique_ptr<Stepper> stage = make(scene.box, p);
+  double clock_seconds = 0;
   for (long long s = 0; s < steps; ++s) {
-    if (scene.mode == Mode::kPrint || s == 0) out.block(s, p, false);
+    if (scene.mode == Mode::kPrint || s == 0) {
+      if (s > 0) stage->read(p);
+      out.block(s, p, false);
+    }
     const auto ts = Clock::now();
-    step(scene.box, p);
-    stats.step_seconds += seconds_since(ts);
-    if (options.digest) std::fputs(digest_line(s + 1, digest(p)).c_str(), options.digest);
+    stage->step();
+    clock_seconds += seconds_since(ts);
+    if (options.digest) {
+      stage->read(p);
+      std::fputs(digest_line(s + 1, digest(p)).c_str(), options.digest);
+    }
     progress.update(s + 1);
   }
+  const auto ts = Clock::now();
+  stage->read(p);  // waits for queued steps: part of the step time on the driver's clock
+  clock_seconds += seconds_since(ts);
   out.block(steps, p, true);
   out.flush();
+  stats.step_seconds = stage->own_seconds() >= 0 ? stage->own_seconds() : clock_seconds;
+  stats.timer = stage->own_seconds() >= 0 ? "cuda events" : "steady_clock";
+  stats.device = stage->device();
   stats.pair_events = (sum(p.pc) - pc0) / 2;
   stats.wall_events = sum(p.wc) - wc0;
   stats.total_seconds = seconds_since(t0);
   return stats;
+}
+
+RunStats simulate(Scene scene, StepFn step, OutputWriter& out, const RunOptions& options) {
+  const MakeStepper make = [step](const Box& box, Particles& p) {
+    return std::unique_ptr<Stepper>(std::make_unique<HostStepper>(step, box, p));
+  };
+  return simulate(std::move(scene), make, out, options);
 }
 
 std::string simulate_to_string(const Scene& scene, StepFn step) {

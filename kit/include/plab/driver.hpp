@@ -3,19 +3,25 @@
 #pragma once
 
 #include <cstdio>
+#include <functional>
+#include <memory>
 #include <string>
 
 #include "plab/io.hpp"
 #include "plab/scene.hpp"
+#include "plab/stepper.hpp"
 
 namespace plab {
 
-/// A stage's step function (see stage.hpp).
-using StepFn = void (*)(const Box&, Particles&);
+/// Starts a stage's run from a state (plab::make_stepper() of stage.hpp has this type).
+using MakeStepper = std::function<std::unique_ptr<Stepper>(const Box&, Particles&)>;
 
 /// What a run measured.
 struct RunStats {
-  double step_seconds = 0;     //!< time spent inside step() (not reading or printing)
+  double step_seconds = 0;     //!< time spent in steps (not reading or printing): the driver's
+                               //!< clock around step(), or the stage's own (CUDA events)
+  std::string timer;           //!< how step_seconds was measured: "steady_clock" or "cuda events"
+  std::string device;          //!< what the stage ran on: "cpu" or the GPU's name
   double total_seconds = 0;    //!< the whole simulation, printing included
   long long pair_events = 0;   //!< pair collisions counted over the run
   long long wall_events = 0;   //!< wall collisions counted over the run
@@ -29,7 +35,11 @@ struct RunOptions {
 
 /// Runs `scene` with `step`, writing MODEL.md's output to `out`: in print mode the blocks of steps
 /// 0..S-1 then the final block (step S, with `pc wc`); in perf mode the step-0 block and the final
-/// block (only the final block when S = 0).
+/// block (only the final block when S = 0). The state is read back from the stage only when it is
+/// printed or digested.
+RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOptions& options = {});
+
+/// The same for a CPU stage's step function.
 RunStats simulate(Scene scene, StepFn step, OutputWriter& out, const RunOptions& options = {});
 
 /// Runs a scene and returns its whole output as text (for tests).

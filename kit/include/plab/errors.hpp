@@ -1,5 +1,5 @@
 /// \file errors.hpp
-/// \brief The kit's exceptions: bad input, and a starting point's unfinished exercise.
+/// \brief The kit's exceptions: bad input, a starting point's unfinished exercise, no GPU.
 #pragma once
 
 #include <stdexcept>
@@ -24,6 +24,14 @@ class NotDone : public std::runtime_error {
   NotDone(const std::string& stage, int exercise, const std::string& what)
       : std::runtime_error("stage " + stage + ": EXERCISE " + std::to_string(exercise) + " (" +
                            what + ") is not done yet") {}
+};
+
+/// Thrown by a CUDA stage when no usable CUDA device is found (no GPU, no driver, a driver too
+/// old): the runner prints one line and exits 4, the tests skip.
+class NoDevice : public std::runtime_error {
+ public:
+  /// `why` is the CUDA runtime's own message.
+  explicit NoDevice(const std::string& why) : std::runtime_error("no CUDA device: " + why) {}
 };
 
 }  // namespace plab

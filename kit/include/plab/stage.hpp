@@ -1,15 +1,17 @@
 /// \file stage.hpp
 /// \brief What every stage implements: one function that advances the state by one step.
 ///
-/// Each stage's `step.cpp` (in `stages/NN-name/` for the student, `solutions/NN-name/` for the
-/// reference) defines plab::step(). The kit's driver does everything else: reading the scene,
-/// printing, timing (see plab::simulate()).
+/// Each CPU stage's `step.cpp` (in `stages/NN-name/` for the student, `solutions/NN-name/` for the
+/// reference) defines plab::step(). A CUDA stage (compiled with `PLAB_GPU_STAGE` set) defines
+/// plab::make_stepper() instead, keeping the state on the GPU between steps. The kit's driver does
+/// everything else: reading the scene, printing, timing (see plab::simulate()).
 #pragma once
 
 #include "plab/errors.hpp"
 #include "plab/model.hpp"
 #include "plab/plan.hpp"
 #include "plab/scene.hpp"
+#include "plab/stepper.hpp"
 
 #ifndef PLAB_STAGE_ID
 /// The two-digit number of the stage being compiled (set by CMake for each stage target).
@@ -22,9 +24,19 @@
 
 namespace plab {
 
-/// Advances every particle by one step, as MODEL.md says. Implemented once per stage.
+#if PLAB_GPU_STAGE
+/// Starts a run of this CUDA stage from `p` (copied to the GPU). Throws NoDevice without a GPU.
+std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p);
+#else
+/// Advances every particle by one step, as MODEL.md says. Implemented once per CPU stage.
 /// \param box the box and radius
 /// \param p   the state at the start of the step; on return, the state at its end
 void step(const Box& box, Particles& p);
+
+/// Starts a run of this CPU stage: step() applied to `p` in place.
+inline std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p) {
+  return std::make_unique<HostStepper>(step, box, p);
+}
+#endif
 
 }  // namespace plab

@@ -1,0 +1,50 @@
+/// \file stepper.hpp
+/// \brief A stage as the driver sees it: something that holds the state and advances it a step.
+///
+/// CPU stages only write plab::step(); the kit wraps it in a host Stepper. CUDA stages keep the
+/// state on the GPU between steps and implement a Stepper of their own, so that the driver copies
+/// the state back only when it prints (every step in print mode, twice in perf mode).
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "plab/scene.hpp"
+
+namespace plab {
+
+/// The state of a run and the way it advances.
+class Stepper {
+ public:
+  virtual ~Stepper() = default;
+  /// Advances the state by one step. May return before the work is done (a GPU queue).
+  virtual void step() = 0;
+  /// Copies the state after the last step into `p` (waits for the work queued so far).
+  virtual void read(Particles& p) = 0;
+  /// Seconds spent in steps as the stage measures them itself (CUDA events), or a negative
+  /// value when the driver's clock around step() is the right measure (CPU stages).
+  [[nodiscard]] virtual double own_seconds() const { return -1; }
+  /// What the stage ran on, for timing reports ("cpu" or the GPU's name).
+  [[nodiscard]] virtual std::string device() const { return "cpu"; }
+};
+
+/// A stage's step function (see stage.hpp).
+using StepFn = void (*)(const Box&, Particles&);
+
+/// The Stepper of a CPU stage: `step` advances the caller's particles in place.
+class HostStepper final : public Stepper {
+ public:
+  /// Advances `p` itself (no copy), which must outlive the stepper.
+  HostStepper(StepFn step, const Box& box, Particles& p) : step_(step), box_(box), p_(&p) {}
+  void step() override { step_(box_, *p_); }
+  void read(Particles& p) override {
+    if (&p != p_) p = *p_;
+  }
+
+ private:
+  StepFn step_;
+  Box box_;
+  Particles* p_;
+};
+
+}  // namespace plab

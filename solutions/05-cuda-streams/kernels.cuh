@@ -1,0 +1,177 @@
+/// \file solutions/05-cuda-streams/kernels.cuh
+/// \brief Stage 05's kernels (device code only): the pair search split over a 2D grid with tiles in
+/// shared memory, every round of a step in one block, and the branchless wall event.
+#pragma once
+
+#include "plab/cuda/particles.hpp"
+#include "plab/model.hpp"
+#include "plab/scene.hpp"
+
+namespace plab::kernels {
+
+using cuda::ParticlesView;
+using model::Event;
+
+constexpr int kFree = -1;         //!< `partner[i]`: particle `i` moves freely (as plab::Plan)
+constexpr int kWall = -2;         //!< `partner[i]`: particle `i` hits a wall
+constexpr int kPairThreads = 128;  //!< threads per block of find_pairs (one per particle `i`)
+constexpr int kTile = 256;         //!< particles `j` per block of find_pairs (in shared memory)
+constexpr int kResolveThreads = 1024;  //!< the one block of resolve
+
+/// What the host reads after a batch of steps.
+struct Flags {
+  int overflow;          //!< largest slot count needed, when a step ran out of slots (else 0)
+  int unused;            //!< (padding)
+  long long steps_done;  //!< steps applied so far
+};
+
+/// One step's working arrays on the device (pointers into memory the host class owns).
+struct StepArrays {
+  double* wall;    //!< wall time of each particle
+  int* count;      //!< pair events found for each particle (can exceed `cap`)
+  int* other;      //!< the other particle of slot `s` of particle `i`, at `[s * n + i]` (coalesced)
+  double* time;    //!< the pair time of that slot
+  int cap;         //!< slots per particle
+  Event* best;     //!< each unresolved particle's earliest event in the current round
+  char* resolved;  //!< 1 once a particle's event (or none) is decided
+  int* contested;  //!< the particles with at least one pair event (they need rounds)
+  int* partner;    //!< the plan: kFree, kWall, or the other particle of its pair
+  double* ptime;   //!< the plan's pair time
+  Flags* flags;    //!< see Flags
+};
+
+/// Wall times (on one stream, while find_pairs runs on another).
+__global__ void wall_times(ParticlesView p, Box box, StepArrays a) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= p.n) return;
+  a.wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
+}
+
+// EXERCISE 1: find_pairs on a 2D grid: block (x, y) pairs x's 128 particles i with y's tile of 256
+// particles j (in shared memory), j > i only; each pair found goes to both particles' slots.
+/// Files the pair event (i, o) at time t under particle i (slots fill in any order: the event key
+/// orders them, so the result does not depend on it).
+__device__ inline void add_slot(const StepArrays& a, int n, int i, int o, double t) {
+  const int s = atomicAdd(&a.count[i], 1);
+  if (s < a.cap) {
+    a.other[s * n + i] = o;
+    a.time[s * n + i] = t;
+  }
+}
+
+/// The pair search on a 2D grid: block (x, y) pairs particles `i` of x's 128 with particles `j`
+/// of y's tile of 256, held in shared memory, and computes only `j > i` (blocks wholly below the
+/// diagonal return at once). A pair found goes to both particles' slots. Many more threads than
+/// particles: at N = 10^4 one thread per particle would leave most of an H100 idle.
+__global__ void find_pairs(ParticlesView p, Box box, StepArrays a) {
+  __shared__ double sx[kTile], sy[kTile], svx[kTile], svy[kTile];
+  const int i0 = blockIdx.x * blockDim.x;
+  const int j0 = blockIdx.y * kTile;
+  if (j0 + kTile <= i0 + 1) return;  // no j > i in this block
+  for (int k = threadIdx.x; k < kTile; k += blockDim.x) {
+    const int j = j0 + k;
+    if (j < p.n) {
+      sx[k] = p.x[j];
+      sy[k] = p.y[j];
+      svx[k] = p.vx[j];
+      svy[k] = p.vy[j];
+    }
+  }
+  __syncthreads();
+  const int i = i0 + threadIdx.x;
+  if (i >= p.n) return;
+  const double xi = p.x[i], yi = p.y[i], vxi = p.vx[i], vyi = p.vy[i];
+  const int end = min(j0 + kTile, p.n);
+  for (int j = max(j0, i + 1); j < end; ++j) {
+    const int k = j - j0;
+    const double t = model::pair_time(xi, yi, vxi, vyi, sx[k], sy[k], svx[k], svy[k], box.r);
+    if (model::in_step(t)) {
+      add_slot(a, p.n, i, j, t);
+      add_slot(a, p.n, j, i, t);
+    }
+  }
+}
+
+// EXERCISE 2: resolve, every round of a step in one block of kResolveThreads threads.
+/// Every round of the step in one block, so that the host never waits: particles without pair
+/// events are decided at once (their wall, or nothing); the others go through choose / accept
+/// rounds separated by block barriers. Skips the step (and counts nothing) when a particle has
+/// more pair events than slots; the host then grows the slots and runs the step again.
+__global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) {
+  __shared__ int contested;
+  if (a.flags->overflow) return;  // an earlier step is waiting for more slots
+  if (threadIdx.x == 0) contested = 0;
+  __syncthreads();
+  int over = 0;
+  for (int i = threadIdx.x; i < n; i += blockDim.x) {
+    const int c = a.count[i];
+    a.partner[i] = (c == 0 && model::in_step(a.wall[i])) ? kWall : kFree;
+    a.resolved[i] = (c == 0);
+    if (c > a.cap) over = max(over, c);
+    if (c > 0) a.contested[atomicAdd(&contested, 1)] = i;
+  }
+  if (__syncthreads_or(over)) {
+    if (over) atomicMax(&a.flags->overflow, over);
+    return;
+  }
+  const int m = contested;
+  const Event none = model::pair_event_key(model::never(), n, n);
+  for (;;) {
+    for (int k = threadIdx.x; k < m; k += blockDim.x) {  // choose
+      const int i = a.contested[k];
+      if (a.resolved[i]) continue;
+      Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
+      for (int s = 0; s < a.count[i]; ++s) {
+        const int o = a.other[s * n + i];
+        if (a.resolved[o]) continue;
+        const Event e = model::pair_event_key(a.time[s * n + i], i < o ? i : o, i < o ? o : i);
+        if (model::key_less(e, b)) b = e;
+      }
+      a.best[i] = b;
+    }
+    __syncthreads();
+    int open = 0;
+    for (int k = threadIdx.x; k < m; k += blockDim.x) {  // accept
+      const int i = a.contested[k];
+      if (a.resolved[i]) continue;
+      const Event e = a.best[i];
+      const int o = (e.lo == i) ? e.hi : e.lo;
+      if (!model::in_step(e.t)) {
+        a.resolved[i] = 1;
+      } else if (e.kind == model::kWall) {
+        a.partner[i] = kWall;
+        a.resolved[i] = 1;
+      } else if (a.best[o].kind == model::kPair && a.best[o].lo == e.lo && a.best[o].hi == e.hi) {
+        a.partner[i] = o;
+        a.ptime[i] = e.t;
+        a.resolved[i] = 1;
+      } else {
+        open = 1;
+      }
+    }
+    if (!__syncthreads_or(open)) break;
+  }
+  if (threadIdx.x == 0) a.flags->steps_done += 1;
+}
+
+/// Applies the plan; `Branchless` picks MODEL.md's branchless wall event (flip each axis whose
+/// time equals the earlier one) over the branchy one: the same bits, less divergence.
+template <bool Branchless>
+__global__ void apply(ParticlesView p, Box box, StepArrays a) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= p.n || a.flags->overflow) return;
+  const int j = a.partner[i];
+  if (j == kFree) {
+    model::free_move(p.x[i], p.y[i], p.vx[i], p.vy[i]);
+  } else if (j == kWall) {
+    if constexpr (Branchless)
+      model::wall_event_branchless(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], box.L, box.r);
+    else
+      model::wall_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], box.L, box.r);
+  } else if (i < j) {
+    model::pair_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.pc[i], p.x[j], p.y[j], p.vx[j], p.vy[j],
+                      p.pc[j], a.ptime[i], box.L, box.r);
+  }
+}
+
+}  // namespace plab::kernels

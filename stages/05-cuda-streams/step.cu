@@ -1,0 +1,158 @@
+/// \file stages/05-cuda-streams/step.cu
+/// \brief Stage 05, CUDA with streams and branchless walls: stage 04 reorganised so that the host
+/// never waits inside a step. Same bits as stages 01-04.
+//
+// =================================================================================================
+//  GOAL   Stage 04's step with the report's Part 2 optimisations, done so that they pay:
+//         1. wall times on one stream beside the pair search on another (joined by an event);
+//            the pair search split over a 2D grid (i x tiles of j in shared memory, j > i only),
+//            so that N = 10^4 fills an H100; slots laid out [slot][particle] for coalescing;
+//         2. every round in one block (resolve): no host round trip per round;
+//         3. the branchless wall event in apply;
+//         4. one step recorded once as a CUDA graph and replayed: no host synchronisation per
+//            step at all. Slots that run out are caught on the device and redone by the host.
+//         PLAB_CUDA_OFF=graph,streams,branchless turns changes off, to measure what each buys.
+//  READ   handouts/05-cuda-streams.md   TEST   ./plab test --impl student --stage 05
+// =================================================================================================
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <string>
+
+#include "launchers.cuh"
+#include "plab/stage.hpp"
+
+namespace plab {
+namespace {
+
+/// Which of the stage's changes are on (all by default; see PLAB_CUDA_OFF above).
+struct Options {
+  bool graph = true;       //!< replay one recorded step instead of launching its kernels
+  bool streams = true;     //!< wall times on a second stream, beside the pair search
+  bool branchless = true;  //!< the branchless wall event
+
+  /// Reads PLAB_CUDA_OFF, a comma-separated list of the options to turn off.
+  static Options from_environment() {
+    Options o;
+    const char* off = std::getenv("PLAB_CUDA_OFF");
+    const std::string list = off ? std::string(",") + off + "," : "";
+    o.graph = list.find(",graph,") == std::string::npos;
+    o.streams = list.find(",streams,") == std::string::npos;
+    o.branchless = list.find(",branchless,") == std::string::npos;
+    return o;
+  }
+};
+
+/// A run of stage 05: owns the device state and queues steps without waiting for them.
+class CudaStepper final : public Stepper {
+ public:
+  CudaStepper(const Box& box, const Particles& p)
+      : device_(cuda::require_device()), options_(Options::from_environment()), box_(box),
+        p_(p, main_), n_(p_.size()), wall_(n_), count_(n_), best_(n_), resolved_(n_),
+        contested_(n_), partner_(n_), ptime_(n_), flags_(1) {
+    PLAB_CUDA_CHECK(cudaMemsetAsync(flags_.get(), 0, flags_.bytes(), main_));
+    grow_slots(8);
+    main_.sync();
+  }
+
+  void step() override {
+    if (n_ == 0) return;
+    timer_.start(main_);
+    queue_step();
+    timer_.stop(main_);
+    ++asked_;
+  }
+
+  void read(Particles& p) override {
+    catch_up();
+    timer_.close();
+    p_.download(p, main_);
+  }
+
+  [[nodiscard]] double own_seconds() const override { return timer_.seconds(); }
+  [[nodiscard]] std::string device() const override { return device_; }
+
+ private:
+  /// Queues one step: the recorded graph, or its kernels one by one.
+  void queue_step() {
+    if (!options_.graph) return queue_kernels();
+    // EXERCISE 3: record queue_kernels() once as a CUDA graph (again when the slots were
+    // reallocated), then replay it: one launch per step instead of five. cuda::Graph::record()
+    // takes the stream and a function that queues the work; graph_stale_ says when to record.
+    queue_kernels();
+    PLAB_EXERCISE(3, "replay one recorded step as a CUDA graph");
+  }
+
+  /// The kernels of one step, on two streams when options_.streams.
+  void queue_kernels() {
+    const cudaStream_t side = options_.streams ? static_cast<cudaStream_t>(side_) : main_;
+    if (options_.streams) fork_.order(main_, side_);
+    launch::wall_times(p_.view(), box_, arrays(), main_);
+    PLAB_CUDA_CHECK(cudaMemsetAsync(count_.get(), 0, count_.bytes(), side));
+    launch::find_pairs(p_.view(), box_, arrays(), side);
+    if (options_.streams) join_.order(side_, main_);
+    launch::resolve(n_, arrays(), main_);
+    launch::apply(p_.view(), box_, arrays(), options_.branchless, main_);
+  }
+
+  /// Waits for the queued steps; when one ran out of slots (the device then skipped it and every
+  /// step after it), grows the slots and queues the skipped steps again.
+  void catch_up() {
+    for (;;) {
+      kernels::Flags f{};
+      PLAB_CUDA_CHECK(cudaMemcpyAsync(&f, flags_.get(), sizeof f, cudaMemcpyDeviceToHost, main_));
+      main_.sync();
+      if (f.steps_done == asked_ || f.overflow == 0) return;
+      grow_slots(f.overflow);
+      PLAB_CUDA_CHECK(cudaMemsetAsync(&flags_.get()->overflow, 0, sizeof(int), main_));
+      for (long long s = f.steps_done; s < asked_; ++s) queue_step();
+      timer_.stop(main_);
+    }
+  }
+
+  /// The working arrays as the kernels see them.
+  [[nodiscard]] kernels::StepArrays arrays() const {
+    return {wall_.get(),     count_.get(),     other_.get(),   time_.get(),
+            cap_,            best_.get(),      resolved_.get(), contested_.get(),
+            partner_.get(),  ptime_.get(),     flags_.get()};
+  }
+
+  /// At least `needed` slots per particle (a power of two). A recorded graph holds the old
+  /// arrays' addresses: it is recorded again before its next replay.
+  void grow_slots(int needed) {
+    main_.sync();
+    while (cap_ < needed) cap_ = cap_ ? 2 * cap_ : 1;
+    other_.resize(static_cast<std::size_t>(n_) * cap_);
+    time_.resize(static_cast<std::size_t>(n_) * cap_);
+    graph_stale_ = true;
+  }
+
+  std::string device_;
+  Options options_;
+  cuda::Stream main_, side_;
+  cuda::Event fork_, join_;
+  Box box_;
+  cuda::DeviceParticles p_;
+  int n_;
+  int cap_ = 0;
+  long long asked_ = 0;  // steps queued so far
+  cuda::DeviceArray<double> wall_;
+  cuda::DeviceArray<int> count_, other_;
+  cuda::DeviceArray<double> time_;
+  cuda::DeviceArray<model::Event> best_;
+  cuda::DeviceArray<char> resolved_;
+  cuda::DeviceArray<int> contested_, partner_;
+  cuda::DeviceArray<double> ptime_;
+  cuda::DeviceArray<kernels::Flags> flags_;
+  cuda::Graph graph_;
+  bool graph_stale_ = true;  // the graph must be recorded (again) before its next replay
+  cuda::EventTimer timer_;
+};
+
+}  // namespace
+
+std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p) {
+  return std::make_unique<CudaStepper>(box, p);
+}
+
+}  // namespace plab

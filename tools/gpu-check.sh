@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Builds particle-lab with its CUDA stages on a machine with a GPU, runs every GPU test (golden
+# files of every dataset, the large ones too; the same text as the CPU stages on fresh scenes) and
+# times stages 03, 04 and 05 on the 2019 report's scenes. Needs no network and no Doxygen: only
+# cmake, ninja, g++, nvcc, GoogleTest, CLI11 and nlohmann-json.
+#
+#   tools/gpu-check.sh [RESULTS_DIR]      (default build-gpu/results)
+#   PLAB_CUDA_ARCH=80 tools/gpu-check.sh  (another GPU than an H100)
+#   PLAB_BENCH_N=1000,10000 PLAB_BENCH_RUNS=3 tools/gpu-check.sh   (a shorter benchmark)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+results=${1:-build-gpu/results}
+mkdir -p "$results"
+log() { printf '\n== %s\n' "$*"; }
+
+log "device"
+nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader | tee "$results/device.txt"
+
+log "configure and build (CUDA architectures ${PLAB_CUDA_ARCH:-90}, --fmad=false)"
+cmake -S . -B build-gpu -G Ninja -DCMAKE_BUILD_TYPE=Release \
+      -DCMAKE_CUDA_ARCHITECTURES="${PLAB_CUDA_ARCH:-90}" > "$results/configure.log"
+cmake --build build-gpu -j "$(nproc)" > "$results/build.log" 2>&1 || { tail -40 "$results/build.log"; exit 1; }
+echo "built"
+
+log "GPU tests (ctest -L gpu, large scenes included)"
+status=0
+ctest --test-dir build-gpu -L gpu -j 4 --output-on-failure > "$results/ctest-gpu.log" 2>&1 || status=1
+tail -25 "$results/ctest-gpu.log"
+
+log "benchmark: stages 03 ($(nproc) threads), 04, 05; L = 20000, r = 1, S = 500"
+build-gpu/bin/plab bench --stage 03,04,05 --threads "$(nproc)" --steps 500 \
+    --n "${PLAB_BENCH_N:-1000,2000,3000,4000,5000,6000,7000,8000,9000,10000}" \
+    --runs "${PLAB_BENCH_RUNS:-3}" --csv "$results/bench-gpu.csv"
+
+log "stage 05, each change turned off in turn (PLAB_CUDA_OFF), N = 1000 and 10000"
+for off in none graph streams branchless graph,streams,branchless; do
+  echo "-- PLAB_CUDA_OFF=$off"
+  PLAB_CUDA_OFF=$off build-gpu/bin/plab bench --stage 05 --steps 500 --n 1000,10000 \
+      --runs "${PLAB_BENCH_RUNS:-3}" --csv "$results/ablation-${off//,/-}.csv" | head -3
+done
+[ "$status" = 0 ] || echo "SOME GPU TESTS FAILED: see $results/ctest-gpu.log"
+exit "$status"
