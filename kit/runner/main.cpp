@@ -51,6 +51,7 @@ int main(int argc, char** argv) {
           {"n", scene.particles.size()},    {"steps", scene.steps},
           {"threads", plab::get_threads()}, {"device", stats.device},
           {"timer", stats.timer},           {"step_seconds", stats.step_seconds},
+          {"device_bytes", stats.device_bytes},
           {"total_seconds", stats.total_seconds},
           {"pair_events", stats.pair_events}, {"wall_events", stats.wall_events}};
       const std::string text = j.dump(2) + "\n";
@@ -65,6 +66,9 @@ int main(int argc, char** argv) {
                    scene.steps, plab::get_threads(), stats.step_seconds,
                    scene.steps ? 1e3 * stats.step_seconds / scene.steps : 0.0,
                    stats.timer.c_str(), stats.total_seconds, stats.pair_events, stats.wall_events);
+    if (!quiet && stats.device_bytes)
+      std::fprintf(stderr, "stage %s (%s): %.2f MB of device memory held\n", PLAB_STAGE_ID,
+                   PLAB_IMPL, stats.device_bytes / 1e6);
     return 0;
   } catch (const plab::NoDevice& e) {
     std::fprintf(stderr, "stage %s: %s\n", PLAB_STAGE_ID, e.what());

@@ -78,6 +78,7 @@ RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOpt
   stats.step_seconds = stage->own_seconds() >= 0 ? stage->own_seconds() : clock_seconds;
   stats.timer = stage->own_seconds() >= 0 ? "cuda events" : "steady_clock";
   stats.device = stage->device();
+  stats.device_bytes = stage->device_bytes();
   stats.pair_events = (sum(p.pc) - pc0) / 2;
   stats.wall_events = sum(p.wc) - wc0;
   stats.total_seconds = seconds_since(t0);

@@ -58,6 +58,10 @@ class CudaStepper final : public Stepper {
 
   [[nodiscard]] double own_seconds() const override { return timer_.seconds(); }
   [[nodiscard]] std::string device() const override { return device_; }
+  [[nodiscard]] std::size_t device_bytes() const override {
+    return p_.bytes() + wall_.bytes() + count_.bytes() + other_.bytes() + time_.bytes() +
+           best_.bytes() + resolved_.bytes() + partner_.bytes() + ptime_.bytes() + flags_.bytes();
+  }
 
  private:
   /// The working arrays as the kernels see them.

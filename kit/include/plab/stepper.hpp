@@ -6,6 +6,7 @@
 /// the state back only when it prints (every step in print mode, twice in perf mode).
 #pragma once
 
+#include <cstddef>
 #include <memory>
 #include <string>
 
@@ -26,6 +27,8 @@ class Stepper {
   [[nodiscard]] virtual double own_seconds() const { return -1; }
   /// What the stage ran on, for timing reports ("cpu" or the GPU's name).
   [[nodiscard]] virtual std::string device() const { return "cpu"; }
+  /// Bytes of device memory the stage holds now (0 for CPU stages).
+  [[nodiscard]] virtual std::size_t device_bytes() const { return 0; }
 };
 
 /// A stage's step function (see stage.hpp).
