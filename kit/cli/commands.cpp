@@ -328,7 +328,7 @@ void add_bench(CLI::App& app) {
     check_impl(impl);
     std::string csv =
         "stage,impl,n,steps,threads,schedule,runs,median_s,min_s,max_s,speedup,step_median_s,"
-        "step_min_s,step_max_s,timer,device\n";
+        "step_min_s,step_max_s,timer,device,device_bytes\n";
     std::printf("%-5s %6s %5s %7s %-11s %10s %9s %8s %10s %9s  %s\n", "stage", "N", "S", "threads",
                 "schedule", "median s", "spread", "speedup", "in steps", "ms/step", "device");
     const std::string report = temp_path("bench-report.json");
@@ -382,10 +382,11 @@ void add_bench(CLI::App& app) {
             std::fflush(stdout);
             char row[512];
             std::snprintf(row, sizeof row,
-                          "%s,%s,%lld,%lld,%d,\"%s\",%d,%.6f,%.6f,%.6f,%s,%.6f,%.6f,%.6f,%s,\"%s\"\n",
+                          "%s,%s,%lld,%lld,%d,\"%s\",%d,%.6f,%.6f,%.6f,%s,%.6f,%.6f,%.6f,%s,\"%s\",%zu\n",
                           id.c_str(), impl.c_str(), n, a->steps, threads, schedule.c_str(), a->runs,
                           median, t.front(), t.back(), speedup, step_median, steps_t.front(),
-                          steps_t.back(), timer.c_str(), device.c_str());
+                          steps_t.back(), timer.c_str(), device.c_str(),
+                          last.value("device_bytes", std::size_t{0}));
             csv += row;
             if (gpu) break;  // threads and schedules are CPU settings
           }
