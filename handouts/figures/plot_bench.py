@@ -1,7 +1,11 @@
 #!/usr/bin/env python3
-"""Speedup figure of stage 03 from the CSV that `plab bench --csv` writes (matplotlib).
+"""The handouts' benchmark figures, from the CSV files that `plab bench --csv` writes (matplotlib).
 
-Usage: python3 handouts/figures/plot_bench.py   (reads data/bench-stage03*.csv, writes *.png)
+Usage: python3 handouts/figures/plot_bench.py   (reads data/*.csv, writes *.png beside itself)
+  stage03-speedup.png   speedup against threads (data/bench-stage03*.csv)
+  stage04-05-time.png   time against N, CPU and GPU, with the 2019 report's figures
+                        (data/bench-gpu-h100.csv, data/report-2019.csv)
+  stage05-changes.png   what each of stage 05's changes buys (data/ablation-stage05-h100.csv)
 """
 import csv
 import pathlib
@@ -16,10 +20,10 @@ HERE = pathlib.Path(__file__).resolve().parent
 
 def rows(name):
     with open(HERE / "data" / name, newline="") as f:
-        return list(csv.DictReader(f))
+        return list(csv.DictReader(line for line in f if not line.startswith("#")))
 
 
-def main():
+def stage03_speedup():
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4))
     data = [r for r in rows("bench-stage03.csv") if r["stage"] == "03"]
     for n in sorted({int(r["n"]) for r in data}):
@@ -35,6 +39,52 @@ def main():
     right.set(ylabel="speedup with 2 threads", title="Phase-1 schedule, N = 4000, S = 100")
     fig.tight_layout()
     fig.savefig(HERE / "stage03-speedup.png", dpi=100)
+    plt.close(fig)
+
+
+def gpu_time():
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    for r_impl, style in (("CUDA", "s--"), ("OpenMP (20 threads)", "^--")):
+        pts = [r for r in rows("report-2019.csv") if r["implementation"] == r_impl]
+        ax.plot([int(r["n"]) for r in pts], [float(r["seconds"]) for r in pts], style, color="grey",
+                label=f"2019 report, {r_impl} ({pts[0]['device']})")
+    bench = rows("bench-gpu-h100.csv")
+    labels = {"03": "stage 03, OpenMP, 16 threads", "04": "stage 04, CUDA",
+              "05": "stage 05, CUDA + graph"}
+    for stage, style in (("03", "o-"), ("04", "D-"), ("05", "v-")):
+        pts = [r for r in bench if r["stage"] == stage]
+        device = pts[0]["device"] if pts[0]["device"] != "cpu" else "H100 host CPU"
+        ax.plot([int(r["n"]) for r in pts], [float(r["step_median_s"]) for r in pts], style,
+                label=f"{labels[stage]} ({device})")
+    ax.set(xscale="log", yscale="log", xlabel="particles N",
+           ylabel="seconds for S = 500 steps (stages: time in steps)",
+           title="Report's scene (L = 20000, r = 1, perf mode)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(HERE / "stage04-05-time.png", dpi=100)
+    plt.close(fig)
+
+
+def stage05_changes():
+    data = rows("ablation-stage05-h100.csv")
+    names = {"none": "all on", "graph": "no graph", "streams": "no second stream",
+             "branchless": "branchy walls", "graph-streams-branchless": "all three off"}
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
+    for ax, n in zip(axes, ("1000", "10000")):
+        pts = [r for r in data if r["n"] == n]
+        ax.bar([names[r["off"]] for r in pts], [1e3 * float(r["step_median_s"]) / 500 for r in pts])
+        ax.set(ylabel="ms per step", title=f"Stage 05, N = {n} (H100)")
+        ax.tick_params(axis="x", labelrotation=20, labelsize=8)
+    fig.tight_layout()
+    fig.savefig(HERE / "stage05-changes.png", dpi=100)
+    plt.close(fig)
+
+
+def main():
+    stage03_speedup()
+    gpu_time()
+    stage05_changes()
 
 
 if __name__ == "__main__":

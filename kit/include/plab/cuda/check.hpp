@@ -44,6 +44,7 @@ template <class T>
 class DeviceArray {
  public:
   DeviceArray() = default;
+  /// `n` uninitialised elements.
   explicit DeviceArray(std::size_t n) { resize(n); }
   ~DeviceArray() { cudaFree(data_); }
   DeviceArray(const DeviceArray&) = delete;
