@@ -51,7 +51,7 @@ Result run_here(const plab::Scene& scene) {
   std::size_t len = 0;
   std::FILE* mem = open_memstream(&buf, &len);
   plab::OutputWriter out(nullptr);
-  plab::simulate(scene, plab::make_stepper, out, {mem, false});
+  plab::simulate(scene, plab::make_stepper, out, {mem, nullptr, false});
   std::fclose(mem);
   Result r{out.text(), std::string(buf, len)};
   std::free(buf);

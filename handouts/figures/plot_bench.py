@@ -1,12 +1,14 @@
 #!/usr/bin/env python3
 """The handouts' benchmark figures, from the CSV files that `plab bench --csv` writes (matplotlib).
 
-Usage: python3 handouts/figures/plot_bench.py   (reads data/*.csv, writes *.png beside itself)
+Usage: python3 handouts/figures/plot_bench.py [--out DIR]   (reads data/*.csv; writes PNGs into
+DIR, by default beside itself; `plab docs` writes them into build/docs/figures)
   stage03-speedup.png   speedup against threads (data/bench-stage03*.csv)
   stage04-05-time.png   time against N, CPU and GPU, with the 2019 report's figures
                         (data/bench-gpu-h100.csv, data/report-2019.csv)
   stage05-changes.png   what each of stage 05's changes buys (data/ablation-stage05-h100.csv)
 """
+import argparse
 import csv
 import pathlib
 
@@ -16,6 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 HERE = pathlib.Path(__file__).resolve().parent
+OUT = HERE
 
 
 def rows(name):
@@ -38,31 +41,43 @@ def stage03_speedup():
     right.axhline(2, color="k", linestyle=":")
     right.set(ylabel="speedup with 2 threads", title="Phase-1 schedule, N = 4000, S = 100")
     fig.tight_layout()
-    fig.savefig(HERE / "stage03-speedup.png", dpi=100)
+    fig.savefig(OUT / "stage03-speedup.png", dpi=100)
     plt.close(fig)
 
 
-def gpu_time():
-    fig, ax = plt.subplots(figsize=(7.5, 4.8))
-    for r_impl, style in (("CUDA", "s--"), ("OpenMP (20 threads)", "^--")):
+def report_lines(ax, implementations):
+    for r_impl, style in implementations:
         pts = [r for r in rows("report-2019.csv") if r["implementation"] == r_impl]
         ax.plot([int(r["n"]) for r in pts], [float(r["seconds"]) for r in pts], style, color="grey",
                 label=f"2019 report, {r_impl} ({pts[0]['device']})")
+
+
+def gpu_time():
+    fig, (cpu, gpu) = plt.subplots(1, 2, figsize=(13, 5))
+    report_lines(cpu, (("OpenMP (20 threads)", "^--"),))
+    small = rows("bench-stage03.csv")
+    for stage, threads, style in (("02", "1", "s-"), ("03", "1", "o-"), ("03", "2", "o--")):
+        pts = [r for r in small if r["stage"] == stage and r["threads"] == threads]
+        cpu.plot([int(r["n"]) for r in pts], [float(r["median_s"]) for r in pts], style,
+                 label=f"stage {stage}, {threads} thread{'s' if threads != '1' else ''}")
+    cpu.set(title="CPU stages on this kit's 2-core machine (whole process)")
+    report_lines(gpu, (("CUDA", "s--"), ("OpenMP (20 threads)", "^--")))
     bench = rows("bench-gpu-h100.csv")
     labels = {"03": "stage 03, OpenMP, 16 threads", "04": "stage 04, CUDA",
               "05": "stage 05, CUDA + graph"}
     for stage, style in (("03", "o-"), ("04", "D-"), ("05", "v-")):
         pts = [r for r in bench if r["stage"] == stage]
         device = pts[0]["device"] if pts[0]["device"] != "cpu" else "H100 host CPU"
-        ax.plot([int(r["n"]) for r in pts], [float(r["step_median_s"]) for r in pts], style,
-                label=f"{labels[stage]} ({device})")
-    ax.set(xscale="log", yscale="log", xlabel="particles N",
-           ylabel="seconds for S = 500 steps (stages: time in steps)",
-           title="Report's scene (L = 20000, r = 1, perf mode)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+        gpu.plot([int(r["n"]) for r in pts], [float(r["step_median_s"]) for r in pts], style,
+                 label=f"{labels[stage]} ({device})")
+    gpu.set(title="GPU machine (time in steps; CUDA events on the GPU)")
+    for ax in (cpu, gpu):
+        ax.set(xscale="log", yscale="log", xlabel="particles N",
+               ylabel="seconds for S = 500 steps, L = 20000, r = 1")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(HERE / "stage04-05-time.png", dpi=100)
+    fig.savefig(OUT / "stage04-05-time.png", dpi=100)
     plt.close(fig)
 
 
@@ -77,11 +92,16 @@ def stage05_changes():
         ax.set(ylabel="ms per step", title=f"Stage 05, N = {n} (H100)")
         ax.tick_params(axis="x", labelrotation=20, labelsize=8)
     fig.tight_layout()
-    fig.savefig(HERE / "stage05-changes.png", dpi=100)
+    fig.savefig(OUT / "stage05-changes.png", dpi=100)
     plt.close(fig)
 
 
 def main():
+    global OUT
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", type=pathlib.Path, default=HERE, help="folder for the PNG files")
+    OUT = ap.parse_args().out
+    OUT.mkdir(parents=True, exist_ok=True)
     stage03_speedup()
     gpu_time()
     stage05_changes()

@@ -6,7 +6,8 @@
 
 namespace plab::cli {
 
-void add_run(CLI::App& app);     //!< `plab run`: simulate a scene with one stage
+void add_run(CLI::App& app);
+void add_render(CLI::App& app);  //!< `plab render`: animate a run, or two outputs side by side     //!< `plab run`: simulate a scene with one stage
 void add_gen(CLI::App& app);     //!< `plab gen`: write a reproducible random scene
 void add_diff(CLI::App& app);    //!< `plab diff`: where two outputs first differ
 void add_golden(CLI::App& app);  //!< `plab golden`: regenerate or check the golden files

@@ -1,5 +1,5 @@
 /// \file cli/main.cpp
-/// \brief `plab`: the kit's command line (run, gen, diff, golden, test, docs, demo).
+/// \brief `plab`: the kit's command line (run, gen, diff, golden, test, docs, demo, bench, render).
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   plab::cli::add_docs(app);
   plab::cli::add_demo(app);
   plab::cli::add_bench(app);
+  plab::cli::add_render(app);
   try {
     CLI11_PARSE(app, argc, argv);
   } catch (const std::exception& e) {

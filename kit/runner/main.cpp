@@ -14,7 +14,8 @@
 #include "plab/stage.hpp"
 
 int main(int argc, char** argv) {
-  std::string scene_path, out_path, digest_path, report_path;
+  std::string scene_path, out_path, digest_path, report_path, events_path, mode;
+  long long steps = -1;
   std::string schedule = "dynamic,16";
   int threads = 0;
   std::uint64_t seed = plab::kDefaultSeed;
@@ -28,6 +29,12 @@ int main(int argc, char** argv) {
                  "OpenMP schedule of the stage's schedule(runtime) loops: static, dynamic or "
                  "guided, with an optional ,CHUNK")->capture_default_str();
   app.add_option("--seed", seed, "seed for scenes without particle lines")->capture_default_str();
+  app.add_option("--events", events_path,
+                 "write `STEP INDEX wall|pair` for every collision to this file (plab render)");
+  app.add_option("--mode", mode, "print or perf, instead of the scene's own mode")
+      ->check(CLI::IsMember({"print", "perf"}));
+  app.add_option("--steps", steps, "run this many steps instead of the scene's S")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--report", report_path,
                  "write the run's timing as JSON to this file (what plab bench reads)");
   app.add_flag("--quiet", quiet, "no timing summary on stderr");
@@ -36,14 +43,19 @@ int main(int argc, char** argv) {
   try {
     plab::set_threads(threads);
     plab::set_schedule(schedule);
-    const plab::Scene scene = plab::load_scene(scene_path, seed);
+    plab::Scene scene = plab::load_scene(scene_path, seed);
+    if (!mode.empty()) scene.mode = (mode == "print") ? plab::Mode::kPrint : plab::Mode::kPerf;
+    if (steps >= 0) scene.steps = steps;
     plab::OutputFile out(out_path);
     plab::OutputFile digest(digest_path, /*optional=*/true);
+    plab::OutputFile events(events_path, /*optional=*/true);
     plab::OutputWriter writer(out.get());
-    const plab::RunStats stats = plab::simulate(
-        scene, plab::make_stepper, writer, {digest.get(), !quiet && plab::stderr_is_terminal()});
+    const plab::RunStats stats =
+        plab::simulate(scene, plab::make_stepper, writer,
+                       {digest.get(), events.get(), !quiet && plab::stderr_is_terminal()});
     out.commit();
     digest.commit();
+    events.commit();
     if (!report_path.empty()) {
       plab::OutputFile report(report_path);
       const nlohmann::json j = {

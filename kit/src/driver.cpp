@@ -10,6 +10,17 @@
 namespace plab {
 namespace {
 
+/// Writes the collisions of step `s` (the counters that grew from `before` to `after`), and
+/// makes `before` the new start.
+void write_events(long long s, Particles& before, const Particles& after, std::FILE* out) {
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    if (after.wc[i] != before.wc[i]) std::fprintf(out, "%lld %zu wall\n", s, i);
+    if (after.pc[i] != before.pc[i]) std::fprintf(out, "%lld %zu pair\n", s, i);
+  }
+  before.wc = after.wc;
+  before.pc = after.pc;
+}
+
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) {
@@ -55,6 +66,7 @@ RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOpt
   Progress progress(options.progress, steps);
   if (options.digest) std::fputs(digest_line(0, digest(p)).c_str(), options.digest);
   const std::unique_ptr<Stepper> stage = make(scene.box, p);
+  Particles before = p;  // the counters at the start of the step (only kept for options.events)
   double clock_seconds = 0;
   for (long long s = 0; s < steps; ++s) {
     if (scene.mode == Mode::kPrint || s == 0) {
@@ -64,10 +76,9 @@ RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOpt
     const auto ts = Clock::now();
     stage->step();
     clock_seconds += seconds_since(ts);
-    if (options.digest) {
-      stage->read(p);
-      std::fputs(digest_line(s + 1, digest(p)).c_str(), options.digest);
-    }
+    if (options.digest || options.events) stage->read(p);
+    if (options.digest) std::fputs(digest_line(s + 1, digest(p)).c_str(), options.digest);
+    if (options.events) write_events(s, before, p, options.events);
     progress.update(s + 1);
   }
   const auto ts = Clock::now();

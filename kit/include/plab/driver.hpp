@@ -31,6 +31,8 @@ struct RunStats {
 /// Options of a run.
 struct RunOptions {
   std::FILE* digest = nullptr;  //!< where to write one digest line per step (optional)
+  std::FILE* events = nullptr;  //!< where to write `STEP INDEX wall|pair` for each collision in
+                                //!< step STEP (from the counters; optional, for plab render)
   bool progress = false;        //!< show progress on stderr
 };
 
