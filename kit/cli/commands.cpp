@@ -487,4 +487,55 @@ void add_render(CLI::App& app) {
   });
 }
 
+void add_grade(CLI::App& app) {
+  struct Args {
+    std::string submission, stages, out = "results.json", junit, rubric, scratch;
+    long long seed = -1;
+    bool keep = false;
+  };
+  auto a = std::make_shared<Args>();
+  auto* c = app.add_subcommand(
+      "grade", "Grade a submission (a copy of the kit with its stages/ filled in): builds its "
+               "stages with the kit's own code in a scratch folder, runs them under limits against "
+               "public and hidden scenes, one step at a time and for speed, and writes Gradescope's "
+               "results.json, JUnit XML and a summary. Points: kit/grade/rubric.json.");
+  c->add_option("--submission", a->submission, "the submission's folder (its stages/ is used)")
+      ->required()->check(CLI::ExistingDirectory);
+  c->add_option("--stages", a->stages, "stages to grade, e.g. 01,03 (default: all in the rubric)");
+  c->add_option("--out", a->out, "results.json to write (always written)")->capture_default_str();
+  c->add_option("--junit", a->junit, "JUnit XML to write (default: beside --out, .xml)");
+  c->add_option("--hidden-seed", a->seed, "secret seed of the hidden scenes (default: random)");
+  c->add_option("--rubric", a->rubric, "rubric file (default: kit/grade/rubric.json)");
+  c->add_option("--scratch", a->scratch, "where to build and run (default: the system's temp)");
+  c->add_flag("--keep", a->keep, "keep the scratch folder");
+  c->callback([a] {
+    if (default_impl() != "solution")
+      throw std::runtime_error("grading needs the instructor's kit (with solutions/)");
+    std::vector<std::string> args{"python3", source_dir() + "/kit/grade/grade.py", "--submission",
+                                  a->submission, "--out", a->out, "--rubric",
+                                  a->rubric.empty() ? source_dir() + "/kit/grade/rubric.json"
+                                                    : a->rubric,
+                                  "--kit-source", source_dir(), "--kit-build", build_dir()};
+    if (!a->stages.empty()) args.insert(args.end(), {"--stages", a->stages});
+    if (!a->junit.empty()) args.insert(args.end(), {"--junit", a->junit});
+    if (a->seed >= 0) args.insert(args.end(), {"--hidden-seed", std::to_string(a->seed)});
+    if (!a->scratch.empty()) args.insert(args.end(), {"--scratch", a->scratch});
+    if (a->keep) args.emplace_back("--keep");
+    g_status = run_program(args);
+  });
+}
+
+void add_release(CLI::App& app) {
+  auto out = std::make_shared<std::string>();
+  auto* c = app.add_subcommand("release", "Write the student version of the kit into a new folder: "
+                                          "no solutions/, no CI, docs built from the copy itself.");
+  c->add_option("--out", *out, "a new (or empty) folder")->required();
+  c->callback([out] {
+    if (default_impl() != "solution")
+      throw std::runtime_error("this is already a student copy (it has no solutions/)");
+    g_status = run_program({"python3", source_dir() + "/kit/grade/release.py", "--kit-source",
+                            source_dir(), "--out", *out});
+  });
+}
+
 }  // namespace plab::cli

@@ -19,6 +19,8 @@ int main(int argc, char** argv) {
   plab::cli::add_demo(app);
   plab::cli::add_bench(app);
   plab::cli::add_render(app);
+  plab::cli::add_grade(app);
+  plab::cli::add_release(app);
   try {
     CLI11_PARSE(app, argc, argv);
   } catch (const std::exception& e) {

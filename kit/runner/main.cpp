@@ -9,12 +9,13 @@
 #include "plab/driver.hpp"
 #include "plab/errors.hpp"
 #include "plab/generate.hpp"
+#include "plab/grading.hpp"
 #include "plab/io.hpp"
 #include "plab/runtime.hpp"
 #include "plab/stage.hpp"
 
 int main(int argc, char** argv) {
-  std::string scene_path, out_path, digest_path, report_path, events_path, mode;
+  std::string scene_path, out_path, digest_path, report_path, events_path, mode, step_from, explain;
   long long steps = -1;
   std::string schedule = "dynamic,16";
   int threads = 0;
@@ -35,6 +36,11 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"print", "perf"}));
   app.add_option("--steps", steps, "run this many steps instead of the scene's S")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--step-from-each", step_from,
+                 "grading: from each block of this print-mode output, run one step and print it");
+  app.add_option("--explain", explain,
+                 "grading: K:i,j,... says the events of particles i, j, ... in step K (by the kit's "
+                 "greedy oracle, from this stage's state at the start of step K)");
   app.add_option("--report", report_path,
                  "write the run's timing as JSON to this file (what plab bench reads)");
   app.add_flag("--quiet", quiet, "no timing summary on stderr");
@@ -46,6 +52,30 @@ int main(int argc, char** argv) {
     plab::Scene scene = plab::load_scene(scene_path, seed);
     if (!mode.empty()) scene.mode = (mode == "print") ? plab::Mode::kPrint : plab::Mode::kPerf;
     if (steps >= 0) scene.steps = steps;
+    if (!step_from.empty()) {
+      plab::OutputFile out(out_path);
+      plab::step_from_each(scene.box, plab::parse_output(plab::read_file(step_from), step_from),
+                           plab::make_stepper, out.get());
+      out.commit();
+      return 0;
+    }
+    if (!explain.empty()) {
+      std::vector<int> which;
+      const auto colon = explain.find(':');
+      const long long k = std::stoll(explain.substr(0, colon));
+      std::string list = colon == std::string::npos ? "" : explain.substr(colon + 1);
+      for (std::size_t at = 0; at < list.size();) {
+        const auto comma = list.find(',', at);
+        which.push_back(std::stoi(list.substr(at, comma - at)));
+        at = comma == std::string::npos ? list.size() : comma + 1;
+      }
+      plab::Particles p = scene.particles;
+      const auto stage = plab::make_stepper(scene.box, p);
+      for (long long s = 0; s < k; ++s) stage->step();
+      stage->read(p);
+      std::fputs(plab::describe_events(scene.box, p, which).c_str(), stdout);
+      return 0;
+    }
     plab::OutputFile out(out_path);
     plab::OutputFile digest(digest_path, /*optional=*/true);
     plab::OutputFile events(events_path, /*optional=*/true);

@@ -1,0 +1,97 @@
+/// \file grading.cpp
+/// \brief The autograder's helpers: the greedy oracle, event descriptions, one step from each state.
+#include "plab/grading.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <sstream>
+
+#include "plab/errors.hpp"
+#include "plab/io.hpp"
+
+namespace plab {
+
+Plan plan_step(const Box& box, const Particles& p) {
+  const int n = static_cast<int>(p.size());
+  std::vector<model::Event> events;
+  for (int i = 0; i < n; ++i) {
+    const model::Event w = wall_candidate(box, p, i);
+    if (model::in_step(w.t)) events.push_back(w);
+    for (int j = i + 1; j < n; ++j) {
+      const model::Event e = pair_candidate(box, p, i, j);
+      if (model::in_step(e.t)) events.push_back(e);
+    }
+  }
+  std::sort(events.begin(), events.end(), model::key_less);
+  Plan plan;
+  plan.reset(p.size());
+  for (const model::Event& e : events)
+    if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
+  return plan;
+}
+
+std::string describe_events(const Box& box, const Particles& p, const std::vector<int>& which) {
+  const Plan plan = plan_step(box, p);
+  std::ostringstream s;
+  char t[64];
+  for (const int i : which) {
+    if (i < 0 || i >= static_cast<int>(p.size())) continue;
+    s << "particle " << i << ": ";
+    const int j = plan.partner[i];
+    if (j == Plan::kFree) {
+      s << "moves freely";
+    } else if (j == Plan::kWall) {
+      std::snprintf(t, sizeof t, "%.8f", model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r));
+      s << "hits a wall at t = " << t;
+    } else {
+      std::snprintf(t, sizeof t, "%.8f", plan.time[i]);
+      s << "pair collision with " << j << " at t = " << t;
+    }
+    s << "\n";
+  }
+  return s.str();
+}
+
+std::vector<std::pair<long long, Particles>> parse_output(const std::string& text,
+                                                          const std::string& file) {
+  std::vector<std::pair<long long, Particles>> blocks;
+  std::istringstream in(text);
+  std::string line;
+  long number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    std::istringstream f(line);
+    long long step = 0, index = 0, pc = 0, wc = 0;
+    double x = 0, y = 0, vx = 0, vy = 0;
+    if (!(f >> step >> index >> x >> y >> vx >> vy))
+      throw InputError(file, number, "a line 'step i x y vx vy'", "'" + line + "'");
+    if (!(f >> pc >> wc)) pc = wc = 0;
+    if (blocks.empty() || blocks.back().first != step) blocks.emplace_back(step, Particles{});
+    Particles& p = blocks.back().second;
+    if (index != static_cast<long long>(p.size()))
+      throw InputError(file, number, "particle " + std::to_string(p.size()) + " of step " +
+                                         std::to_string(step), "particle " + std::to_string(index));
+    p.x.push_back(x);
+    p.y.push_back(y);
+    p.vx.push_back(vx);
+    p.vy.push_back(vy);
+    p.pc.push_back(pc);
+    p.wc.push_back(wc);
+  }
+  return blocks;
+}
+
+void step_from_each(const Box& box, const std::vector<std::pair<long long, Particles>>& blocks,
+                    const MakeStepper& make, std::FILE* out) {
+  OutputWriter writer(out);
+  for (std::size_t k = 0; k + 1 < blocks.size(); ++k) {
+    Particles p = blocks[k].second;
+    const auto stage = make(box, p);
+    stage->step();
+    stage->read(p);
+    writer.block(blocks[k].first + 1, p, false);
+  }
+  writer.flush();
+}
+
+}  // namespace plab

@@ -1,0 +1,157 @@
+#!/usr/bin/env python3
+"""Self-tests of `plab grade` (CTest label grader): the solutions get full marks, the untouched
+starting points get no correctness points and each test names the exercise, five mutated solutions
+are each caught at the right first divergence, and submissions that crash, loop forever or print
+without end are stopped, scored zero with the reason, and still get a results.json.
+
+  grader_selftest.py PLAB_PROGRAM KIT_SOURCE_DIR SCRATCH_DIR [CASE ...]
+"""
+import json
+import pathlib
+import shutil
+import subprocess
+import sys
+
+plab, kit, scratch = sys.argv[1], pathlib.Path(sys.argv[2]), pathlib.Path(sys.argv[3])
+only = set(sys.argv[4:])
+STAGES = {"01": "01-naive", "02": "02-heap", "03": "03-openmp"}
+failures = []
+
+
+def submission(name, tree="solutions", mutations=()):
+    """A copy of the kit's stages 01-03 (solutions or starting points), with `mutations`
+    applied: (stage, old text, new text), each of which must match exactly once."""
+    root = scratch / name
+    shutil.rmtree(root, ignore_errors=True)
+    for folder in STAGES.values():
+        shutil.copytree(kit / tree / folder, root / "stages" / folder)
+    for stage, old, new in mutations:
+        f = root / "stages" / STAGES[stage] / "step.cpp"
+        text = f.read_text()
+        assert text.count(old) == 1, f"mutation of stage {stage} does not match once: {old!r}"
+        f.write_text(text.replace(old, new))
+    return root
+
+
+def grade(name, root):
+    out = scratch / f"{name}.json"
+    out.unlink(missing_ok=True)
+    done = subprocess.run([plab, "grade", "--submission", root, "--stages", "01,02,03", "--out",
+                           out, "--hidden-seed", "7"], capture_output=True, text=True)
+    (scratch / f"{name}.log").write_text(done.stdout + done.stderr)
+    assert out.exists(), f"{name}: no results.json written:\n{done.stdout[-3000:]}{done.stderr}"
+    tests = {t["name"]: t for t in json.loads(out.read_text())["tests"]}
+    assert "grader error" not in tests, tests.get("grader error", {}).get("output")
+    return tests, done.stdout
+
+
+def check(name, condition, message):
+    print(("ok   " if condition else "FAIL ") + f"{name}: {message}", flush=True)
+    if not condition:
+        failures.append(f"{name}: {message}")
+
+
+def failed(tests, prefix):
+    return {n: t for n, t in tests.items() if n.startswith(prefix) and t["status"] == "failed"}
+
+
+def case_solutions():
+    tests, _ = grade("solutions", submission("solutions"))
+    lost = {n: t for n, t in tests.items() if t["score"] < t["max_score"]}
+    noisy = all("TOO NOISY" in t["output"] for n, t in lost.items() if "performance" in n)
+    check("solutions", not lost or (noisy and all("performance" in n for n in lost)),
+          f"full marks on {len(tests)} tests" if not lost else f"lost points: {list(lost)}")
+
+
+def case_starting_points():
+    tests, _ = grade("starting-points", submission("starting-points", "stages"))
+    correctness = {n: t for n, t in tests.items() if "performance" not in n}
+    check("starting points", all(t["score"] == 0 for t in correctness.values()),
+          "no correctness points")
+    named = [t for t in correctness.values() if "EXERCISE" in t["output"]]
+    check("starting points", len(named) == len(correctness),
+          f"{len(named)} of {len(correctness)} tests name the unfinished exercise, e.g. "
+          f"{next(iter(named), {}).get('output', '')!r}")
+
+
+def case_mutants_a():
+    root = submission("mutants-a", mutations=[
+        # wrong tie rule: a pair beats a wall at the same time
+        ("02", "return model::key_less(b, a);",
+         "return (a.t != b.t) ? a.t > b.t : a.kind < b.kind;"),
+        # missing stop at a wall after a pair collision (pairs finish the step as if the walls
+        # were infinitely far: the rest of the step never stops at one)
+        ("01", "for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);",
+         "for (int i = 0; i < n; ++i) apply_one(plan.partner[i] >= 0 ? Box{box.L, -1e300} : box, "
+         "p, plan, i);"),
+        # off-by-one in the rounds: the last particle never chooses
+        ("03", "#pragma omp parallel for schedule(static)\n    for (int i = 0; i < n; ++i) {\n"
+               "      if (resolved[i]) continue;\n      model::Event b",
+         "#pragma omp parallel for schedule(static)\n    for (int i = 0; i < n - 1; ++i) {\n"
+         "      if (resolved[i]) continue;\n      model::Event b"),
+    ])
+    tests, out = grade("mutants-a", root)
+    t = tests["02: public wall-and-pair-tie"]
+    check("tie rule", t["status"] == "failed" and "hits a wall" in t["output"],
+          "02: wall-and-pair-tie fails; the reference says the particle hits a wall")
+    t = tests["01: public pair-then-wall-stop"]
+    check("stop at a wall", t["status"] == "failed" and "step 1, particle" in t["output"],
+          "01: pair-then-wall-stop fails at step 1, after the pair collision of step 0")
+    t = tests["03: public course-1"]
+    check("off-by-one", t["status"] == "failed" and "step 1, particle 1" in t["output"],
+          "03: course-1 fails at step 1 on particle 1, the last one")
+    print(out[out.find("first failure of stage 02"):][:1500])
+
+
+def case_mutants_b():
+    root = submission("mutants-b", mutations=[
+        # the window closed at t = 1 (an event exactly at the end of the step counts)
+        ("02", "const model::Event w = wall_candidate(box, p, i);\n    if (model::in_step(w.t))",
+         "const model::Event w = wall_candidate(box, p, i);\n    if (w.t <= 1)"),
+        # a data race: every thread appends to the first thread's list
+        ("03", "std::vector<FoundPair>& mine = found[omp_get_thread_num()];",
+         "std::vector<FoundPair>& mine = found[0];"),
+    ])
+    tests, _ = grade("mutants-b", root)
+    t = tests["02: public event-at-step-end"]
+    check("t <= 1", t["status"] == "failed" and "first difference" in t["output"],
+          "02: event-at-step-end fails with a first difference")
+    bad = failed(tests, "03:")
+    check("data race", bool(bad), f"stage 03 with 2 threads fails {len(bad)} tests, e.g. "
+          f"{next(iter(bad), '')}: {next(iter(bad.values()), {}).get('output', '')[:80]!r}")
+
+
+def case_hostile():
+    root = submission("hostile", mutations=[
+        ("01", "void step(const Box& box, Particles& p) {\n",
+         "void step(const Box& box, Particles& p) {\n  volatile int* nothing = nullptr;\n"
+         "  *nothing = 1;\n"),
+        ("02", "void step(const Box& box, Particles& p) {\n",
+         "void step(const Box& box, Particles& p) {\n  for (volatile long k = 0;; k = k + 1) {\n"
+         "  }\n"),
+        ("03", "void step(const Box& box, Particles& p) {\n",
+         "void step(const Box& box, Particles& p) {\n  for (;;) std::fputs(\"spam spam spam\\n\", "
+         "stdout);\n"),
+    ])
+    tests, _ = grade("hostile", root)
+    total = sum(t["score"] for t in tests.values())
+    check("hostile", total == 0, f"scored {total} in all")
+    crash = tests["01: public course-1"]["output"]
+    check("crash", "crashed with signal 11 (SIGSEGV)" in crash, crash.splitlines()[0])
+    loop = tests["02: public course-1"]["output"]
+    check("endless loop", "time limit" in loop, loop.splitlines()[0])
+    later = tests["02: public course-2"]["output"]
+    check("endless loop", later.startswith("not run: an earlier test"), later.splitlines()[0])
+    flood = tests["03: public course-1"]["output"]
+    check("flood", "output cap" in flood, flood.splitlines()[0])
+
+
+CASES = {"solutions": case_solutions, "starting-points": case_starting_points,
+         "mutants-a": case_mutants_a, "mutants-b": case_mutants_b, "hostile": case_hostile}
+scratch.mkdir(parents=True, exist_ok=True)
+for name, case in CASES.items():
+    if not only or name in only:
+        case()
+if failures:
+    sys.exit("grader self-test failures:\n  " + "\n  ".join(failures))
+print("every grader self-test passed")
