@@ -35,6 +35,7 @@ namespace plab {
 void PrintTo(const Dataset& d, std::ostream* os) { *os << d.name; }
 void PrintTo(const GenParams& g, std::ostream* os) {
   *os << "plab gen --n " << g.n << " --l " << g.L << " --r " << g.r << " --steps " << g.steps;
+  if (g.speed_min >= 0) *os << " --speed " << g.speed_min << ":" << g.speed_max;
 }
 }  // namespace plab
 
@@ -158,7 +159,11 @@ TEST_P(AgainstOtherStage, SameText) {
   expect_same_as_other(plab::generate_scene(g),
                        "a fresh scene (plab gen --n " + std::to_string(g.n) + " --l " +
                            std::to_string(g.L) + " --r " + std::to_string(g.r) + " --steps " +
-                           std::to_string(g.steps) + " --seed " + std::to_string(g.seed) + ")");
+                           std::to_string(g.steps) + " --seed " + std::to_string(g.seed) +
+                           (g.speed_min >= 0 ? " --speed " + std::to_string(g.speed_min) + ":" +
+                                                   std::to_string(g.speed_max)
+                                             : std::string()) +
+                           ")");
 }
 
 /// One particle at rest with 24 others converging on it from a ring (overlapping each other):
@@ -185,7 +190,9 @@ INSTANTIATE_TEST_SUITE_P(
     Random, AgainstOtherStage,
     testing::Values(plab::GenParams{60, 600, 1, 60, plab::Mode::kPrint, 0},     // sparse, fast
                     plab::GenParams{50, 30, 1, 60, plab::Mode::kPrint, 0},      // dense (0.17)
-                    plab::GenParams{90, 40, 1.5, 20, plab::Mode::kPrint, 0}),   // very dense (0.40)
+                    plab::GenParams{90, 40, 1.5, 20, plab::Mode::kPrint, 0},    // very dense (0.40)
+                    plab::GenParams{80, 50, 1, 30, plab::Mode::kPrint, 0, 1e-3, 1e-2},  // very slow
+                    plab::GenParams{60, 100, 1, 20, plab::Mode::kPrint, 0, 400, 1000}), // 4-10 boxes a step
     [](const auto& info) { return "scene" + std::to_string(info.index); });
 
 TEST(Invariants, EnergyConservedFiniteCountersGrow) {

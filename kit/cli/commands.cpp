@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
@@ -313,6 +314,8 @@ void add_bench(CLI::App& app) {
     int runs = 3;
     std::string csv, impl;
     std::uint64_t seed = 1;
+    bool fixed_density = false;
+    std::string speed;
   };
   auto a = std::make_shared<Args>();
   auto* c = app.add_subcommand("bench", "Time stages on scenes like the 2019 report's (L = 20000, "
@@ -328,6 +331,11 @@ void add_bench(CLI::App& app) {
   c->add_option("--schedule", a->schedules, "OpenMP schedules to compare, e.g. static dynamic,16 "
                                             "guided")->capture_default_str();
   c->add_option("--seed", a->seed, "scene seed")->capture_default_str();
+  c->add_flag("--fixed-density", a->fixed_density,
+              "scale the box with N (L = 20000 sqrt(N / 10^4)): the report's density at every N, "
+              "with the report's speeds (2500 .. 5000) unless --speed says otherwise");
+  c->add_option("--speed", a->speed, "MIN:MAX speeds (default: MODEL.md's L/8 .. L/4, or 2500:5000 "
+                                     "with --fixed-density)");
   c->add_option("--impl", a->impl, "solution or student (default as for run)");
   c->add_option("--csv", a->csv, "also write the table as CSV to this file");
   c->callback([a] {
@@ -340,10 +348,19 @@ void add_bench(CLI::App& app) {
                 "schedule", "median s", "spread", "speedup", "in steps", "ms/step", "device");
     const std::string report = temp_path("bench-report.json");
     for (const long long n : a->n) {
-      const std::string scene = temp_path("bench-" + std::to_string(n) + "-" +
+      const std::string scene = temp_path("bench-" + std::to_string(n) + (a->fixed_density ? "-fd-" : "-") +
                                           std::to_string(a->steps) + "-" + std::to_string(a->seed) +
                                           ".in");
-      GenParams g{n, 20000, 1, a->steps, Mode::kPerf, a->seed};
+      const double L = a->fixed_density ? 20000 * std::sqrt(n / 1e4) : 20000;
+      GenParams g{n, L, 1, a->steps, Mode::kPerf, a->seed};
+      if (!a->speed.empty()) {
+        const auto colon = a->speed.find(':');
+        g.speed_min = std::stod(a->speed.substr(0, colon));
+        g.speed_max = std::stod(a->speed.substr(colon + 1));
+      } else if (a->fixed_density) {
+        g.speed_min = 2500;
+        g.speed_max = 5000;
+      }
       write_text(scene, format_scene(generate_scene(g)));
       for (const std::string& raw : a->stages) {
         const std::string id = two_digits(raw);

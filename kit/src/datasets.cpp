@@ -59,7 +59,9 @@ Scene generate_scene(const GenParams& g) {
   s.box = Box{g.L, g.r};
   s.steps = g.steps;
   s.mode = g.mode;
-  s.particles = generate(s.box, static_cast<std::size_t>(g.n), g.seed, default_speeds(s.box));
+  const SpeedRange speeds =
+      g.speed_min < 0 ? default_speeds(s.box) : SpeedRange{g.speed_min, g.speed_max};
+  s.particles = generate(s.box, static_cast<std::size_t>(g.n), g.seed, speeds);
   return s;
 }
 

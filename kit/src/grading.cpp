@@ -22,12 +22,7 @@ Plan plan_step(const Box& box, const Particles& p) {
       if (model::in_step(e.t)) events.push_back(e);
     }
   }
-  std::sort(events.begin(), events.end(), model::key_less);
-  Plan plan;
-  plan.reset(p.size());
-  for (const model::Event& e : events)
-    if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
-  return plan;
+  return greedy_plan(events, p.size());
 }
 
 std::string describe_events(const Box& box, const Particles& p, const std::vector<int>& which) {

@@ -2,6 +2,7 @@
 /// \brief The events chosen for one step (at most one per particle), and applying them.
 #pragma once
 
+#include <algorithm>
 #include <vector>
 
 #include "plab/model.hpp"
@@ -64,6 +65,17 @@ inline void apply_one(const Box& box, Particles& p, const Plan& plan, int i) {
 inline void apply(const Box& box, Particles& p, const Plan& plan) {
   const int n = static_cast<int>(p.size());
   for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);
+}
+
+/// MODEL.md's selection over a list of candidate events (walls and pairs with t < 1): in key
+/// order, each event is accepted when its particles are still free. Sorts `events`.
+inline Plan greedy_plan(std::vector<model::Event>& events, std::size_t n) {
+  std::sort(events.begin(), events.end(), model::key_less);
+  Plan plan;
+  plan.reset(n);
+  for (const model::Event& e : events)
+    if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
+  return plan;
 }
 
 /// The wall event of particle `i` as a candidate, from its start-of-step state.

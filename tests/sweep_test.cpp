@@ -1,0 +1,118 @@
+/// \file sweep_test.cpp
+/// \brief The broad phase never drops a pair whose MODEL.md pair time is below 1: random pairs
+/// placed to meet at a chosen time, and grazing pairs whose closest approach is right at 2r.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "plab/model.hpp"
+#include "plab/plan.hpp"
+#include "plab/sweep.hpp"
+
+namespace {
+
+/// Whether the broad phase finds particles 0 and 1 of `p` in some slab: close_in_slab() holds at
+/// the slab's midpoint and their cells are the same or adjacent (what stage 06 searches).
+bool found(const plab::Particles& p, const plab::sweep::Grid& g) {
+  const double h = 0.5 / g.slabs;
+  for (int k = 0; k < g.slabs; ++k) {
+    const double tm = plab::sweep::slab_mid(k, g);
+    double mx[2], my[2], ra[2];
+    for (int i = 0; i < 2; ++i) {
+      mx[i] = p.x[i] + tm * p.vx[i];
+      my[i] = p.y[i] + tm * p.vy[i];
+      ra[i] = std::sqrt(p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i]) * h * (1 + 1e-9);
+    }
+    const int dx = plab::sweep::cell_of(mx[0], g) - plab::sweep::cell_of(mx[1], g);
+    const int dy = plab::sweep::cell_of(my[0], g) - plab::sweep::cell_of(my[1], g);
+    if (std::abs(dx) <= 1 && std::abs(dy) <= 1 &&
+        plab::sweep::close_in_slab(mx[0] - mx[1], my[0] - my[1], p.vx[0] - p.vx[1],
+                                   p.vy[0] - p.vy[1], ra[0], ra[1], g))
+      return true;
+  }
+  return false;
+}
+
+/// A scene of `n` particles whose grid is used, with particles 0 and 1 the pair under test.
+struct Case {
+  plab::Box box;
+  plab::Particles p;
+};
+
+Case make_case(std::mt19937_64& rng, double L, double r, double speed, int n, double t_meet,
+               double miss, bool graze) {
+  std::uniform_real_distribution<double> u(0, 1);
+  Case c{{L, r}, {}};
+  c.p.resize(n);
+  for (int i = 2; i < n; ++i) {  // the rest of the scene sets the grid (speeds, extent)
+    c.p.x[i] = r + u(rng) * (L - 2 * r);
+    c.p.y[i] = r + u(rng) * (L - 2 * r);
+    const double a = 2 * M_PI * u(rng);
+    c.p.vx[i] = speed * std::cos(a);
+    c.p.vy[i] = speed * std::sin(a);
+  }
+  // Particles 0 and 1 are 2r + miss apart at t_meet, approaching along a random direction.
+  const double cx = r + u(rng) * (L - 2 * r), cy = r + u(rng) * (L - 2 * r);
+  const double a = 2 * M_PI * u(rng), b = 2 * M_PI * u(rng);
+  const double s0 = speed * u(rng), s1 = speed * u(rng);
+  const double nx = std::cos(a), ny = std::sin(a);
+  const double gap = 2 * r + miss;
+  c.p.vx[0] = s0 * std::cos(b);
+  c.p.vy[0] = s0 * std::sin(b);
+  c.p.vx[1] = s1 * std::cos(b + 2 * M_PI * u(rng));
+  c.p.vy[1] = s1 * std::sin(b + 2 * M_PI * u(rng));
+  if (graze) {  // relative velocity across the line of centres: closest approach at t_meet
+    c.p.vx[1] = c.p.vx[0] - s1 * ny;
+    c.p.vy[1] = c.p.vy[0] + s1 * nx;
+  }
+  c.p.x[0] = cx - t_meet * c.p.vx[0];
+  c.p.y[0] = cy - t_meet * c.p.vy[0];
+  c.p.x[1] = cx + gap * nx - t_meet * c.p.vx[1];
+  c.p.y[1] = cy + gap * ny - t_meet * c.p.vy[1];
+  return c;
+}
+
+TEST(Sweep, NeverDropsAPairThatMeetsInTheStep) {
+  std::mt19937_64 rng(2026);
+  std::uniform_real_distribution<double> u(0, 1);
+  long checked = 0;
+  for (int trial = 0; trial < 200000; ++trial) {
+    const double L = std::pow(10.0, 1 + 5 * u(rng));              // 10 .. 10^6
+    const double r = L * std::pow(10.0, -1 - 4 * u(rng));          // L/10 .. L/10^5
+    const double speed = L * std::pow(10.0, -6 + 6 * u(rng));      // tiny .. a whole box a step
+    const int n = 2 + static_cast<int>(u(rng) * 60);
+    // meet right at the margin: 2r apart give or take a few ulps, at any time of the step
+    const double miss = (u(rng) - 0.5) * 8 * std::numeric_limits<double>::epsilon() * L;
+    Case c = make_case(rng, L, r, speed, n, u(rng), miss, trial % 2 == 0);
+    const double t = plab::pair_candidate(c.box, c.p, 0, 1).t;
+    if (!plab::model::in_step(t)) continue;
+    ++checked;
+    const plab::sweep::Grid g = plab::sweep::choose(c.box, c.p);
+    ASSERT_TRUE(found(c.p, g)) << "pair time " << t << " dropped: L " << L << " r " << r
+                               << " speed " << speed << " slabs " << g.slabs;
+  }
+  EXPECT_GT(checked, 50000);
+}
+
+TEST(Sweep, GridFromTheScene) {
+  plab::Particles p;
+  p.resize(10000);
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    p.x[i] = 20000 * u(rng);
+    p.y[i] = 20000 * u(rng);
+    p.vx[i] = 5000 * (2 * u(rng) - 1) / std::sqrt(2.0);
+    p.vy[i] = 5000 * (2 * u(rng) - 1) / std::sqrt(2.0);
+  }
+  const plab::sweep::Grid g = plab::sweep::choose({20000, 1}, p);
+  EXPECT_GT(g.slabs, 1);  // long sweeps: several slabs
+  EXPECT_LT(g.cell, 2 + 6000.0 / g.slabs);
+  EXPECT_GE(1 << g.bucket_bits, 20000);
+  p.vx.assign(p.size(), 0);
+  p.vy.assign(p.size(), 0);
+  EXPECT_EQ(plab::sweep::choose({20000, 1}, p).slabs, 1);  // at rest: one slab, cells of 2r
+}
+
+}  // namespace
