@@ -1,4 +1,4 @@
-# plab_add_stage(SOURCES file... [TEST_MAX_N n] [GPU])
+# plab_add_stage(SOURCES file... [CUDA_SOURCES file...] [TEST_MAX_N n] [GPU])
 #
 # Called from each stage folder's CMakeLists.txt (stages/NN-name or solutions/NN-name). Adds:
 #   plab_stage_NN_IMPL   a library with the stage's step() (IMPL: student or solution)
@@ -6,8 +6,10 @@
 # and records the stage so that tests/ adds its tests. TEST_MAX_N: the largest scene its golden
 # tests run (stage 01 is O(N^3) per step by design). GPU: a CUDA stage (its sources define
 # plab::make_stepper(); PLAB_GPU_STAGE is set for it and its users), skipped without nvcc.
+# CUDA_SOURCES: a CPU stage's GPU version, compiled when nvcc is found (PLAB_HYBRID_STAGE is then
+# set: its make_stepper() takes the GPU when there is one).
 function(plab_add_stage)
-  cmake_parse_arguments(S "GPU" "TEST_MAX_N" "SOURCES" ${ARGN})
+  cmake_parse_arguments(S "GPU" "TEST_MAX_N" "SOURCES;CUDA_SOURCES" ${ARGN})
   get_filename_component(folder ${CMAKE_CURRENT_SOURCE_DIR} NAME)
   get_filename_component(tree ${CMAKE_CURRENT_SOURCE_DIR} DIRECTORY)
   get_filename_component(tree ${tree} NAME)
@@ -35,6 +37,11 @@ function(plab_add_stage)
     set(kind gpu)
     target_link_libraries(${lib} PUBLIC plab::cuda)
     target_compile_definitions(${lib} PUBLIC PLAB_GPU_STAGE=1)
+  elseif(S_CUDA_SOURCES AND PLAB_HAVE_CUDA)
+    set(kind hybrid)
+    target_sources(${lib} PRIVATE ${S_CUDA_SOURCES})
+    target_link_libraries(${lib} PUBLIC plab::cuda)
+    target_compile_definitions(${lib} PUBLIC PLAB_HYBRID_STAGE=1)
   endif()
 
   set(program plab-run-${id}-${impl})

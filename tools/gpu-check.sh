@@ -27,11 +27,21 @@ status=0
 ctest --test-dir build-gpu -L gpu -LE '^student$' -j 4 --output-on-failure > "$results/ctest-gpu.log" 2>&1 || status=1
 tail -25 "$results/ctest-gpu.log"
 
-log "benchmark: stages 03 ($(nproc) threads), 04, 05; L = 20000, r = 1, S = 500"
-build-gpu/bin/plab bench --stage 03,04,05 --threads "$(nproc)" --steps 500 \
+log "stage 06 forced onto the CPU (PLAB_DEVICE=cpu): the same tests"
+PLAB_DEVICE=cpu ctest --test-dir build-gpu -R '^stage06[.]solution' -LE long -j 4 \
+    > "$results/ctest-06-cpu.log" 2>&1 || status=1
+tail -3 "$results/ctest-06-cpu.log"
+
+log "benchmark: stages ${PLAB_BENCH_STAGES:-03,04,05,06} (CPU stages on $(nproc) threads); L = 20000, r = 1, S = 500"
+build-gpu/bin/plab bench --stage "${PLAB_BENCH_STAGES:-03,04,05,06}" --threads "$(nproc)" --steps 500 \
     --n "${PLAB_BENCH_N:-1000,2000,3000,4000,5000,6000,7000,8000,9000,10000}" \
     --runs "${PLAB_BENCH_RUNS:-3}" --csv "$results/bench-gpu.csv"
 
+log "stage 06 at the report's density (L = 20000 sqrt(N / 10^4), speeds 2500..5000), S = 100"
+build-gpu/bin/plab bench --stage 06 --fixed-density --steps 100 --runs "${PLAB_BENCH_RUNS:-3}" \
+    --n "${PLAB_SCALE_N:-10000,100000,1000000}" --csv "$results/bench-06-scale.csv"
+
+[ -n "${PLAB_SKIP_ABLATION:-}" ] && { [ "$status" = 0 ] || echo "SOME GPU TESTS FAILED"; exit "$status"; }
 log "stage 05, each change turned off in turn (PLAB_CUDA_OFF), N = 1000 and 10000"
 for off in none graph streams branchless graph,streams,branchless; do
   echo "-- PLAB_CUDA_OFF=$off"

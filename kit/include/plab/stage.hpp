@@ -3,7 +3,8 @@
 ///
 /// Each CPU stage's `step.cpp` (in `stages/NN-name/` for the student, `solutions/NN-name/` for the
 /// reference) defines plab::step(). A CUDA stage (compiled with `PLAB_GPU_STAGE` set) defines
-/// plab::make_stepper() instead, keeping the state on the GPU between steps. The kit's driver does
+/// plab::make_stepper() instead, keeping the state on the GPU between steps; a stage with both
+/// (`PLAB_HYBRID_STAGE`) defines both and runs on the GPU when it finds one. The kit's driver does
 /// everything else: reading the scene, printing, timing (see plab::simulate()).
 #pragma once
 
@@ -33,10 +34,16 @@ std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p);
 /// \param p   the state at the start of the step; on return, the state at its end
 void step(const Box& box, Particles& p);
 
+#if PLAB_HYBRID_STAGE
+/// Starts a run of this stage on the GPU when there is one (and PLAB_DEVICE is not `cpu`),
+/// otherwise of its step() on the CPU.
+std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p);
+#else
 /// Starts a run of this CPU stage: step() applied to `p` in place.
 inline std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p) {
   return std::make_unique<HostStepper>(step, box, p);
 }
+#endif
 #endif
 
 }  // namespace plab

@@ -70,32 +70,47 @@ PLAB_HD inline bool close_in_slab(double dx, double dy, double wx, double wy, do
   return !(ex * ex + ey * ey > rr);  // not-a-number counts as close
 }
 
-/// Chooses the grid from the scene: \f$K \approx \alpha \sqrt N \, v_{max} / L\f$ slabs (between 1
-/// and 256), cells of side \f$2r + v_{max}/K + m\f$, at most `max_side` per side, hashed into about
-/// \f$2N\f$ buckets.
-inline Grid choose(const Box& box, const Particles& p, double alpha = 1.0, int max_side = 1 << 20) {
-  double v2 = 0, extent = box.L;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    v2 = std::max(v2, p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i]);
-    extent = std::max({extent, std::fabs(p.x[i]), std::fabs(p.y[i])});
-  }
-  const double vmax = std::sqrt(v2) * (1 + 1e-12);
+/// Chooses the grid for `n` particles of speed at most `vmax` whose coordinates stay within
+/// `extent` of the origin: \f$K \approx \alpha \sqrt N \, v_{max} / L\f$ slabs (between 1 and 256),
+/// cells of side \f$2r + v_{max}/K + m\f$, at most `max_side` per side, hashed into about \f$2N\f$
+/// buckets.
+inline Grid choose_for(const Box& box, std::size_t n, double vmax, double extent,
+                       double alpha = 1.0, int max_side = 1 << 20) {
   Grid g;
   if (!std::isfinite(vmax) || !std::isfinite(extent)) {  // no geometry to trust: one cell
     g.reach = HUGE_VAL;
     return g;
   }
   const double margin = 1e-6 * (extent + vmax + box.r);
-  const double n = static_cast<double>(p.size());
   g.reach = 2 * box.r + margin;
-  g.slabs = static_cast<int>(std::clamp(std::ceil(alpha * std::sqrt(n) * vmax / extent), 1.0, 256.0));
+  g.slabs = static_cast<int>(std::clamp(
+      std::ceil(alpha * std::sqrt(static_cast<double>(n)) * vmax / extent), 1.0, 256.0));
   const double span = extent + 2 * (vmax + g.reach);  // paths leave the box by at most vmax
   g.origin = -(vmax + g.reach);
   g.cell = std::max(g.reach + vmax / g.slabs + margin, span / max_side);
   g.inv_cell = 1 / g.cell;
   g.side = std::max(1, static_cast<int>(std::ceil(span * g.inv_cell)));
-  while ((std::size_t{1} << g.bucket_bits) < 2 * p.size() && g.bucket_bits < 30) ++g.bucket_bits;
+  while ((std::size_t{1} << g.bucket_bits) < 2 * n && g.bucket_bits < 30) ++g.bucket_bits;
   return g;
+}
+
+/// The largest speed (times `headroom`) and the extent of a state, for choose_for().
+inline void speed_and_extent(const Box& box, const Particles& p, double& vmax, double& extent,
+                             double headroom = 1.0) {
+  double v2 = 0;
+  extent = box.L;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    v2 = std::max(v2, p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i]);
+    extent = std::max({extent, std::fabs(p.x[i]), std::fabs(p.y[i])});
+  }
+  vmax = std::sqrt(v2) * (1 + 1e-12) * headroom;
+}
+
+/// The grid for the current state (see choose_for()).
+inline Grid choose(const Box& box, const Particles& p) {
+  double vmax = 0, extent = 0;
+  speed_and_extent(box, p, vmax, extent);
+  return choose_for(box, p.size(), vmax, extent);
 }
 
 }  // namespace plab::sweep

@@ -1,0 +1,68 @@
+/// \file solutions/06-broadphase/launchers.cuh
+/// \brief Stage 06's launchers: grid size, launch on a stream, check. One per kernel (and the
+/// CUB scan of the counting sort).
+#pragma once
+
+#include <cub/device/device_scan.cuh>
+
+#include "kernels.cuh"
+#include "plab/cuda/check.hpp"
+#include "plab/cuda/stream.hpp"
+
+namespace plab::launch {
+
+constexpr int kThreads = 256;  //!< threads per block of the per-particle and per-entry kernels
+
+/// Blocks of kThreads covering `n`.
+inline unsigned blocks(long long n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
+
+inline void start_step(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
+                       const kernels::DeviceGrid& d, cudaStream_t s) {
+  kernels::start_step<<<blocks(p.n), kThreads, 0, s>>>(p, box, a, d);
+  PLAB_CUDA_CHECK_LAUNCH("start_step");
+}
+
+inline void bin_count(const cuda::ParticlesView& p, const kernels::StepArrays& a,
+                      const kernels::DeviceGrid& d, cudaStream_t s) {
+  kernels::bin_count<<<dim3(blocks(p.n), d.g.slabs), kThreads, 0, s>>>(p, a, d);
+  PLAB_CUDA_CHECK_LAUNCH("bin_count");
+}
+
+/// start[] becomes the prefix sums of the counts (CUB; `temp` of `temp_bytes` from scan_bytes()).
+inline void scan(int* start, int size, void* temp, std::size_t temp_bytes, cudaStream_t s) {
+  PLAB_CUDA_CHECK(cub::DeviceScan::InclusiveSum(temp, temp_bytes, start, start, size, s));
+}
+
+/// Bytes of temporary storage scan() needs for `size` counters.
+inline std::size_t scan_bytes(int size) {
+  std::size_t bytes = 0;
+  PLAB_CUDA_CHECK(cub::DeviceScan::InclusiveSum(nullptr, bytes, static_cast<int*>(nullptr),
+                                                static_cast<int*>(nullptr), size));
+  return bytes;
+}
+
+inline void bin_scatter(const cuda::ParticlesView& p, const kernels::StepArrays& a,
+                        const kernels::DeviceGrid& d, cudaStream_t s) {
+  kernels::bin_scatter<<<dim3(blocks(p.n), d.g.slabs), kThreads, 0, s>>>(p, a, d);
+  PLAB_CUDA_CHECK_LAUNCH("bin_scatter");
+}
+
+inline void find_pairs(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
+                       const kernels::DeviceGrid& d, cudaStream_t s) {
+  const int entries = p.n * d.g.slabs;
+  kernels::find_pairs<<<blocks(entries), kThreads, 0, s>>>(p, box, a, d, entries);
+  PLAB_CUDA_CHECK_LAUNCH("find_pairs");
+}
+
+inline void resolve(int n, const kernels::StepArrays& a, cudaStream_t s) {
+  kernels::resolve<<<1, kernels::kResolveThreads, 0, s>>>(n, a);
+  PLAB_CUDA_CHECK_LAUNCH("resolve");
+}
+
+inline void apply(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
+                  cudaStream_t s) {
+  kernels::apply<<<blocks(p.n), kThreads, 0, s>>>(p, box, a);
+  PLAB_CUDA_CHECK_LAUNCH("apply");
+}
+
+}  // namespace plab::launch

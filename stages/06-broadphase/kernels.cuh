@@ -1,0 +1,168 @@
+/// \file stages/06-broadphase/kernels.cuh
+/// \brief Stage 06's kernels (device code only): the space-time grid built by a counting sort on
+/// the GPU (atomics, a CUB scan), the pair search over neighbouring buckets, then stage 05's
+/// one-block rounds and branchless apply over the sparse candidates.
+#pragma once
+
+#include "plab/cuda/particles.hpp"
+#include "plab/model.hpp"
+#include "plab/scene.hpp"
+#include "plab/sweep.hpp"
+
+namespace plab::kernels {
+
+using cuda::ParticlesView;
+using model::Event;
+
+constexpr int kFree = -1;              //!< `partner[i]`: particle `i` moves freely
+constexpr int kWall = -2;              //!< `partner[i]`: particle `i` hits a wall
+constexpr int kResolveThreads = 1024;  //!< the one block of resolve
+
+/// What the host reads after a batch of steps.
+struct Flags {
+  int overflow;          //!< largest slot count needed, when a step ran out of slots (else 0)
+  int too_fast;          //!< 1 when a particle got faster than the grid allows
+  long long steps_done;  //!< steps applied so far
+};
+
+/// The grid of the batch, as the kernels see it.
+struct DeviceGrid {
+  sweep::Grid g;      //!< slabs, cells, buckets
+  int buckets;        //!< 2^g.bucket_bits
+  double v2_limit;    //!< the largest squared speed the grid was made for
+};
+
+/// One step's working arrays (pointers into memory the host class owns).
+struct StepArrays {
+  double* wall;      //!< wall time of each particle
+  int* count;        //!< pair events found for each particle (can exceed `cap`)
+  int* other;        //!< slot `s` of particle `i` at `[s * n + i]`: the other particle
+  double* time;      //!< ... and the pair time
+  int cap;           //!< slots per particle
+  Event* best;       //!< each unresolved particle's earliest event in the current round
+  char* resolved;    //!< 1 once a particle's event (or none) is decided
+  int* contested;    //!< the particles with at least one pair event
+  int* partner;      //!< the plan: kFree, kWall, or the other particle of its pair
+  double* ptime;     //!< the plan's pair time
+  int* start;        //!< K * buckets + 1: bucket b of slab k holds entries [start[kB+b], start[kB+b+1])
+  int* fill;         //!< scatter cursors (a copy of start)
+  int* entry_id;     //!< K * N entries: the particle
+  int* entry_k;      //!< ... its slab
+  double* entry_x;   //!< ... its midpoint position
+  double* entry_y;
+  Flags* flags;      //!< see Flags
+};
+
+/// Wall times, counters cleared, and the speed check of the grid.
+__global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= p.n) return;
+  a.wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
+  a.count[i] = 0;
+  if (!(p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i] <= d.v2_limit)) a.flags->too_fast = 1;
+}
+
+/// The bucket (in slab k's range) of particle i's midpoint cell.
+__device__ inline int entry_bucket(const ParticlesView& p, int i, int k, const DeviceGrid& d,
+                                   double& mx, double& my) {
+  const double tm = sweep::slab_mid(k, d.g);
+  mx = p.x[i] + tm * p.vx[i];
+  my = p.y[i] + tm * p.vy[i];
+  return k * d.buckets +
+         static_cast<int>(sweep::bucket_of(sweep::cell_of(mx, d.g), sweep::cell_of(my, d.g), d.g));
+}
+
+// EXERCISE 4: the broad phase on the GPU, as step.cpp's EXERCISE 1 with one thread per
+// (particle, slab): bin_count (atomicAdd on start[bucket + 1], using entry_bucket()), and after
+// the host's scan, bin_scatter (atomicAdd on fill[bucket] gives the entry's place; store its
+// particle, slab and midpoint position).
+
+/// Files the pair event (i, o) at time t under particle i (any order: the key orders them).
+__device__ inline void add_slot(const StepArrays& a, int n, int i, int o, double t) {
+  const int s = atomicAdd(&a.count[i], 1);
+  if (s < a.cap) {
+    a.other[s * n + i] = o;
+    a.time[s * n + i] = t;
+  }
+}
+
+// EXERCISE 4: find_pairs, one thread per entry: the later entries of its own bucket and the
+// entries of the buckets of cells (+1, 0), (-1, +1), (0, +1), (+1, +1) of the same slab; for each
+// pair that passes sweep::close_in_slab(), MODEL.md's pair time (lower index first), and if it is
+// in the step, add_slot() under both particles.
+
+/// Every round of the step in one block (stage 05's resolve over the sparse candidates); skips
+/// the step when slots ran out or a particle is faster than the grid allows.
+__global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) {
+  __shared__ int contested;
+  if (a.flags->overflow || a.flags->too_fast) return;
+  if (threadIdx.x == 0) contested = 0;
+  __syncthreads();
+  int over = 0;
+  for (int i = threadIdx.x; i < n; i += blockDim.x) {
+    const int c = a.count[i];
+    a.partner[i] = (c == 0 && model::in_step(a.wall[i])) ? kWall : kFree;
+    a.resolved[i] = (c == 0);
+    if (c > a.cap) over = max(over, c);
+    if (c > 0) a.contested[atomicAdd(&contested, 1)] = i;
+  }
+  if (__syncthreads_or(over)) {
+    if (over) atomicMax(&a.flags->overflow, over);
+    return;
+  }
+  const int m = contested;
+  const Event none = model::pair_event_key(model::never(), n, n);
+  for (;;) {
+    for (int q = threadIdx.x; q < m; q += blockDim.x) {  // choose
+      const int i = a.contested[q];
+      if (a.resolved[i]) continue;
+      Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
+      for (int s = 0; s < a.count[i]; ++s) {
+        const int o = a.other[s * n + i];
+        if (a.resolved[o]) continue;
+        const Event e = model::pair_event_key(a.time[s * n + i], i < o ? i : o, i < o ? o : i);
+        if (model::key_less(e, b)) b = e;
+      }
+      a.best[i] = b;
+    }
+    __syncthreads();
+    int open = 0;
+    for (int q = threadIdx.x; q < m; q += blockDim.x) {  // accept
+      const int i = a.contested[q];
+      if (a.resolved[i]) continue;
+      const Event e = a.best[i];
+      const int o = (e.lo == i) ? e.hi : e.lo;
+      if (!model::in_step(e.t)) {
+        a.resolved[i] = 1;
+      } else if (e.kind == model::kWall) {
+        a.partner[i] = kWall;
+        a.resolved[i] = 1;
+      } else if (a.best[o].kind == model::kPair && a.best[o].lo == e.lo && a.best[o].hi == e.hi) {
+        a.partner[i] = o;
+        a.ptime[i] = e.t;
+        a.resolved[i] = 1;
+      } else {
+        open = 1;
+      }
+    }
+    if (!__syncthreads_or(open)) break;
+  }
+  if (threadIdx.x == 0) a.flags->steps_done += 1;
+}
+
+/// Applies the plan (branchless walls); nothing when the step was skipped.
+__global__ void apply(ParticlesView p, Box box, StepArrays a) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= p.n || a.flags->overflow || a.flags->too_fast) return;
+  const int j = a.partner[i];
+  if (j == kFree) {
+    model::free_move(p.x[i], p.y[i], p.vx[i], p.vy[i]);
+  } else if (j == kWall) {
+    model::wall_event_branchless(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], box.L, box.r);
+  } else if (i < j) {
+    model::pair_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.pc[i], p.x[j], p.y[j], p.vx[j], p.vy[j],
+                      p.pc[j], a.ptime[i], box.L, box.r);
+  }
+}
+
+}  // namespace plab::kernels

@@ -1,0 +1,73 @@
+/// \file stages/06-broadphase/launchers.cuh
+/// \brief Stage 06's launchers: grid size, launch on a stream, check. One per kernel (and the
+/// CUB scan of the counting sort).
+#pragma once
+
+#include <cub/device/device_scan.cuh>
+
+#include "kernels.cuh"
+#include "plab/cuda/check.hpp"
+#include "plab/cuda/stream.hpp"
+#include "plab/stage.hpp"
+
+namespace plab::launch {
+
+constexpr int kThreads = 256;  //!< threads per block of the per-particle and per-entry kernels
+
+/// Blocks of kThreads covering `n`.
+inline unsigned blocks(long long n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
+
+inline void start_step(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
+                       const kernels::DeviceGrid& d, cudaStream_t s) {
+  kernels::start_step<<<blocks(p.n), kThreads, 0, s>>>(p, box, a, d);
+  PLAB_CUDA_CHECK_LAUNCH("start_step");
+}
+
+inline void bin_count([[maybe_unused]] const cuda::ParticlesView& p,
+                      [[maybe_unused]] const kernels::StepArrays& a,
+                      [[maybe_unused]] const kernels::DeviceGrid& d, [[maybe_unused]] cudaStream_t s) {
+  // EXERCISE 4: launch kernels::bin_count on a grid of (N / kThreads) x slabs blocks.
+  PLAB_EXERCISE(4, "the broad phase on the GPU: kernels bin_count, bin_scatter, find_pairs");
+}
+
+/// start[] becomes the prefix sums of the counts (CUB; `temp` of `temp_bytes` from scan_bytes()).
+inline void scan(int* start, int size, void* temp, std::size_t temp_bytes, cudaStream_t s) {
+  PLAB_CUDA_CHECK(cub::DeviceScan::InclusiveSum(temp, temp_bytes, start, start, size, s));
+}
+
+/// Bytes of temporary storage scan() needs for `size` counters.
+inline std::size_t scan_bytes(int size) {
+  std::size_t bytes = 0;
+  PLAB_CUDA_CHECK(cub::DeviceScan::InclusiveSum(nullptr, bytes, static_cast<int*>(nullptr),
+                                                static_cast<int*>(nullptr), size));
+  return bytes;
+}
+
+inline void bin_scatter([[maybe_unused]] const cuda::ParticlesView& p,
+                        [[maybe_unused]] const kernels::StepArrays& a,
+                        [[maybe_unused]] const kernels::DeviceGrid& d,
+                        [[maybe_unused]] cudaStream_t s) {
+  // EXERCISE 4: launch kernels::bin_scatter like bin_count.
+  PLAB_EXERCISE(4, "the broad phase on the GPU: kernels bin_count, bin_scatter, find_pairs");
+}
+
+inline void find_pairs([[maybe_unused]] const cuda::ParticlesView& p,
+                       [[maybe_unused]] const Box& box, [[maybe_unused]] const kernels::StepArrays& a,
+                       [[maybe_unused]] const kernels::DeviceGrid& d,
+                       [[maybe_unused]] cudaStream_t s) {
+  // EXERCISE 4: launch kernels::find_pairs, one thread per entry (N x slabs of them).
+  PLAB_EXERCISE(4, "the broad phase on the GPU: kernels bin_count, bin_scatter, find_pairs");
+}
+
+inline void resolve(int n, const kernels::StepArrays& a, cudaStream_t s) {
+  kernels::resolve<<<1, kernels::kResolveThreads, 0, s>>>(n, a);
+  PLAB_CUDA_CHECK_LAUNCH("resolve");
+}
+
+inline void apply(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
+                  cudaStream_t s) {
+  kernels::apply<<<blocks(p.n), kThreads, 0, s>>>(p, box, a);
+  PLAB_CUDA_CHECK_LAUNCH("apply");
+}
+
+}  // namespace plab::launch

@@ -1,0 +1,176 @@
+/// \file stages/06-broadphase/step.cu
+/// \brief Stage 06 on the GPU: the broad phase of step.cpp as a counting sort on the device, the
+/// pair search over neighbouring buckets, stage 05's rounds and apply; one CUDA graph per step.
+/// plab::make_stepper() takes the GPU when there is one (PLAB_DEVICE=cpu forces step.cpp).
+//
+// =================================================================================================
+//  GOAL   step.cpp's idea with every phase on the device and no host round trip in a step:
+//         start_step (wall times, counters, speed check) -> bin_count -> CUB scan -> bin_scatter
+//         -> find_pairs -> resolve -> apply, recorded once as a graph. The grid is chosen on the
+//         host for the batch with 25% speed headroom; a particle that outruns it, or one with
+//         more pair events than slots, stops the batch on the device, and the host redoes it.
+//  READ   handouts/06-broadphase.md     TEST   ./plab test --impl student --stage 06
+// =================================================================================================
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <string>
+
+#include "launchers.cuh"
+#include "plab/stage.hpp"
+
+namespace plab {
+namespace {
+
+/// A run of stage 06 on the GPU.
+class CudaStepper final : public Stepper {
+ public:
+  CudaStepper(const Box& box, const Particles& p, std::string device)
+      : device_(std::move(device)), box_(box), p_(p, main_), n_(p_.size()), wall_(n_),
+        count_(n_), best_(n_), resolved_(n_), contested_(n_), partner_(n_), ptime_(n_),
+        flags_(1) {
+    PLAB_CUDA_CHECK(cudaMemsetAsync(flags_.get(), 0, flags_.bytes(), main_));
+    grow_slots(8);
+    set_grid(p);
+    main_.sync();
+  }
+
+  void step() override {
+    if (n_ == 0) return;
+    timer_.start(main_);
+    queue_step();
+    timer_.stop(main_);
+    ++asked_;
+  }
+
+  void read(Particles& p) override {
+    catch_up();
+    timer_.close();
+    p_.download(p, main_);
+  }
+
+  [[nodiscard]] double own_seconds() const override { return timer_.seconds(); }
+  [[nodiscard]] std::string device() const override { return device_; }
+  [[nodiscard]] std::size_t device_bytes() const override {
+    return p_.bytes() + wall_.bytes() + count_.bytes() + other_.bytes() + time_.bytes() +
+           best_.bytes() + resolved_.bytes() + contested_.bytes() + partner_.bytes() +
+           ptime_.bytes() + start_.bytes() + fill_.bytes() + entry_id_.bytes() +
+           entry_k_.bytes() + entry_x_.bytes() + entry_y_.bytes() + temp_.bytes() +
+           flags_.bytes();
+  }
+
+ private:
+  /// One step: the recorded graph (recorded again after the arrays changed).
+  void queue_step() {
+    if (stale_) {
+      graph_.record(main_, [this] { queue_kernels(); });
+      stale_ = false;
+    }
+    graph_.launch(main_);
+  }
+
+  /// The kernels of one step.
+  void queue_kernels() {
+    const auto a = arrays();
+    launch::start_step(p_.view(), box_, a, grid_, main_);
+    PLAB_CUDA_CHECK(cudaMemsetAsync(start_.get(), 0, start_.bytes(), main_));
+    launch::bin_count(p_.view(), a, grid_, main_);
+    launch::scan(start_.get(), static_cast<int>(start_.size()), temp_.get(), temp_.size(), main_);
+    PLAB_CUDA_CHECK(cudaMemcpyAsync(fill_.get(), start_.get(), fill_.bytes(),
+                                    cudaMemcpyDeviceToDevice, main_));
+    launch::bin_scatter(p_.view(), a, grid_, main_);
+    launch::find_pairs(p_.view(), box_, a, grid_, main_);
+    launch::resolve(n_, a, main_);
+    launch::apply(p_.view(), box_, a, main_);
+  }
+
+  /// Waits for the queued steps; redoes those a stop on the device skipped (more slots, or a new
+  /// grid for faster particles).
+  void catch_up() {
+    for (;;) {
+      kernels::Flags f{};
+      PLAB_CUDA_CHECK(cudaMemcpyAsync(&f, flags_.get(), sizeof f, cudaMemcpyDeviceToHost, main_));
+      main_.sync();
+      if (f.steps_done == asked_ || (f.overflow == 0 && f.too_fast == 0)) return;
+      if (f.overflow) grow_slots(f.overflow);
+      if (f.too_fast) {
+        Particles now;
+        p_.download(now, main_);
+        set_grid(now);
+      }
+      PLAB_CUDA_CHECK(cudaMemsetAsync(flags_.get(), 0, 2 * sizeof(int), main_));
+      for (long long s = f.steps_done; s < asked_; ++s) queue_step();
+      timer_.stop(main_);
+    }
+  }
+
+  /// The grid for the state `p` with 25% speed headroom, and the arrays it needs.
+  void set_grid(const Particles& p) {
+    main_.sync();
+    double vmax = 0, extent = 0;
+    sweep::speed_and_extent(box_, p, vmax, extent, 1.25);
+    grid_.g = sweep::choose_for(box_, p.size(), vmax, extent);
+    grid_.buckets = 1 << grid_.g.bucket_bits;
+    grid_.v2_limit = std::isfinite(vmax) ? vmax * vmax : HUGE_VAL;
+    const std::size_t entries = static_cast<std::size_t>(n_) * grid_.g.slabs;
+    const int size = grid_.g.slabs * grid_.buckets + 1;
+    start_.resize(size);
+    fill_.resize(size);
+    entry_id_.resize(entries);
+    entry_k_.resize(entries);
+    entry_x_.resize(entries);
+    entry_y_.resize(entries);
+    temp_.resize(launch::scan_bytes(size));
+    stale_ = true;
+  }
+
+  /// At least `needed` slots per particle (a power of two).
+  void grow_slots(int needed) {
+    main_.sync();
+    while (cap_ < needed) cap_ = cap_ ? 2 * cap_ : 1;
+    other_.resize(static_cast<std::size_t>(n_) * cap_);
+    time_.resize(static_cast<std::size_t>(n_) * cap_);
+    stale_ = true;
+  }
+
+  [[nodiscard]] kernels::StepArrays arrays() const {
+    return {wall_.get(),     count_.get(),   other_.get(),    time_.get(),     cap_,
+            best_.get(),     resolved_.get(), contested_.get(), partner_.get(), ptime_.get(),
+            start_.get(),    fill_.get(),    entry_id_.get(), entry_k_.get(), entry_x_.get(),
+            entry_y_.get(),  flags_.get()};
+  }
+
+  std::string device_;
+  cuda::Stream main_;
+  Box box_;
+  cuda::DeviceParticles p_;
+  int n_;
+  int cap_ = 0;
+  long long asked_ = 0;
+  kernels::DeviceGrid grid_{};
+  cuda::DeviceArray<double> wall_;
+  cuda::DeviceArray<int> count_, other_;
+  cuda::DeviceArray<double> time_;
+  cuda::DeviceArray<model::Event> best_;
+  cuda::DeviceArray<char> resolved_;
+  cuda::DeviceArray<int> contested_, partner_;
+  cuda::DeviceArray<double> ptime_;
+  cuda::DeviceArray<int> start_, fill_, entry_id_, entry_k_;
+  cuda::DeviceArray<double> entry_x_, entry_y_;
+  cuda::DeviceArray<unsigned char> temp_;
+  cuda::DeviceArray<kernels::Flags> flags_;
+  cuda::Graph graph_;
+  bool stale_ = true;
+  cuda::EventTimer timer_;
+};
+
+}  // namespace
+
+std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p) {
+  const char* forced = std::getenv("PLAB_DEVICE");
+  if (!(forced && std::strcmp(forced, "cpu") == 0) && cuda::missing_device().empty())
+    return std::make_unique<CudaStepper>(box, p, cuda::require_device());
+  return std::make_unique<HostStepper>(step, box, p);
+}
+
+}  // namespace plab
