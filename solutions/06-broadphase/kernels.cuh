@@ -103,9 +103,19 @@ __device__ inline void add_slot(const StepArrays& a, int n, int i, int o, double
   }
 }
 
+/// Whether particles i and j pass the slab test in slab k (then slab k's search finds them).
+__device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, int k, double ri,
+                                        double rj, const DeviceGrid& d) {
+  const double tm = sweep::slab_mid(k, d.g);
+  return sweep::close_in_slab((p.x[i] + tm * p.vx[i]) - (p.x[j] + tm * p.vx[j]),
+                              (p.y[i] + tm * p.vy[i]) - (p.y[j] + tm * p.vy[j]),
+                              p.vx[i] - p.vx[j], p.vy[i] - p.vy[j], ri, rj, d.g);
+}
+
 /// The pair search: one thread per entry, against the later entries of its own bucket and the
 /// entries of the buckets of cells (+1, 0), (-1, +1), (0, +1), (+1, +1) in the same slab; the
-/// pairs that pass sweep::close_in_slab() get MODEL.md's pair time.
+/// pairs that pass sweep::close_in_slab() get MODEL.md's pair time, unless slab k - 1 found them
+/// already (a pair listed twice is harmless to the rounds, but it fills slots).
 __global__ void find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d, int entries) {
   const int e = blockIdx.x * blockDim.x + threadIdx.x;
   if (e >= entries || a.flags->overflow || a.flags->too_fast) return;
@@ -116,9 +126,14 @@ __global__ void find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d,
   const double mx = a.entry_x[e], my = a.entry_y[e];
   const int cx = sweep::cell_of(mx, d.g), cy = sweep::cell_of(my, d.g);
   constexpr int kNext[5][2] = {{0, 0}, {1, 0}, {-1, 1}, {0, 1}, {1, 1}};
+  int seen[5];
   for (int q = 0; q < 5; ++q) {
     const int nb = k * d.buckets +
                    static_cast<int>(sweep::bucket_of(cx + kNext[q][0], cy + kNext[q][1], d.g));
+    seen[q] = nb;
+    bool again = false;  // two neighbour cells hashed to one bucket: search it once
+    for (int r = 0; r < q; ++r) again |= (seen[r] == nb);
+    if (again) continue;
     for (int f = (q == 0) ? e + 1 : a.start[nb]; f < a.start[nb + 1]; ++f) {
       const int j = a.entry_id[f];
       const double vxj = p.vx[j], vyj = p.vy[j];
@@ -126,6 +141,7 @@ __global__ void find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d,
       if (j == i || !sweep::close_in_slab(mx - a.entry_x[f], my - a.entry_y[f], vxi - vxj,
                                           vyi - vyj, ri, rj, d.g))
         continue;
+      if (k > 0 && close_in_slab_at(p, i, j, k - 1, ri, rj, d)) continue;  // found in slab k - 1
       const int lo = i < j ? i : j, hi = i < j ? j : i;
       const double t = model::pair_time(p.x[lo], p.y[lo], p.vx[lo], p.vy[lo], p.x[hi], p.y[hi],
                                         p.vx[hi], p.vy[hi], box.r);

@@ -86,6 +86,15 @@ __device__ inline void add_slot(const StepArrays& a, int n, int i, int o, double
   }
 }
 
+/// Whether particles i and j pass the slab test in slab k (then slab k's search finds them).
+__device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, int k, double ri,
+                                        double rj, const DeviceGrid& d) {
+  const double tm = sweep::slab_mid(k, d.g);
+  return sweep::close_in_slab((p.x[i] + tm * p.vx[i]) - (p.x[j] + tm * p.vx[j]),
+                              (p.y[i] + tm * p.vy[i]) - (p.y[j] + tm * p.vy[j]),
+                              p.vx[i] - p.vx[j], p.vy[i] - p.vy[j], ri, rj, d.g);
+}
+
 // EXERCISE 4: find_pairs, one thread per entry: the later entries of its own bucket and the
 // entries of the buckets of cells (+1, 0), (-1, +1), (0, +1), (+1, +1) of the same slab; for each
 // pair that passes sweep::close_in_slab(), MODEL.md's pair time (lower index first), and if it is

@@ -30,7 +30,7 @@ class CudaStepper final : public Stepper {
         count_(n_), best_(n_), resolved_(n_), contested_(n_), partner_(n_), ptime_(n_),
         flags_(1) {
     PLAB_CUDA_CHECK(cudaMemsetAsync(flags_.get(), 0, flags_.bytes(), main_));
-    grow_slots(8);
+    grow_slots(16);
     set_grid(p);
     main_.sync();
   }
@@ -40,7 +40,9 @@ class CudaStepper final : public Stepper {
     timer_.start(main_);
     queue_step();
     timer_.stop(main_);
-    ++asked_;
+    // A stop on the device (more slots, a new grid) idles every later step until the host looks:
+    // look every kCheckEvery steps, so that at most that many are redone.
+    if (++asked_ % kCheckEvery == 0) catch_up();
   }
 
   void read(Particles& p) override {
@@ -92,7 +94,7 @@ class CudaStepper final : public Stepper {
       PLAB_CUDA_CHECK(cudaMemcpyAsync(&f, flags_.get(), sizeof f, cudaMemcpyDeviceToHost, main_));
       main_.sync();
       if (f.steps_done == asked_ || (f.overflow == 0 && f.too_fast == 0)) return;
-      if (f.overflow) grow_slots(f.overflow);
+      if (f.overflow) grow_slots(2 * f.overflow);
       if (f.too_fast) {
         Particles now;
         p_.download(now, main_);
@@ -109,7 +111,8 @@ class CudaStepper final : public Stepper {
     main_.sync();
     double vmax = 0, extent = 0;
     sweep::speed_and_extent(box_, p, vmax, extent, 1.25);
-    grid_.g = sweep::choose_for(box_, p.size(), vmax, extent);
+    const char* alpha = std::getenv("PLAB_SWEEP_ALPHA");  // a tuning knob: slabs per sqrt(N) v/L
+    grid_.g = sweep::choose_for(box_, p.size(), vmax, extent, alpha ? std::atof(alpha) : 1.0);
     grid_.buckets = 1 << grid_.g.bucket_bits;
     grid_.v2_limit = std::isfinite(vmax) ? vmax * vmax : HUGE_VAL;
     const std::size_t entries = static_cast<std::size_t>(n_) * grid_.g.slabs;
@@ -140,6 +143,7 @@ class CudaStepper final : public Stepper {
             entry_y_.get(),  flags_.get()};
   }
 
+  static constexpr long long kCheckEvery = 32;  //!< steps between two looks at the flags
   std::string device_;
   cuda::Stream main_;
   Box box_;

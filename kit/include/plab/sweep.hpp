@@ -58,7 +58,7 @@ PLAB_HD inline unsigned bucket_of(int cx, int cy, const Grid& g) {
 PLAB_HD inline bool close_in_slab(double dx, double dy, double wx, double wy, double ra, double rb,
                                   const Grid& g) {
   const double dd = dx * dx + dy * dy;
-  const double far = g.reach + ra + rb;
+  const double far = g.reach + (ra + rb);  // symmetric in the two particles, bit for bit
   if (dd > far * far) return false;  // farther apart than both can close in half a slab
   const double h = 0.5 / g.slabs;
   const double ww = wx * wx + wy * wy;
