@@ -7,6 +7,9 @@ DIR, by default beside itself; `plab docs` writes them into build/docs/figures)
   stage04-05-time.png   time against N, CPU and GPU, with the 2019 report's figures
                         (data/bench-gpu-h100.csv, data/report-2019.csv)
   stage05-changes.png   what each of stage 05's changes buys (data/ablation-stage05-h100.csv)
+  stage06-pairs.png     pairs tested per step by stage 06 against all pairs, and time per step
+                        against N at the report's density (data/pairs-stage06.csv,
+                        data/bench-stage0[36]-cpu-scale.csv, data/bench-stage06-gpu-scale.csv)
 """
 import argparse
 import csv
@@ -96,6 +99,34 @@ def stage05_changes():
     plt.close(fig)
 
 
+def stage06_pairs():
+    fig, (left, right) = plt.subplots(1, 2, figsize=(13, 5))
+    data = rows("pairs-stage06.csv")
+    n = [int(r["n"]) for r in data]
+    for key, style, label in (("all_pairs", "k--", "all pairs, N(N-1)/2 (stages 01-05)"),
+                              ("slab_tests", "o-", "stage 06: slab tests (broad phase)"),
+                              ("pair_times", "s-", "stage 06: pair times (narrow phase)")):
+        left.plot(n, [float(r[key]) for r in data], style, label=label)
+    left.set(xscale="log", yscale="log", xlabel="particles N", ylabel="per step",
+             title="Pairs tested per step, at the report's density")
+    for name, stage, style, label in (
+            ("bench-stage03-cpu-scale.csv", "03", "o--", "stage 03, CPU, 2 threads"),
+            ("bench-stage06-cpu-scale.csv", "06", "s-", "stage 06, CPU, 2 threads"),
+            ("bench-stage06-gpu-scale.csv", "06", "v-", "stage 06, H100")):
+        pts = [r for r in rows(name) if r["stage"] == stage]
+        right.plot([int(r["n"]) for r in pts],
+                   [1e3 * float(r["step_median_s"]) / int(r["steps"]) for r in pts], style,
+                   label=label)
+    right.set(xscale="log", yscale="log", xlabel="particles N", ylabel="ms per step",
+              title="Time per step at the report's density (L grows with sqrt N)")
+    for ax in (left, right):
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(OUT / "stage06-pairs.png", dpi=100)
+    plt.close(fig)
+
+
 def main():
     global OUT
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -105,6 +136,7 @@ def main():
     stage03_speedup()
     gpu_time()
     stage05_changes()
+    stage06_pairs()
 
 
 if __name__ == "__main__":
