@@ -13,6 +13,11 @@ if command -v ncu >/dev/null; then
       $bin/plab-run-06-solution /tmp/s4.in --out /dev/null 2>&1 |
     grep -E "^  [a-z_]+|gpu__time_duration" | paste - - | awk '{print $1, $(NF)}' | sort | uniq -c
 fi
+echo "N = 60000 (the rounds on the whole GPU): GPU against the CPU, 30 steps, every digest"
+$bin/plab gen --n 60000 --l 48990 --r 1 --steps 30 --mode perf --seed 3 --out /tmp/s5.in
+$bin/plab-run-06-solution /tmp/s5.in --quiet --out /tmp/g.out --digest /tmp/g.dig
+PLAB_DEVICE=cpu $bin/plab-run-06-solution /tmp/s5.in --quiet --out /tmp/c.out --digest /tmp/c.dig
+cmp /tmp/g.out /tmp/c.out && cmp /tmp/g.dig /tmp/c.dig && echo "N = 60000: GPU and CPU identical, output and all 31 digests"
 for a in 0.25 0.5 1 2; do
   echo "alpha $a:"
   PLAB_SWEEP_ALPHA=$a $bin/plab-run-06-solution /tmp/s4.in --out /dev/null 2>&1 | grep -o "N=.*ms/step"

@@ -4,6 +4,8 @@
 /// one-block rounds and branchless apply over the sparse candidates.
 #pragma once
 
+#include <cooperative_groups.h>
+
 #include "plab/cuda/particles.hpp"
 #include "plab/model.hpp"
 #include "plab/scene.hpp"
@@ -23,6 +25,8 @@ struct Flags {
   int overflow;          //!< largest slot count needed, when a step ran out of slots (else 0)
   int too_fast;          //!< 1 when a particle got faster than the grid allows
   long long steps_done;  //!< steps applied so far
+  int contested;         //!< resolve_grid: particles with pair events this step
+  int open[3];           //!< resolve_grid: someone left unresolved in round r (at r % 3)
 };
 
 /// The grid of the batch, as the kernels see it.
@@ -59,7 +63,11 @@ __global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d)
   if (i >= p.n) return;
   a.wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
   a.count[i] = 0;
-  if (!(p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i] <= d.v2_limit)) a.flags->too_fast = 1;
+  if (p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i] > d.v2_limit) a.flags->too_fast = 1;
+  if (i == 0) {
+    a.flags->contested = 0;
+    a.flags->open[0] = a.flags->open[1] = a.flags->open[2] = 0;
+  }
 }
 
 /// The bucket (in slab k's range) of particle i's midpoint cell.
@@ -210,6 +218,69 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
     if (!__syncthreads_or(open)) break;
   }
   if (threadIdx.x == 0) a.flags->steps_done += 1;
+}
+
+/// resolve() for large N: the same rounds over the whole grid (a cooperative launch, every block
+/// resident), with grid-wide barriers between the phases instead of block barriers.
+__global__ void resolve_grid(int n, StepArrays a) {
+  namespace cg = cooperative_groups;
+  cg::grid_group grid = cg::this_grid();
+  Flags* f = a.flags;
+  const int stride = gridDim.x * blockDim.x;
+  const int me = blockIdx.x * blockDim.x + threadIdx.x;
+  const bool skipped = f->overflow || f->too_fast;  // read before anyone writes them below
+  grid.sync();
+  if (skipped) return;
+  for (int i = me; i < n; i += stride) {
+    const int c = a.count[i];
+    a.partner[i] = (c == 0 && model::in_step(a.wall[i])) ? kWall : kFree;
+    a.resolved[i] = (c == 0);
+    if (c > a.cap) atomicMax(&f->overflow, c);
+    if (c > 0) a.contested[atomicAdd(&f->contested, 1)] = i;
+  }
+  grid.sync();
+  if (f->overflow) return;
+  const int m = f->contested;
+  const Event none = model::pair_event_key(model::never(), n, n);
+  for (int round = 0;; ++round) {
+    // Three flags: round r writes r % 3 and everyone reads it after the last barrier of round r;
+    // clearing (r + 1) % 3 now cannot meet a slow reader of round r - 1's flag.
+    if (me == 0) f->open[(round + 1) % 3] = 0;
+    for (int q = me; q < m; q += stride) {  // choose
+      const int i = a.contested[q];
+      if (a.resolved[i]) continue;
+      Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
+      for (int s = 0; s < a.count[i]; ++s) {
+        const int o = a.other[s * n + i];
+        if (a.resolved[o]) continue;
+        const Event e = model::pair_event_key(a.time[s * n + i], i < o ? i : o, i < o ? o : i);
+        if (model::key_less(e, b)) b = e;
+      }
+      a.best[i] = b;
+    }
+    grid.sync();
+    for (int q = me; q < m; q += stride) {  // accept
+      const int i = a.contested[q];
+      if (a.resolved[i]) continue;
+      const Event e = a.best[i];
+      const int o = (e.lo == i) ? e.hi : e.lo;
+      if (!model::in_step(e.t)) {
+        a.resolved[i] = 1;
+      } else if (e.kind == model::kWall) {
+        a.partner[i] = kWall;
+        a.resolved[i] = 1;
+      } else if (a.best[o].kind == model::kPair && a.best[o].lo == e.lo && a.best[o].hi == e.hi) {
+        a.partner[i] = o;
+        a.ptime[i] = e.t;
+        a.resolved[i] = 1;
+      } else {
+        f->open[round % 3] = 1;
+      }
+    }
+    grid.sync();
+    if (!f->open[round % 3]) break;
+  }
+  if (me == 0) f->steps_done += 1;
 }
 
 /// Applies the plan (branchless walls); nothing when the step was skipped.

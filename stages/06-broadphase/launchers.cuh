@@ -64,6 +64,22 @@ inline void resolve(int n, const kernels::StepArrays& a, cudaStream_t s) {
   PLAB_CUDA_CHECK_LAUNCH("resolve");
 }
 
+/// Blocks of resolve_grid that can all be resident at once (a cooperative launch needs that).
+inline int resolve_grid_blocks() {
+  int device = 0, sms = 0, per_sm = 0;
+  PLAB_CUDA_CHECK(cudaGetDevice(&device));
+  PLAB_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
+  PLAB_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, kernels::resolve_grid,
+                                                                kThreads, 0));
+  return sms * per_sm;
+}
+
+inline void resolve_grid(int n, const kernels::StepArrays& a, int grid_blocks, cudaStream_t s) {
+  void* args[] = {&n, const_cast<kernels::StepArrays*>(&a)};
+  PLAB_CUDA_CHECK(cudaLaunchCooperativeKernel(reinterpret_cast<void*>(kernels::resolve_grid),
+                                              grid_blocks, kThreads, args, 0, s));
+}
+
 inline void apply(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
                   cudaStream_t s) {
   kernels::apply<<<blocks(p.n), kThreads, 0, s>>>(p, box, a);

@@ -32,6 +32,7 @@ class CudaStepper final : public Stepper {
     PLAB_CUDA_CHECK(cudaMemsetAsync(flags_.get(), 0, flags_.bytes(), main_));
     grow_slots(16);
     set_grid(p);
+    if (n_ >= kGridResolveFrom) grid_blocks_ = launch::resolve_grid_blocks();
     main_.sync();
   }
 
@@ -82,7 +83,10 @@ class CudaStepper final : public Stepper {
                                     cudaMemcpyDeviceToDevice, main_));
     launch::bin_scatter(p_.view(), a, grid_, main_);
     launch::find_pairs(p_.view(), box_, a, grid_, main_);
-    launch::resolve(n_, a, main_);
+    if (n_ >= kGridResolveFrom)
+      launch::resolve_grid(n_, a, grid_blocks_, main_);
+    else
+      launch::resolve(n_, a, main_);
     launch::apply(p_.view(), box_, a, main_);
   }
 
@@ -100,7 +104,7 @@ class CudaStepper final : public Stepper {
         p_.download(now, main_);
         set_grid(now);
       }
-      PLAB_CUDA_CHECK(cudaMemsetAsync(flags_.get(), 0, 2 * sizeof(int), main_));
+      PLAB_CUDA_CHECK(cudaMemsetAsync(flags_.get(), 0, 2 * sizeof(int), main_));  // the two stops
       for (long long s = f.steps_done; s < asked_; ++s) queue_step();
       timer_.stop(main_);
     }
@@ -144,6 +148,7 @@ class CudaStepper final : public Stepper {
   }
 
   static constexpr long long kCheckEvery = 32;  //!< steps between two looks at the flags
+  static constexpr int kGridResolveFrom = 50000;  //!< from this N the rounds use the whole GPU
   std::string device_;
   cuda::Stream main_;
   Box box_;
@@ -165,6 +170,7 @@ class CudaStepper final : public Stepper {
   cuda::DeviceArray<kernels::Flags> flags_;
   cuda::Graph graph_;
   bool stale_ = true;
+  int grid_blocks_ = 0;
   cuda::EventTimer timer_;
 };
 
