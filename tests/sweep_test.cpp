@@ -15,14 +15,13 @@ namespace {
 /// Whether the broad phase finds particles 0 and 1 of `p` in some slab: close_in_slab() holds at
 /// the slab's midpoint and their cells are the same or adjacent (what stage 06 searches).
 bool found(const plab::Particles& p, const plab::sweep::Grid& g) {
-  const double h = 0.5 / g.slabs;
   for (int k = 0; k < g.slabs; ++k) {
     const double tm = plab::sweep::slab_mid(k, g);
     double mx[2], my[2], ra[2];
     for (int i = 0; i < 2; ++i) {
       mx[i] = p.x[i] + tm * p.vx[i];
       my[i] = p.y[i] + tm * p.vy[i];
-      ra[i] = std::sqrt(p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i]) * h * (1 + 1e-9);
+      ra[i] = plab::sweep::slab_reach(p.vx[i], p.vy[i], g);
     }
     const int dx = plab::sweep::cell_of(mx[0], g) - plab::sweep::cell_of(mx[1], g);
     const int dy = plab::sweep::cell_of(my[0], g) - plab::sweep::cell_of(my[1], g);

@@ -128,9 +128,8 @@ __global__ void find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d,
   const int e = blockIdx.x * blockDim.x + threadIdx.x;
   if (e >= entries || a.flags->overflow || a.flags->too_fast) return;
   const int i = a.entry_id[e], k = a.entry_k[e];
-  const double h = 0.5 / d.g.slabs;
   const double vxi = p.vx[i], vyi = p.vy[i];
-  const double ri = sqrt(vxi * vxi + vyi * vyi) * h * (1 + 1e-9);
+  const double ri = sweep::slab_reach(vxi, vyi, d.g);
   const double mx = a.entry_x[e], my = a.entry_y[e];
   const int cx = sweep::cell_of(mx, d.g), cy = sweep::cell_of(my, d.g);
   constexpr int kNext[5][2] = {{0, 0}, {1, 0}, {-1, 1}, {0, 1}, {1, 1}};
@@ -145,7 +144,7 @@ __global__ void find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d,
     for (int f = (q == 0) ? e + 1 : a.start[nb]; f < a.start[nb + 1]; ++f) {
       const int j = a.entry_id[f];
       const double vxj = p.vx[j], vyj = p.vy[j];
-      const double rj = sqrt(vxj * vxj + vyj * vyj) * h * (1 + 1e-9);
+      const double rj = sweep::slab_reach(vxj, vyj, d.g);
       if (j == i || !sweep::close_in_slab(mx - a.entry_x[f], my - a.entry_y[f], vxi - vxj,
                                           vyi - vyj, ri, rj, d.g))
         continue;
@@ -159,6 +158,39 @@ __global__ void find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d,
       }
     }
   }
+}
+
+/// A round's first half for particle i: its earliest event among its wall and its pairs with
+/// unresolved partners (or `none`, which sorts after every real event).
+__device__ inline void choose_one(int i, int n, const StepArrays& a, const Event& none) {
+  Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
+  for (int s = 0; s < a.count[i]; ++s) {
+    const int o = a.other[s * n + i];
+    if (a.resolved[o]) continue;
+    const Event e = model::pair_event_key(a.time[s * n + i], i < o ? i : o, i < o ? o : i);
+    if (model::key_less(e, b)) b = e;
+  }
+  a.best[i] = b;
+}
+
+/// A round's second half for particle i: accepts a wall, no event, or a pair both chose, writing
+/// only particle i. Returns false when i is left for the next round.
+__device__ inline bool accept_one(int i, const StepArrays& a) {
+  const Event e = a.best[i];
+  const int o = (e.lo == i) ? e.hi : e.lo;
+  if (!model::in_step(e.t)) {
+    a.resolved[i] = 1;
+  } else if (e.kind == model::kWall) {
+    a.partner[i] = kWall;
+    a.resolved[i] = 1;
+  } else if (a.best[o].kind == model::kPair && a.best[o].lo == e.lo && a.best[o].hi == e.hi) {
+    a.partner[i] = o;
+    a.ptime[i] = e.t;
+    a.resolved[i] = 1;
+  } else {
+    return false;
+  }
+  return true;
 }
 
 /// Every round of the step in one block (stage 05's resolve over the sparse candidates); skips
@@ -183,38 +215,12 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
   const int m = contested;
   const Event none = model::pair_event_key(model::never(), n, n);
   for (;;) {
-    for (int q = threadIdx.x; q < m; q += blockDim.x) {  // choose
-      const int i = a.contested[q];
-      if (a.resolved[i]) continue;
-      Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
-      for (int s = 0; s < a.count[i]; ++s) {
-        const int o = a.other[s * n + i];
-        if (a.resolved[o]) continue;
-        const Event e = model::pair_event_key(a.time[s * n + i], i < o ? i : o, i < o ? o : i);
-        if (model::key_less(e, b)) b = e;
-      }
-      a.best[i] = b;
-    }
+    for (int q = threadIdx.x; q < m; q += blockDim.x)  // choose
+      if (!a.resolved[a.contested[q]]) choose_one(a.contested[q], n, a, none);
     __syncthreads();
     int open = 0;
-    for (int q = threadIdx.x; q < m; q += blockDim.x) {  // accept
-      const int i = a.contested[q];
-      if (a.resolved[i]) continue;
-      const Event e = a.best[i];
-      const int o = (e.lo == i) ? e.hi : e.lo;
-      if (!model::in_step(e.t)) {
-        a.resolved[i] = 1;
-      } else if (e.kind == model::kWall) {
-        a.partner[i] = kWall;
-        a.resolved[i] = 1;
-      } else if (a.best[o].kind == model::kPair && a.best[o].lo == e.lo && a.best[o].hi == e.hi) {
-        a.partner[i] = o;
-        a.ptime[i] = e.t;
-        a.resolved[i] = 1;
-      } else {
-        open = 1;
-      }
-    }
+    for (int q = threadIdx.x; q < m; q += blockDim.x)  // accept
+      if (!a.resolved[a.contested[q]] && !accept_one(a.contested[q], a)) open = 1;
     if (!__syncthreads_or(open)) break;
   }
   if (threadIdx.x == 0) a.flags->steps_done += 1;
@@ -246,37 +252,11 @@ __global__ void resolve_grid(int n, StepArrays a) {
     // Three flags: round r writes r % 3 and everyone reads it after the last barrier of round r;
     // clearing (r + 1) % 3 now cannot meet a slow reader of round r - 1's flag.
     if (me == 0) f->open[(round + 1) % 3] = 0;
-    for (int q = me; q < m; q += stride) {  // choose
-      const int i = a.contested[q];
-      if (a.resolved[i]) continue;
-      Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
-      for (int s = 0; s < a.count[i]; ++s) {
-        const int o = a.other[s * n + i];
-        if (a.resolved[o]) continue;
-        const Event e = model::pair_event_key(a.time[s * n + i], i < o ? i : o, i < o ? o : i);
-        if (model::key_less(e, b)) b = e;
-      }
-      a.best[i] = b;
-    }
+    for (int q = me; q < m; q += stride)  // choose
+      if (!a.resolved[a.contested[q]]) choose_one(a.contested[q], n, a, none);
     grid.sync();
-    for (int q = me; q < m; q += stride) {  // accept
-      const int i = a.contested[q];
-      if (a.resolved[i]) continue;
-      const Event e = a.best[i];
-      const int o = (e.lo == i) ? e.hi : e.lo;
-      if (!model::in_step(e.t)) {
-        a.resolved[i] = 1;
-      } else if (e.kind == model::kWall) {
-        a.partner[i] = kWall;
-        a.resolved[i] = 1;
-      } else if (a.best[o].kind == model::kPair && a.best[o].lo == e.lo && a.best[o].hi == e.hi) {
-        a.partner[i] = o;
-        a.ptime[i] = e.t;
-        a.resolved[i] = 1;
-      } else {
-        f->open[round % 3] = 1;
-      }
-    }
+    for (int q = me; q < m; q += stride)  // accept
+      if (!a.resolved[a.contested[q]] && !accept_one(a.contested[q], a)) f->open[round % 3] = 1;
     grid.sync();
     if (!f->open[round % 3]) break;
   }

@@ -45,7 +45,6 @@ void step(const Box& box, Particles& p) {
 #pragma omp for schedule(dynamic, 1)
     for (int k = 0; k < g.slabs; ++k) {
       const double tm = sweep::slab_mid(k, g);
-      const double h = 0.5 / g.slabs;
       std::fill(start.begin(), start.end(), 0);
       for (int i = 0; i < n; ++i) {
         cx[i] = sweep::cell_of(p.x[i] + tm * p.vx[i], g);
@@ -61,7 +60,7 @@ void step(const Box& box, Particles& p) {
         my[s] = p.y[i] + tm * p.vy[i];
         vx[s] = p.vx[i];
         vy[s] = p.vy[i];
-        reach[s] = std::sqrt(p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i]) * h * (1 + 1e-9);
+        reach[s] = sweep::slab_reach(p.vx[i], p.vy[i], g);
       }
       for (int a = 0; a < n; ++a) {
         const int i0 = id[a];

@@ -109,6 +109,39 @@ __device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, in
 // pass it in slab k - 1 (close_in_slab_at()), MODEL.md's pair time (lower index first), and if it
 // is in the step, add_slot() under both particles.
 
+/// A round's first half for particle i: its earliest event among its wall and its pairs with
+/// unresolved partners (or `none`, which sorts after every real event).
+__device__ inline void choose_one(int i, int n, const StepArrays& a, const Event& none) {
+  Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
+  for (int s = 0; s < a.count[i]; ++s) {
+    const int o = a.other[s * n + i];
+    if (a.resolved[o]) continue;
+    const Event e = model::pair_event_key(a.time[s * n + i], i < o ? i : o, i < o ? o : i);
+    if (model::key_less(e, b)) b = e;
+  }
+  a.best[i] = b;
+}
+
+/// A round's second half for particle i: accepts a wall, no event, or a pair both chose, writing
+/// only particle i. Returns false when i is left for the next round.
+__device__ inline bool accept_one(int i, const StepArrays& a) {
+  const Event e = a.best[i];
+  const int o = (e.lo == i) ? e.hi : e.lo;
+  if (!model::in_step(e.t)) {
+    a.resolved[i] = 1;
+  } else if (e.kind == model::kWall) {
+    a.partner[i] = kWall;
+    a.resolved[i] = 1;
+  } else if (a.best[o].kind == model::kPair && a.best[o].lo == e.lo && a.best[o].hi == e.hi) {
+    a.partner[i] = o;
+    a.ptime[i] = e.t;
+    a.resolved[i] = 1;
+  } else {
+    return false;
+  }
+  return true;
+}
+
 /// Every round of the step in one block (stage 05's resolve over the sparse candidates); skips
 /// the step when slots ran out or a particle is faster than the grid allows.
 __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) {
@@ -131,38 +164,12 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
   const int m = contested;
   const Event none = model::pair_event_key(model::never(), n, n);
   for (;;) {
-    for (int q = threadIdx.x; q < m; q += blockDim.x) {  // choose
-      const int i = a.contested[q];
-      if (a.resolved[i]) continue;
-      Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
-      for (int s = 0; s < a.count[i]; ++s) {
-        const int o = a.other[s * n + i];
-        if (a.resolved[o]) continue;
-        const Event e = model::pair_event_key(a.time[s * n + i], i < o ? i : o, i < o ? o : i);
-        if (model::key_less(e, b)) b = e;
-      }
-      a.best[i] = b;
-    }
+    for (int q = threadIdx.x; q < m; q += blockDim.x)  // choose
+      if (!a.resolved[a.contested[q]]) choose_one(a.contested[q], n, a, none);
     __syncthreads();
     int open = 0;
-    for (int q = threadIdx.x; q < m; q += blockDim.x) {  // accept
-      const int i = a.contested[q];
-      if (a.resolved[i]) continue;
-      const Event e = a.best[i];
-      const int o = (e.lo == i) ? e.hi : e.lo;
-      if (!model::in_step(e.t)) {
-        a.resolved[i] = 1;
-      } else if (e.kind == model::kWall) {
-        a.partner[i] = kWall;
-        a.resolved[i] = 1;
-      } else if (a.best[o].kind == model::kPair && a.best[o].lo == e.lo && a.best[o].hi == e.hi) {
-        a.partner[i] = o;
-        a.ptime[i] = e.t;
-        a.resolved[i] = 1;
-      } else {
-        open = 1;
-      }
-    }
+    for (int q = threadIdx.x; q < m; q += blockDim.x)  // accept
+      if (!a.resolved[a.contested[q]] && !accept_one(a.contested[q], a)) open = 1;
     if (!__syncthreads_or(open)) break;
   }
   if (threadIdx.x == 0) a.flags->steps_done += 1;
@@ -194,37 +201,11 @@ __global__ void resolve_grid(int n, StepArrays a) {
     // Three flags: round r writes r % 3 and everyone reads it after the last barrier of round r;
     // clearing (r + 1) % 3 now cannot meet a slow reader of round r - 1's flag.
     if (me == 0) f->open[(round + 1) % 3] = 0;
-    for (int q = me; q < m; q += stride) {  // choose
-      const int i = a.contested[q];
-      if (a.resolved[i]) continue;
-      Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
-      for (int s = 0; s < a.count[i]; ++s) {
-        const int o = a.other[s * n + i];
-        if (a.resolved[o]) continue;
-        const Event e = model::pair_event_key(a.time[s * n + i], i < o ? i : o, i < o ? o : i);
-        if (model::key_less(e, b)) b = e;
-      }
-      a.best[i] = b;
-    }
+    for (int q = me; q < m; q += stride)  // choose
+      if (!a.resolved[a.contested[q]]) choose_one(a.contested[q], n, a, none);
     grid.sync();
-    for (int q = me; q < m; q += stride) {  // accept
-      const int i = a.contested[q];
-      if (a.resolved[i]) continue;
-      const Event e = a.best[i];
-      const int o = (e.lo == i) ? e.hi : e.lo;
-      if (!model::in_step(e.t)) {
-        a.resolved[i] = 1;
-      } else if (e.kind == model::kWall) {
-        a.partner[i] = kWall;
-        a.resolved[i] = 1;
-      } else if (a.best[o].kind == model::kPair && a.best[o].lo == e.lo && a.best[o].hi == e.hi) {
-        a.partner[i] = o;
-        a.ptime[i] = e.t;
-        a.resolved[i] = 1;
-      } else {
-        f->open[round % 3] = 1;
-      }
-    }
+    for (int q = me; q < m; q += stride)  // accept
+      if (!a.resolved[a.contested[q]] && !accept_one(a.contested[q], a)) f->open[round % 3] = 1;
     grid.sync();
     if (!f->open[round % 3]) break;
   }

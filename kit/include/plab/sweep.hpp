@@ -52,6 +52,12 @@ PLAB_HD inline unsigned bucket_of(int cx, int cy, const Grid& g) {
              : static_cast<unsigned>((index * 0x9E3779B97F4A7C15ull) >> (64 - g.bucket_bits));
 }
 
+/// How far a particle of velocity (vx, vy) moves in half a slab, a hair over (for rounding): the
+/// quick-reject distance close_in_slab() takes for each particle.
+PLAB_HD inline double slab_reach(double vx, double vy, const Grid& g) {
+  return sqrt(vx * vx + vy * vy) * (0.5 / g.slabs) * (1 + 1e-9);
+}
+
 /// Whether two particles, `d` apart (relative position at the slab's midpoint) with relative
 /// velocity `w`, come within the grid's reach during the slab: \f$\min_{|s| \le h} |d + s w| \le
 /// reach\f$, without a division. `ra`, `rb`: each particle's \f$h |v|\f$, for a quick reject.
