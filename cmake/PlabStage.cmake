@@ -1,4 +1,4 @@
-# plab_add_stage(SOURCES file... [CUDA_SOURCES file...] [TEST_MAX_N n] [GPU])
+# plab_add_stage(SOURCES file... [CUDA_SOURCES file...] [TEST_MAX_N n] [GPU] [EXACT])
 #
 # Called from each stage folder's CMakeLists.txt (stages/NN-name or solutions/NN-name). Adds:
 #   plab_stage_NN_IMPL   a library with the stage's step() (IMPL: student or solution)
@@ -7,9 +7,11 @@
 # tests run (stage 01 is O(N^3) per step by design). GPU: a CUDA stage (its sources define
 # plab::make_stepper(); PLAB_GPU_STAGE is set for it and its users), skipped without nvcc.
 # CUDA_SOURCES: a CPU stage's GPU version, compiled when nvcc is found (PLAB_HYBRID_STAGE is then
-# set: its make_stepper() takes the GPU when there is one).
+# set: its make_stepper() takes the GPU when there is one). EXACT: the exact event-driven
+# reference (stage 07), not MODEL.md's stepped model: its sources define plab::make_stepper()
+# (PLAB_EXACT_STAGE is set), it has its own tests and golden files.
 function(plab_add_stage)
-  cmake_parse_arguments(S "GPU" "TEST_MAX_N" "SOURCES;CUDA_SOURCES" ${ARGN})
+  cmake_parse_arguments(S "GPU;EXACT" "TEST_MAX_N" "SOURCES;CUDA_SOURCES" ${ARGN})
   get_filename_component(folder ${CMAKE_CURRENT_SOURCE_DIR} NAME)
   get_filename_component(tree ${CMAKE_CURRENT_SOURCE_DIR} DIRECTORY)
   get_filename_component(tree ${tree} NAME)
@@ -33,7 +35,10 @@ function(plab_add_stage)
   target_link_libraries(${lib} PUBLIC plab::kit)
   target_compile_definitions(${lib} PRIVATE PLAB_STAGE_ID="${id}")
   set(kind cpu)
-  if(S_GPU)
+  if(S_EXACT)
+    set(kind exact)
+    target_compile_definitions(${lib} PUBLIC PLAB_EXACT_STAGE=1)
+  elseif(S_GPU)
     set(kind gpu)
     target_link_libraries(${lib} PUBLIC plab::cuda)
     target_compile_definitions(${lib} PUBLIC PLAB_GPU_STAGE=1)

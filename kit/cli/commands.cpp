@@ -208,7 +208,17 @@ void add_golden(CLI::App& app) {
       const std::string dig = temp_path(d.name + ".digest");
       const int rc = run_program({ref, m.scene_path(d), "--quiet", "--out", out, "--digest", dig});
       if (rc != 0) throw std::runtime_error("the reference failed on " + m.scene_path(d));
-      for (const auto& [made, golden] : {std::pair{out, m.golden_path(d)}, {dig, m.digest_path(d)}}) {
+      std::vector<std::pair<std::string, std::string>> made_golden{{out, m.golden_path(d)},
+                                                                   {dig, m.digest_path(d)}};
+      if (m.has_exact_golden(d)) {  // the exact event-driven stage's own golden file
+        const std::string exact = temp_path(d.name + ".exact");
+        if (run_program({require_stage(m.exact_stage, "solution"), m.scene_path(d), "--quiet",
+                         "--out", exact}) != 0)
+          throw std::runtime_error("stage " + m.exact_stage + " failed on " + m.scene_path(d));
+        fs::create_directories(fs::path(m.exact_golden_path(d)).parent_path());
+        made_golden.emplace_back(exact, m.exact_golden_path(d));
+      }
+      for (const auto& [made, golden] : made_golden) {
         if (!*check) {
           fs::rename(made, golden);
           continue;
@@ -290,7 +300,9 @@ void add_demo(CLI::App& app) {
         const double t = wall_seconds(t0);
         std::string verdict = "FAILED (exit " + std::to_string(rc) + ")";
         if (rc == 0) {
-          const auto diff = first_difference(read_file(m.golden_path(d)), read_file(out));
+          const bool exact = s.id == m.exact_stage;  // stage 07: its own golden files
+          const auto diff = first_difference(
+              read_file(exact ? m.exact_golden_path(d) : m.golden_path(d)), read_file(out));
           verdict = diff ? "DIFFERS: " + diff->describe() : "identical";
           fs::remove(out);
         } else if (rc == 4) {  // a CUDA stage on a machine without a GPU (it said so above)

@@ -16,6 +16,10 @@ std::string Manifest::digest_path(const Dataset& d) const {
   return root + "/golden/" + d.name + ".digest";
 }
 
+std::string Manifest::exact_golden_path(const Dataset& d) const {
+  return root + "/golden/exact/" + d.name + ".out";
+}
+
 Manifest load_manifest(const std::string& root) {
   const std::string path = root + "/manifest.json";
   Manifest m;
@@ -23,6 +27,7 @@ Manifest load_manifest(const std::string& root) {
   try {
     const auto j = nlohmann::json::parse(read_file(path));
     m.reference_stage = j.at("reference_stage").get<std::string>();
+    m.exact_stage = j.value("exact_stage", std::string());
     for (const auto& e : j.at("scenes")) {
       Dataset d;
       d.name = e.at("name").get<std::string>();

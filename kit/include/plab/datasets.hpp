@@ -37,10 +37,17 @@ struct Dataset {
 struct Manifest {
   std::string root;                //!< the datasets folder
   std::string reference_stage;     //!< the stage whose solution produces the golden files
+  std::string exact_stage;         //!< the exact event-driven stage (its own golden files), or ""
   std::vector<Dataset> datasets;   //!< every scene, in manifest order
   [[nodiscard]] std::string scene_path(const Dataset& d) const;   //!< `ROOT/scenes/NAME.in`
   [[nodiscard]] std::string golden_path(const Dataset& d) const;  //!< `ROOT/golden/NAME.out`
   [[nodiscard]] std::string digest_path(const Dataset& d) const;  //!< `ROOT/golden/NAME.digest`
+  /// `ROOT/golden/exact/NAME.out`: the exact stage's output (small and medium scenes only)
+  [[nodiscard]] std::string exact_golden_path(const Dataset& d) const;
+  /// Whether the exact stage has a golden file for this scene (small and medium scenes).
+  [[nodiscard]] bool has_exact_golden(const Dataset& d) const {
+    return !exact_stage.empty() && d.size != "large";
+  }
 };
 
 /// Reads `ROOT/manifest.json` (and each scene's N from its file).

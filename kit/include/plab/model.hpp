@@ -100,6 +100,27 @@ PLAB_HD inline double pair_time(double xi, double yi, double vxi, double vyi,
   return never();
 }
 
+/// The robust contact time of two disks (stage 07, the stress suite): the earliest \f$t \ge 0\f$
+/// with \f$ |\Delta p + t \Delta v| = 2r \f$ for the relative position `(dx, dy)` and velocity
+/// `(dvx, dvy)` at the current time. With half-\f$b\f$ coefficients
+/// \f$ b = \Delta p \cdot \Delta v \f$, \f$ a = |\Delta v|^2 \f$, \f$ c = |\Delta p|^2 - (2r)^2 \f$:
+/// receding or parallel pairs (\f$ b \ge 0 \f$) never meet; an overlapping pair that approaches
+/// (\f$ c \le 0 \f$) meets now (0); otherwise, when \f$ D = b^2 - ac > 0 \f$,
+/// \f[ t = \frac{c}{-b + \sqrt{D}} \f]
+/// which never subtracts two nearly equal numbers (the textbook \f$ (-b - \sqrt D)/a \f$ does,
+/// for grazing and near-contact pairs) and never divides by \f$ a = 0 \f$.
+/// This is not MODEL.md's pair time: the stepped stages must keep pair_time() for their bits.
+PLAB_HD inline double contact_time(double dx, double dy, double dvx, double dvy, double r) {
+  const double b = dx * dvx + dy * dvy;
+  if (!(b < 0)) return never();
+  const double c = (dx * dx + dy * dy) - (2 * r) * (2 * r);
+  if (c <= 0) return 0.0;
+  const double a = dvx * dvx + dvy * dvy;
+  const double disc = b * b - a * c;
+  if (!(disc > 0)) return never();
+  return c / (-b + sqrt(disc));
+}
+
 /// Whether an event at time `t` happens in this step (the window is half-open: \f$ t < 1 \f$).
 PLAB_HD inline bool in_step(double t) { return t < 1; }
 

@@ -4,7 +4,9 @@
 /// Each CPU stage's `step.cpp` (in `stages/NN-name/` for the student, `solutions/NN-name/` for the
 /// reference) defines plab::step(). A CUDA stage (compiled with `PLAB_GPU_STAGE` set) defines
 /// plab::make_stepper() instead, keeping the state on the GPU between steps; a stage with both
-/// (`PLAB_HYBRID_STAGE`) defines both and runs on the GPU when it finds one. The kit's driver does
+/// (`PLAB_HYBRID_STAGE`) defines both and runs on the GPU when it finds one. The exact
+/// event-driven stage 07 (`PLAB_EXACT_STAGE`) defines plab::make_stepper() too: it is not
+/// MODEL.md's stepped model, so it has no step(). The kit's driver does
 /// everything else: reading the scene, printing, timing (see plab::simulate()).
 #pragma once
 
@@ -25,8 +27,9 @@
 
 namespace plab {
 
-#if PLAB_GPU_STAGE
-/// Starts a run of this CUDA stage from `p` (copied to the GPU). Throws NoDevice without a GPU.
+#if PLAB_GPU_STAGE || PLAB_EXACT_STAGE
+/// Starts a run of this CUDA stage from `p` (copied to the GPU; throws NoDevice without a GPU),
+/// or of the exact event-driven stage (07), which keeps its own continuous-time state.
 std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p);
 #else
 /// Advances every particle by one step, as MODEL.md says. Implemented once per CPU stage.
