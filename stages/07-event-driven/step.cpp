@@ -20,7 +20,6 @@
 // =================================================================================================
 #include <algorithm>
 #include <cmath>
-#include <queue>
 #include <vector>
 
 #include "plab/stage.hpp"
@@ -35,35 +34,92 @@ enum Kind : int {
   kCross = 2,    //!< particle `i`'s centre leaves its cell along `axes` (1: x, 2: y)
 };
 
-/// One predicted event: a small plain struct, kept by value in the queue.
+/// One predicted event: a small plain struct, one per particle.
 struct Event {
   double t;       //!< absolute time (steps since the start of the run)
   int kind;       //!< a Kind
   int i;          //!< the particle whose prediction this is
   int j;          //!< the partner (kPairHit), or -1
   int axes;       //!< kWallHit / kCross: which axes (bit 1: x, bit 2: y)
-  long long ci;   //!< collisions of `i` when predicted (stale when it has changed)
-  long long cj;   //!< collisions of `j` when predicted
-  bool operator>(const Event& o) const { return t > o.t; }
+  long long cj;   //!< collisions of `j` when predicted (stale when it has changed)
+};
+
+/// The particles in a binary min-heap by the time of their one predicted event. An indexed heap:
+/// each particle sits in it once, and a new prediction moves it up or down, so the heap never
+/// holds stale entries and stays N long.
+class EventQueue {
+ public:
+  explicit EventQueue(int n) : events_(n), heap_(n), at_(n) {
+    for (int i = 0; i < n; ++i) {
+      events_[i] = Event{model::never(), kCross, i, -1, 0, 0};
+      heap_[i] = Entry{model::never(), i};
+      at_[i] = i;
+    }
+  }
+  [[nodiscard]] bool empty() const { return heap_.empty(); }
+  /// The earliest event.
+  [[nodiscard]] const Event& top() const { return events_[heap_[0].i]; }
+  /// Replaces the prediction of particle `e.i`.
+  void set(const Event& e) {
+    events_[e.i] = e;
+    const int k = at_[e.i];
+    heap_[k].t = e.t;
+    if (k > 0 && e.t < heap_[(k - 1) / 2].t) up(k);
+    else down(k);
+  }
+
+ private:
+  struct Entry {
+    double t;  //!< the event's time, kept beside the particle so that sifting reads one array
+    int i;     //!< the particle
+  };
+  void put(int k, const Entry& e) {
+    heap_[k] = e;
+    at_[e.i] = k;
+  }
+  void up(int k) {
+    const Entry e = heap_[k];
+    for (; k > 0 && e.t < heap_[(k - 1) / 2].t; k = (k - 1) / 2) put(k, heap_[(k - 1) / 2]);
+    put(k, e);
+  }
+  void down(int k) {
+    const Entry e = heap_[k];
+    const int n = static_cast<int>(heap_.size());
+    for (int c = 2 * k + 1; c < n; k = c, c = 2 * k + 1) {
+      if (c + 1 < n && heap_[c + 1].t < heap_[c].t) ++c;
+      if (!(heap_[c].t < e.t)) break;
+      put(k, heap_[c]);
+    }
+    put(k, e);
+  }
+  std::vector<Event> events_;  //!< each particle's prediction
+  std::vector<Entry> heap_;    //!< (time, particle) in heap order
+  std::vector<int> at_;        //!< each particle's place in heap_
 };
 
 /// Exact hard-disk dynamics as a Stepper: step() advances time by 1.
 class EventDriven final : public Stepper {
  public:
-  EventDriven(const Box& box, const Particles& p) : box_(box), p_(p) {
+  EventDriven(const Box& box, const Particles& p)
+      : box_(box), p_(p), queue_(static_cast<int>(p.size())) {
     const int n = static_cast<int>(p.size());
     t_.assign(n, 0.0);
     hits_.assign(n, 0);
     last_.assign(n, -1);
-    // Cells: at least 2r wide (a pair in cells that are not neighbours is apart by more than 2r),
-    // and about two particles a cell on average, so that a prediction looks at a few particles.
-    const double side = std::max(2 * box.r, box.L * std::sqrt(2.0 / n));
+    cached_.resize(n);
+    // Cells: at least 2r wide (a pair in cells that are not neighbours is apart by more than 2r).
+    // Smaller cells mean fewer particles to look at in a prediction, but more crossing events:
+    // half a mean free path (L^2 / (4 r N) in a dilute gas) balances the two, and no more than
+    // two particles a cell on average (sparse, fast scenes).
+    const double free_path = box.L * box.L / (4 * box.r * n) / 2;
+    const double side = std::max(2 * box.r, std::min(free_path, box.L * std::sqrt(2.0 / n)));
     cells_ = std::max(1, static_cast<int>(box.L / side));
     cell_side_ = box.L / cells_;
-    members_.assign(static_cast<std::size_t>(cells_) * cells_, {});
+    head_.assign(static_cast<std::size_t>(cells_) * cells_, -1);
     cx_.resize(n);
     cy_.resize(n);
-    slot_.resize(n);
+    next_.resize(n);
+    prev_.resize(n);
     for (int i = 0; i < n; ++i) {
       cx_[i] = cell_of(p_.x[i]);
       cy_[i] = cell_of(p_.y[i]);
@@ -88,18 +144,19 @@ class EventDriven final : public Stepper {
   int cell_of(double pos) const {
     return std::clamp(static_cast<int>(pos / cell_side_), 0, cells_ - 1);
   }
-  std::vector<int>& cell(int cx, int cy) { return members_[static_cast<std::size_t>(cy) * cells_ + cx]; }
+  /// The first particle of a cell's list (-1: empty); next_ links the rest.
+  int& head(int cx, int cy) { return head_[static_cast<std::size_t>(cy) * cells_ + cx]; }
   void insert(int i) {
-    auto& m = cell(cx_[i], cy_[i]);
-    slot_[i] = static_cast<int>(m.size());
-    m.push_back(i);
+    int& h = head(cx_[i], cy_[i]);
+    prev_[i] = -1;
+    next_[i] = h;
+    if (h >= 0) prev_[h] = i;
+    h = i;
   }
   void remove(int i) {
-    auto& m = cell(cx_[i], cy_[i]);
-    const int last = m.back();
-    m[slot_[i]] = last;
-    slot_[last] = slot_[i];
-    m.pop_back();
+    if (prev_[i] >= 0) next_[prev_[i]] = next_[i];
+    else head(cx_[i], cy_[i]) = next_[i];
+    if (next_[i] >= 0) prev_[next_[i]] = prev_[i];
   }
   /// Moves particle `i` along its straight path to time `t` (it is stored at its own time).
   void advance(int i, double t) {
@@ -115,47 +172,82 @@ class EventDriven final : public Stepper {
     return model::never();
   }
 
-  /// Predicts particle `i`'s next event from now (it must be at time now_) and queues it.
+  /// Predicts particle `i`'s next event and queues it. Wall and pair times are computed from the
+  /// stored states (a pair from the later of its two stored times), never from the current time:
+  /// only collisions change the stored states, so cell crossings and stale events leave no trace
+  /// in the rounding, and the cell size changes the speed, never the result.
   void predict(int i) {
-    const double x = p_.x[i], y = p_.y[i], vx = p_.vx[i], vy = p_.vy[i];
+    const double vx = p_.vx[i], vy = p_.vy[i], ti = t_[i];
     const double L = box_.L, r = box_.r;
     // Walls: the centre reaches r or L - r; both axes at the same time is a corner.
-    const double wx = exit_time(x, vx, r, L - r), wy = exit_time(y, vy, r, L - r);
-    Event best{now_ + std::min(wx, wy), kWallHit, i, -1, (wx <= wy ? 1 : 0) | (wy <= wx ? 2 : 0),
-               hits_[i], 0};
-    // Cell crossings (no crossing out of the grid: the walls come first).
+    const double wx = exit_time(p_.x[i], vx, r, L - r), wy = exit_time(p_.y[i], vy, r, L - r);
+    Event best{std::max(now_, ti + std::min(wx, wy)), kWallHit, i, -1,
+               (wx <= wy ? 1 : 0) | (wy <= wx ? 2 : 0), 0};
+    cached_[i] = scan(i, cx_[i] - 1, cx_[i] + 1, cy_[i] - 1, cy_[i] + 1, best);
+    schedule(i);
+  }
+
+  /// The earliest of `best` and the pair events of `i` with the particles of cells
+  /// [gx0, gx1] x [gy0, gy1] (clipped to the grid).
+  Event scan(int i, int gx0, int gx1, int gy0, int gy1, Event best) const {
+    for (int gy = std::max(0, gy0); gy <= std::min(cells_ - 1, gy1); ++gy) {
+      for (int gx = std::max(0, gx0); gx <= std::min(cells_ - 1, gx1); ++gx) {
+        // EXERCISE 1: for every particle j != i of this cell (head_, next_), the contact time
+        // of the pair by model::contact_time(), from both positions at the later of their stored
+        // times t_[i], t_[j]; keep `best` the earliest (a kPairHit Event with hits_[j]). Skip the
+        // pair that has just collided when the time is 0 (last_), or rounding can make it collide
+        // again and again.
+        PLAB_EXERCISE(1, "predict the pair events of a particle");
+      }
+    }
+    return best;
+  }
+
+  /// Queues the earlier of particle `i`'s cached wall or pair event and its next cell crossing.
+  void schedule(int i) {
+    const double vx = p_.vx[i], vy = p_.vy[i];
+    const double x = p_.x[i] + (now_ - t_[i]) * vx, y = p_.y[i] + (now_ - t_[i]) * vy;  // now
+    // No crossing out of the grid: the walls come first.
     const double lo_x = cx_[i] * cell_side_, lo_y = cy_[i] * cell_side_;
     const double kx = exit_time(x, (vx > 0 && cx_[i] == cells_ - 1) || (vx < 0 && cx_[i] == 0) ? 0 : vx,
                                 lo_x, lo_x + cell_side_);
     const double ky = exit_time(y, (vy > 0 && cy_[i] == cells_ - 1) || (vy < 0 && cy_[i] == 0) ? 0 : vy,
                                 lo_y, lo_y + cell_side_);
-    const double k = std::min(kx, ky);
-    if (now_ + k < best.t) best = Event{now_ + k, kCross, i, -1, kx <= ky ? 1 : 2, hits_[i], 0};
-    // EXERCISE 1: pairs. For every other particle j of the 3 x 3 cells around i's cell, take j's
-    // position now (it is stored at its own time t_[j]), its contact time with i by
-    // model::contact_time(), and keep `best` the earliest event. Skip the pair that has just
-    // collided when the time is 0 (last_), or rounding can make it collide again and again.
-    PLAB_EXERCISE(1, "predict the pair events of a particle");
-    queue_.push(best);
+    const double k = now_ + std::min(kx, ky);
+    queue_.set(k < cached_[i].t ? Event{k, kCross, i, -1, kx <= ky ? 1 : 2, 0} : cached_[i]);
+  }
+
+  /// Particle `i` enters the next cell along `axes`: only the row or column of cells that has
+  /// just become its neighbour can add pair events (unless its cached event went stale).
+  void cross(int i, int axes) {
+    remove(i);
+    const int dx = (axes & 1) ? (p_.vx[i] > 0 ? 1 : -1) : 0;
+    const int dy = (axes & 2) ? (p_.vy[i] > 0 ? 1 : -1) : 0;
+    cx_[i] += dx;
+    cy_[i] += dy;
+    insert(i);
+    const Event& c = cached_[i];
+    if (c.kind == kPairHit && c.cj != hits_[c.j]) {
+      predict(i);
+    } else if (dx != 0) {
+      cached_[i] = scan(i, cx_[i] + dx, cx_[i] + dx, cy_[i] - 1, cy_[i] + 1, c);
+      schedule(i);
+    } else {
+      cached_[i] = scan(i, cx_[i] - 1, cx_[i] + 1, cy_[i] + dy, cy_[i] + dy, c);
+      schedule(i);
+    }
   }
 
   /// Processes every event before time `end`, then sets the clock to `end`.
   void run_until(double end) {
     while (!queue_.empty() && queue_.top().t < end) {
-      const Event e = queue_.top();
-      queue_.pop();
-      // EXERCISE 2: stale events. Drop the event when i has collided since it was predicted (it
-      // has a newer prediction); when only the partner j has, set the clock, bring i to it and
-      // predict i again.
-      PLAB_EXERCISE(2, "skip or redo the stale events");
+      const Event e = queue_.top();  // each branch below predicts e.i again, replacing it
       now_ = e.t;
+      // EXERCISE 2: a pair event whose partner has collided since it was predicted (its hits_
+      // changed) is stale: predict e.i again instead of colliding.
+      PLAB_EXERCISE(2, "redo the stale events");
       if (e.kind == kCross) {
-        advance(e.i, now_);
-        remove(e.i);
-        if (e.axes & 1) cx_[e.i] += p_.vx[e.i] > 0 ? 1 : -1;
-        if (e.axes & 2) cy_[e.i] += p_.vy[e.i] > 0 ? 1 : -1;
-        insert(e.i);
-        predict(e.i);
+        cross(e.i, e.axes);
       } else if (e.kind == kWallHit) {
         advance(e.i, now_);
         if (e.axes & 1) p_.vx[e.i] = -p_.vx[e.i];
@@ -192,12 +284,14 @@ class EventDriven final : public Stepper {
   std::vector<double> t_;          //!< the time each particle's position is stored at
   std::vector<long long> hits_;    //!< collisions so far (wall and pair): what makes events stale
   std::vector<int> last_;          //!< the last pair partner (-1 after a wall)
-  std::vector<int> cx_, cy_, slot_;  //!< each particle's cell and its place in the cell's list
-  std::vector<std::vector<int>> members_;  //!< the particles of each cell
+  std::vector<Event> cached_;      //!< each particle's earliest wall or pair event
+  std::vector<int> cx_, cy_;       //!< each particle's cell
+  std::vector<int> head_;          //!< the first particle of each cell (-1: none)
+  std::vector<int> next_, prev_;   //!< the cell lists, linked both ways (-1 ends them)
   int cells_ = 1;                  //!< cells along each axis
   double cell_side_ = 0;           //!< their side (at least 2r)
   double now_ = 0;                 //!< the current time
-  std::priority_queue<Event, std::vector<Event>, std::greater<>> queue_;
+  EventQueue queue_;               //!< every particle's next event
 };
 
 }  // namespace
