@@ -189,7 +189,7 @@ class EventDriven final : public Stepper {
 
   /// The earliest of `best` and the pair events of `i` with the particles of cells
   /// [gx0, gx1] x [gy0, gy1] (clipped to the grid).
-  Event scan(int i, int gx0, int gx1, int gy0, int gy1, Event best) const {
+  Event scan([[maybe_unused]] int i, int gx0, int gx1, int gy0, int gy1, Event best) const {
     for (int gy = std::max(0, gy0); gy <= std::min(cells_ - 1, gy1); ++gy) {
       for (int gx = std::max(0, gx0); gx <= std::min(cells_ - 1, gx1); ++gx) {
         // EXERCISE 1: for every particle j != i of this cell (head_, next_), the contact time
