@@ -1,4 +1,4 @@
-# plab_add_stage(SOURCES file... [CUDA_SOURCES file...] [TEST_MAX_N n] [GPU] [EXACT])
+# plab_add_stage(SOURCES file... [CUDA_SOURCES file...] [TEST_MAX_N n] [GPU] [EXACT] [FLOAT])
 #
 # Called from each stage folder's CMakeLists.txt (stages/NN-name or solutions/NN-name). Adds:
 #   plab_stage_NN_IMPL   a library with the stage's step() (IMPL: student or solution)
@@ -9,9 +9,10 @@
 # CUDA_SOURCES: a CPU stage's GPU version, compiled when nvcc is found (PLAB_HYBRID_STAGE is then
 # set: its make_stepper() takes the GPU when there is one). EXACT: the exact event-driven
 # reference (stage 07), not MODEL.md's stepped model: its sources define plab::make_stepper()
-# (PLAB_EXACT_STAGE is set), it has its own tests and golden files.
+# (PLAB_EXACT_STAGE is set), it has its own tests and golden files. FLOAT: the stage also defines
+# plab::step_float() (PLAB_FLOAT_STAGE is set), the float variant `plab accuracy` measures.
 function(plab_add_stage)
-  cmake_parse_arguments(S "GPU;EXACT" "TEST_MAX_N" "SOURCES;CUDA_SOURCES" ${ARGN})
+  cmake_parse_arguments(S "GPU;EXACT;FLOAT" "TEST_MAX_N" "SOURCES;CUDA_SOURCES" ${ARGN})
   get_filename_component(folder ${CMAKE_CURRENT_SOURCE_DIR} NAME)
   get_filename_component(tree ${CMAKE_CURRENT_SOURCE_DIR} DIRECTORY)
   get_filename_component(tree ${tree} NAME)
@@ -34,6 +35,9 @@ function(plab_add_stage)
   add_library(${lib} STATIC ${S_SOURCES})
   target_link_libraries(${lib} PUBLIC plab::kit)
   target_compile_definitions(${lib} PRIVATE PLAB_STAGE_ID="${id}")
+  if(S_FLOAT)
+    target_compile_definitions(${lib} PUBLIC PLAB_FLOAT_STAGE=1)
+  endif()
   set(kind cpu)
   if(S_EXACT)
     set(kind exact)

@@ -25,45 +25,45 @@ struct P {
 }  // namespace
 
 TEST(WallTime, EachDirectionAndZero) {
-  EXPECT_EQ(m::axis_wall_time(5, -2, L, r), 2.0);   // (5 - 1) / (0 - -2)
-  EXPECT_EQ(m::axis_wall_time(5, 2, L, r), 2.0);    // ((10 - 5) - 1) / 2
-  EXPECT_EQ(m::axis_wall_time(5, 0, L, r), kInf);   // resting: never (the original: 4/0 or 0/0)
-  EXPECT_EQ(m::axis_wall_time(9, 0, L, r), kInf);   // resting on the wall x = L - r: not NaN
-  EXPECT_EQ(m::axis_wall_time(9.5, 1, L, r), -0.5); // already past L - r: negative, still counts
-  EXPECT_EQ(m::wall_time(3, 6, -2, 4, L, r), 0.75);  // tx = 1, ty = 0.75
-  const m::WallTimes w = m::wall_times(3, 6, -2, 4, L, r);
+  EXPECT_EQ(m::axis_wall_time<double>(5, -2, L, r), 2.0);   // (5 - 1) / (0 - -2)
+  EXPECT_EQ(m::axis_wall_time<double>(5, 2, L, r), 2.0);    // ((10 - 5) - 1) / 2
+  EXPECT_EQ(m::axis_wall_time<double>(5, 0, L, r), kInf);   // resting: never (the original: 4/0 or 0/0)
+  EXPECT_EQ(m::axis_wall_time<double>(9, 0, L, r), kInf);   // resting on the wall x = L - r: not NaN
+  EXPECT_EQ(m::axis_wall_time<double>(9.5, 1, L, r), -0.5); // already past L - r: negative, still counts
+  EXPECT_EQ(m::wall_time<double>(3, 6, -2, 4, L, r), 0.75);  // tx = 1, ty = 0.75
+  const m::WallTimes w = m::wall_times<double>(3, 6, -2, 4, L, r);
   EXPECT_EQ(w.tx, 1.0);
   EXPECT_EQ(w.ty, 0.75);
-  EXPECT_EQ(m::wall_time(w), 0.75);
+  EXPECT_EQ(m::wall_time<double>(w), 0.75);
 }
 
 TEST(PairTime, HeadOnMidStep) {
   // Centres 10.5 apart closing at 4 per step: they touch (distance 2) at t = 8.5 / 4 = 2.125.
-  EXPECT_EQ(m::pair_time(5, 10, 2, 0, 15.5, 10, -2, 0, r), 2.125);
-  EXPECT_EQ(m::pair_time(9, 10, 2, 0, 11.5, 10, -2, 0, r), 0.125);
+  EXPECT_EQ(m::pair_time<double>(5, 10, 2, 0, 15.5, 10, -2, 0, r), 2.125);
+  EXPECT_EQ(m::pair_time<double>(9, 10, 2, 0, 11.5, 10, -2, 0, r), 0.125);
 }
 
 TEST(PairTime, GrazingHasZeroDiscriminant) {
   // Paths 2 = 2r apart: c = 25, b = -20, a = 4, disc = 400 - 16 * 25 = 0, t = 20 / 8.
-  EXPECT_EQ(m::pair_time(5, 10, 1, 0, 10, 12, -1, 0, r), 2.5);
-  EXPECT_EQ(m::pair_time(5, 10, 1, 0, 10, 12.000001, -1, 0, r), kInf);  // a hair further: a miss
+  EXPECT_EQ(m::pair_time<double>(5, 10, 1, 0, 10, 12, -1, 0, r), 2.5);
+  EXPECT_EQ(m::pair_time<double>(5, 10, 1, 0, 10, 12.000001, -1, 0, r), kInf);  // a hair further: a miss
 }
 
 TEST(PairTime, OverlapCollidesAtOnceWhicheverWayItMoves) {
-  EXPECT_EQ(m::pair_time(5, 10, 1, 0, 6, 10, -1, 0, r), 0.0);   // approaching: t1 = -0.5, t2 = 1.5
-  EXPECT_EQ(m::pair_time(15, 10, -1, 0, 16, 10, 1, 0, r), 0.0); // separating: t1 = -1.5, t2 = 0.5
-  EXPECT_EQ(m::pair_time(10, 10, 1, 2, 10, 10, -2, 1, r), 0.0); // coincident centres
+  EXPECT_EQ(m::pair_time<double>(5, 10, 1, 0, 6, 10, -1, 0, r), 0.0);   // approaching: t1 = -0.5, t2 = 1.5
+  EXPECT_EQ(m::pair_time<double>(15, 10, -1, 0, 16, 10, 1, 0, r), 0.0); // separating: t1 = -1.5, t2 = 0.5
+  EXPECT_EQ(m::pair_time<double>(10, 10, 1, 2, 10, 10, -2, 1, r), 0.0); // coincident centres
 }
 
 TEST(PairTime, NoEvent) {
-  EXPECT_EQ(m::pair_time(5, 5, 0, 0, 6.5, 5, 0, 0, r), kInf);    // a == 0 (same velocity), overlapping
-  EXPECT_EQ(m::pair_time(5, 5, 1, 1, 8, 5, 1, 1, r), kInf);      // a == 0, apart
-  EXPECT_EQ(m::pair_time(5, 5, -1, 0, 9, 5, 1, 0, r), kInf);     // receding: both roots negative
-  EXPECT_EQ(m::pair_time(5, 5, 1, 0, 9, 9, 1, 1, r), kInf);      // disc < 0: paths never close
-  EXPECT_EQ(m::pair_time(5, 10, 2, 0, 11, 10, -2, 0, r), 1.0);   // exactly t = 1: not in this step
-  EXPECT_FALSE(m::in_step(1.0));
-  EXPECT_TRUE(m::in_step(0.0));
-  EXPECT_TRUE(m::in_step(-0.5));
+  EXPECT_EQ(m::pair_time<double>(5, 5, 0, 0, 6.5, 5, 0, 0, r), kInf);    // a == 0 (same velocity), overlapping
+  EXPECT_EQ(m::pair_time<double>(5, 5, 1, 1, 8, 5, 1, 1, r), kInf);      // a == 0, apart
+  EXPECT_EQ(m::pair_time<double>(5, 5, -1, 0, 9, 5, 1, 0, r), kInf);     // receding: both roots negative
+  EXPECT_EQ(m::pair_time<double>(5, 5, 1, 0, 9, 9, 1, 1, r), kInf);      // disc < 0: paths never close
+  EXPECT_EQ(m::pair_time<double>(5, 10, 2, 0, 11, 10, -2, 0, r), 1.0);   // exactly t = 1: not in this step
+  EXPECT_FALSE(m::in_step<double>(1.0));
+  EXPECT_TRUE(m::in_step<double>(0.0));
+  EXPECT_TRUE(m::in_step<double>(-0.5));
 }
 
 TEST(EventKey, OrderIsTimeThenKindThenIndices) {
@@ -78,14 +78,14 @@ TEST(EventKey, OrderIsTimeThenKindThenIndices) {
 
 TEST(FreeMove, WholeStep) {
   double x = 2, y = 3;
-  m::free_move(x, y, 0.5, -1);
+  m::free_move<double>(x, y, 0.5, -1);
   EXPECT_EQ(x, 2.5);
   EXPECT_EQ(y, 2.0);
 }
 
 TEST(WallEvent, XFirstThenStopAtSecondWall) {
   P p{2, 6, -2, 4};  // tx = 0.5, ty = 0.75: reflect in x at (1, 8), stop at y = 9 at t = 0.75
-  m::wall_event(p.x, p.y, p.vx, p.vy, p.c, L, r);
+  m::wall_event<double>(p.x, p.y, p.vx, p.vy, p.c, L, r);
   EXPECT_EQ(p.x, 1.5);
   EXPECT_EQ(p.y, 9.0);
   EXPECT_EQ(p.vx, 2.0);
@@ -95,7 +95,7 @@ TEST(WallEvent, XFirstThenStopAtSecondWall) {
 
 TEST(WallEvent, XFirstNoSecondWall) {
   P p{2, 5, -2, 1};  // tx = 0.5, ty = 4: reflect, move the remaining 0.5
-  m::wall_event(p.x, p.y, p.vx, p.vy, p.c, L, r);
+  m::wall_event<double>(p.x, p.y, p.vx, p.vy, p.c, L, r);
   EXPECT_EQ(p.x, 2.0);
   EXPECT_EQ(p.y, 6.0);
   EXPECT_EQ(p.vx, 2.0);
@@ -103,7 +103,7 @@ TEST(WallEvent, XFirstNoSecondWall) {
 
 TEST(WallEvent, YFirstIsTheMirror) {
   P p{6, 2, 4, -2};
-  m::wall_event(p.x, p.y, p.vx, p.vy, p.c, L, r);
+  m::wall_event<double>(p.x, p.y, p.vx, p.vy, p.c, L, r);
   EXPECT_EQ(p.x, 9.0);
   EXPECT_EQ(p.y, 1.5);
   EXPECT_EQ(p.vx, 4.0);
@@ -112,7 +112,7 @@ TEST(WallEvent, YFirstIsTheMirror) {
 
 TEST(WallEvent, ExactCornerReflectsBoth) {
   P p{3, 3, -4, -4};  // tx = ty = 0.5
-  m::wall_event(p.x, p.y, p.vx, p.vy, p.c, L, r);
+  m::wall_event<double>(p.x, p.y, p.vx, p.vy, p.c, L, r);
   EXPECT_EQ(p.x, 3.0);
   EXPECT_EQ(p.y, 3.0);
   EXPECT_EQ(p.vx, 4.0);
@@ -122,7 +122,7 @@ TEST(WallEvent, ExactCornerReflectsBoth) {
 
 TEST(WallEvent, RestingAxisNeverReflects) {
   P p{9, 5, 0, 8};  // on the wall x = L - r with vx = 0: only y reflects (ty = 0.5)
-  m::wall_event(p.x, p.y, p.vx, p.vy, p.c, L, r);
+  m::wall_event<double>(p.x, p.y, p.vx, p.vy, p.c, L, r);
   EXPECT_EQ(p.x, 9.0);
   EXPECT_EQ(p.y, 5.0);
   EXPECT_EQ(p.vy, -8.0);
@@ -143,12 +143,12 @@ TEST(WallEvent, BranchlessGivesTheSameBits) {
       default: a = {2 + std::floor(6 * rng.uniform01()), 2 + std::floor(6 * rng.uniform01()),
                     std::floor(8 * rng.uniform01()) - 4, std::floor(8 * rng.uniform01()) - 4};
     }
-    const m::WallTimes w = m::wall_times(a.x, a.y, a.vx, a.vy, L, r);
-    if (!(m::wall_time(w) < 1)) continue;
+    const m::WallTimes w = m::wall_times<double>(a.x, a.y, a.vx, a.vy, L, r);
+    if (!(m::wall_time<double>(w) < 1)) continue;
     corners += w.tx == w.ty;
     P b = a;
-    m::wall_event(a.x, a.y, a.vx, a.vy, a.c, L, r);
-    m::wall_event_branchless(b.x, b.y, b.vx, b.vy, b.c, L, r);
+    m::wall_event<double>(a.x, a.y, a.vx, a.vy, a.c, L, r);
+    m::wall_event_branchless<double>(b.x, b.y, b.vx, b.vy, b.c, L, r);
     ASSERT_TRUE(same_bits(a.x, b.x) && same_bits(a.y, b.y) && same_bits(a.vx, b.vx) &&
                 same_bits(a.vy, b.vy) && a.c == b.c)
         << "case " << k;
@@ -158,7 +158,7 @@ TEST(WallEvent, BranchlessGivesTheSameBits) {
 
 TEST(PairEvent, HeadOnExchangesVelocities) {
   P i{9, 10, 2, 0}, j{11.5, 10, -2, 0};  // meet at t = 0.125 at x = 9.25 and 11.25
-  ASSERT_TRUE(m::pair_event(i.x, i.y, i.vx, i.vy, i.c, j.x, j.y, j.vx, j.vy, j.c, 0.125, 20, r));
+  ASSERT_TRUE(m::pair_event<double>(i.x, i.y, i.vx, i.vy, i.c, j.x, j.y, j.vx, j.vy, j.c, 0.125, 20, r));
   EXPECT_EQ(i.vx, -2.0);
   EXPECT_EQ(j.vx, 2.0);
   EXPECT_EQ(i.x, 9.25 - 2 * 0.875);
@@ -173,9 +173,9 @@ TEST(PairEvent, HeadOnExchangesVelocities) {
 
 TEST(PairEvent, StopsAtWallForTheRestOfTheStep) {
   P i{3, 10, 0, 0}, j{6, 10, -4, 0};  // collide at t = 0.25; i then reaches x = r at t = 0.75
-  const double t = m::pair_time(i.x, i.y, i.vx, i.vy, j.x, j.y, j.vx, j.vy, r);
+  const double t = m::pair_time<double>(i.x, i.y, i.vx, i.vy, j.x, j.y, j.vx, j.vy, r);
   ASSERT_EQ(t, 0.25);
-  m::pair_event(i.x, i.y, i.vx, i.vy, i.c, j.x, j.y, j.vx, j.vy, j.c, t, 20, r);
+  m::pair_event<double>(i.x, i.y, i.vx, i.vy, i.c, j.x, j.y, j.vx, j.vy, j.c, t, 20, r);
   EXPECT_EQ(i.x, 1.0);
   EXPECT_EQ(i.vx, -4.0);
   EXPECT_EQ(j.x, 5.0);
@@ -184,7 +184,7 @@ TEST(PairEvent, StopsAtWallForTheRestOfTheStep) {
 
 TEST(PairEvent, TangentialVelocityUnchangedWhenGrazing) {
   P i{7.5, 10, 1, 0}, j{7.5, 12, -1, 0};  // touching, normal along y, velocities along x
-  m::pair_event(i.x, i.y, i.vx, i.vy, i.c, j.x, j.y, j.vx, j.vy, j.c, 0.0, 40, r);
+  m::pair_event<double>(i.x, i.y, i.vx, i.vy, i.c, j.x, j.y, j.vx, j.vy, j.c, 0.0, 40, r);
   EXPECT_EQ(i.vx, 1.0);
   EXPECT_EQ(j.vx, -1.0);
   EXPECT_EQ(i.x, 8.5);
@@ -193,7 +193,7 @@ TEST(PairEvent, TangentialVelocityUnchangedWhenGrazing) {
 
 TEST(PairEvent, CoincidentCentresAreDropped) {
   P i{10, 10, 1, 2}, j{10, 10, -2, 1};
-  EXPECT_FALSE(m::pair_event(i.x, i.y, i.vx, i.vy, i.c, j.x, j.y, j.vx, j.vy, j.c, 0.0, 20, r));
+  EXPECT_FALSE(m::pair_event<double>(i.x, i.y, i.vx, i.vy, i.c, j.x, j.y, j.vx, j.vy, j.c, 0.0, 20, r));
   EXPECT_EQ(i.x, 11.0);
   EXPECT_EQ(i.y, 12.0);
   EXPECT_EQ(j.x, 8.0);
@@ -209,7 +209,7 @@ TEST(PairEvent, ConservesKineticEnergyAndMomentum) {
     P j{50 + 2 * rng.uniform01(), 51.5, 10 * rng.uniform01() - 5, 10 * rng.uniform01() - 5};
     const double e0 = i.vx * i.vx + i.vy * i.vy + j.vx * j.vx + j.vy * j.vy;
     const double px = i.vx + j.vx, py = i.vy + j.vy;
-    m::pair_event(i.x, i.y, i.vx, i.vy, i.c, j.x, j.y, j.vx, j.vy, j.c, 0.0, 100, r);
+    m::pair_event<double>(i.x, i.y, i.vx, i.vy, i.c, j.x, j.y, j.vx, j.vy, j.c, 0.0, 100, r);
     EXPECT_NEAR(i.vx * i.vx + i.vy * i.vy + j.vx * j.vx + j.vy * j.vy, e0, 1e-12 * (1 + e0));
     EXPECT_NEAR(i.vx + j.vx, px, 1e-12 * (1 + std::fabs(px)));
     EXPECT_NEAR(i.vy + j.vy, py, 1e-12 * (1 + std::fabs(py)));
@@ -227,7 +227,7 @@ TEST(RestOfStep, UsesTheOtherAssociation) {
     if (((big_l - small_r) - x0) == ((big_l - x0) - small_r)) continue;
     ++differing;
     double x = x0, y = 5;
-    m::rest_of_step(x, y, v, 0, 0.0, big_l, small_r);
+    m::rest_of_step<double>(x, y, v, 0, 0.0, big_l, small_r);
     EXPECT_TRUE(same_bits(x, x0 + (((big_l - small_r) - x0) / v) * v));
   }
   EXPECT_GT(differing, 10);

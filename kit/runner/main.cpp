@@ -21,6 +21,8 @@ int main(int argc, char** argv) {
   int threads = 0;
   std::uint64_t seed = plab::kDefaultSeed;
   bool quiet = false;
+  int substeps = 1;
+  std::string real = "double";
   CLI::App app{"Runs stage " PLAB_STAGE_ID " (" PLAB_IMPL ") on a scene and writes MODEL.md's output."};
   app.add_option("scene", scene_path, "scene file (MODEL.md's input format)")->required();
   app.add_option("--out", out_path, "write the output here instead of stdout (all or nothing)");
@@ -43,6 +45,14 @@ int main(int argc, char** argv) {
                  "greedy oracle, from this stage's state at the start of step K)");
   app.add_option("--report", report_path,
                  "write the run's timing as JSON to this file (what plab bench reads)");
+  app.add_option("--substeps", substeps,
+                 "plab accuracy: K model steps of 1/K per printed step (K a power of two keeps the "
+                 "velocity scaling exact); not MODEL.md's output")
+      ->check(CLI::Range(1, 1 << 20))->capture_default_str();
+  app.add_option("--real", real,
+                 "plab accuracy: run the model in float (stages built with it: 06) instead of "
+                 "MODEL.md's double; never for golden outputs")
+      ->check(CLI::IsMember({"double", "float"}))->capture_default_str();
   app.add_flag("--quiet", quiet, "no timing summary on stderr");
   CLI11_PARSE(app, argc, argv);
 
@@ -76,13 +86,21 @@ int main(int argc, char** argv) {
       std::fputs(plab::describe_events(scene.box, p, which).c_str(), stdout);
       return 0;
     }
+    plab::MakeStepper make = plab::make_stepper;
+    if (real == "float") {
+#if PLAB_FLOAT_STAGE
+      make = plab::make_float_stepper;
+#else
+      throw std::runtime_error("stage " PLAB_STAGE_ID " has no float variant (--real float)");
+#endif
+    }
     plab::OutputFile out(out_path);
     plab::OutputFile digest(digest_path, /*optional=*/true);
     plab::OutputFile events(events_path, /*optional=*/true);
     plab::OutputWriter writer(out.get());
     const plab::RunStats stats =
-        plab::simulate(scene, plab::make_stepper, writer,
-                       {digest.get(), events.get(), !quiet && plab::stderr_is_terminal()});
+        plab::simulate(scene, make, writer,
+                       {digest.get(), events.get(), !quiet && plab::stderr_is_terminal(), substeps});
     out.commit();
     digest.commit();
     events.commit();
@@ -95,7 +113,8 @@ int main(int argc, char** argv) {
           {"timer", stats.timer},           {"step_seconds", stats.step_seconds},
           {"device_bytes", stats.device_bytes},
           {"total_seconds", stats.total_seconds},
-          {"pair_events", stats.pair_events}, {"wall_events", stats.wall_events}};
+          {"pair_events", stats.pair_events}, {"wall_events", stats.wall_events},
+          {"substeps", substeps},           {"real", real}};
       const std::string text = j.dump(2) + "\n";
       std::fputs(text.c_str(), report.get());
       report.commit();

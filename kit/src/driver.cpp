@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <numeric>
 
@@ -65,24 +66,42 @@ RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOpt
   const long long wc0 = sum(p.wc);
   Progress progress(options.progress, steps);
   if (options.digest) std::fputs(digest_line(0, digest(p)).c_str(), options.digest);
+  const int k = std::max(1, options.substeps);
+  const double scale = k;
+  if (k > 1) {  // K substeps: the same paths in steps of 1/K
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      p.vx[i] = p.vx[i] / scale;
+      p.vy[i] = p.vy[i] / scale;
+    }
+  }
   const std::unique_ptr<Stepper> stage = make(scene.box, p);
+  // The state as printed: velocities back in length units per printed step.
+  auto read = [&] {
+    stage->read(p);
+    if (k > 1) {
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        p.vx[i] = p.vx[i] * scale;
+        p.vy[i] = p.vy[i] * scale;
+      }
+    }
+  };
   Particles before = p;  // the counters at the start of the step (only kept for options.events)
   double clock_seconds = 0;
   for (long long s = 0; s < steps; ++s) {
     if (scene.mode == Mode::kPrint || s == 0) {
-      if (s > 0) stage->read(p);
+      if (s > 0) read();
       out.block(s, p, false);
     }
     const auto ts = Clock::now();
-    stage->step();
+    for (int sub = 0; sub < k; ++sub) stage->step();
     clock_seconds += seconds_since(ts);
-    if (options.digest || options.events) stage->read(p);
+    if (options.digest || options.events) read();
     if (options.digest) std::fputs(digest_line(s + 1, digest(p)).c_str(), options.digest);
     if (options.events) write_events(s, before, p, options.events);
     progress.update(s + 1);
   }
   const auto ts = Clock::now();
-  stage->read(p);  // waits for queued steps: part of the step time on the driver's clock
+  read();  // waits for queued steps: part of the step time on the driver's clock
   clock_seconds += seconds_since(ts);
   out.block(steps, p, true);
   out.flush();

@@ -6,15 +6,6 @@
 
 namespace plab {
 
-void Particles::resize(std::size_t n) {
-  x.resize(n);
-  y.resize(n);
-  vx.resize(n);
-  vy.resize(n);
-  pc.resize(n);
-  wc.resize(n);
-}
-
 const char* mode_name(Mode mode) { return mode == Mode::kPrint ? "print" : "perf"; }
 
 InputError::InputError(const std::string& file, long line, const std::string& expected,

@@ -26,7 +26,10 @@
 
 namespace plab {
 
-void step(const Box& box, Particles& p) {
+/// One step in reals of type `Real`: `double` is MODEL.md's step, `float` the variant that
+/// `plab accuracy` measures (the broad phase always works in double).
+template <class Real>
+void step_in(const Box& box, ParticlesOf<Real>& p) {
   const int n = static_cast<int>(p.size());
   const sweep::Grid g = sweep::choose(box, p);
   const int buckets = 1 << g.bucket_bits;
@@ -95,5 +98,9 @@ void step(const Box& box, Particles& p) {
 #pragma omp parallel for schedule(static)
   for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);
 }
+
+void step(const Box& box, Particles& p) { step_in(box, p); }
+
+void step_float(const Box& box, ParticlesOf<float>& p) { step_in(box, p); }
 
 }  // namespace plab

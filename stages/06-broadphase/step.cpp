@@ -26,7 +26,10 @@
 
 namespace plab {
 
-void step([[maybe_unused]] const Box& box, Particles& p) {
+/// One step in reals of type `Real`: `double` is MODEL.md's step, `float` the variant that
+/// `plab accuracy` measures (the broad phase always works in double).
+template <class Real>
+void step_in([[maybe_unused]] const Box& box, ParticlesOf<Real>& p) {
   [[maybe_unused]] const int n = static_cast<int>(p.size());
   [[maybe_unused]] const sweep::Grid g = sweep::choose(box, p);
   [[maybe_unused]] std::vector<model::Event> events;
@@ -46,5 +49,9 @@ void step([[maybe_unused]] const Box& box, Particles& p) {
   // candidates) and apply them in parallel (plab::apply_one()).
   PLAB_EXERCISE(3, "select the events and apply them");
 }
+
+void step(const Box& box, Particles& p) { step_in(box, p); }
+
+void step_float(const Box& box, ParticlesOf<float>& p) { step_in(box, p); }
 
 }  // namespace plab

@@ -34,12 +34,16 @@ struct RunOptions {
   std::FILE* events = nullptr;  //!< where to write `STEP INDEX wall|pair` for each collision in
                                 //!< step STEP (from the counters; optional, for plab render)
   bool progress = false;        //!< show progress on stderr
+  int substeps = 1;             //!< `plab accuracy`: K model steps per printed step (velocities
+                                //!< divided by K, K S steps, every K-th state printed with its
+                                //!< velocities times K); a power of two keeps both scalings exact
 };
 
 /// Runs `scene` with `step`, writing MODEL.md's output to `out`: in print mode the blocks of steps
 /// 0..S-1 then the final block (step S, with `pc wc`); in perf mode the step-0 block and the final
 /// block (only the final block when S = 0). The state is read back from the stage only when it is
-/// printed or digested.
+/// printed or digested. With `options.substeps` = K > 1 each printed step is K model steps of
+/// 1/K (MODEL.md's model refined in time; not MODEL.md's output).
 RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOptions& options = {});
 
 /// The same for a CPU stage's step function.

@@ -7,6 +7,11 @@
 /// rules: every operation below is one IEEE-754 double operation evaluated in the order written,
 /// the project is compiled without FMA contraction (`-ffp-contract=off`, nvcc `--fmad=false`),
 /// and nothing is compiled with fast-math. See \ref model_page for the equations.
+///
+/// The functions are templates on the real type `Real`, deduced from the arguments: MODEL.md and
+/// every golden output use `double`; `plab accuracy` also runs the model in `float`, and the
+/// stress suite evaluates the pair time in `long double` to measure the rounding of the double
+/// form. Instantiated with `double`, each function is exactly the double code it always was.
 #pragma once
 
 #include <math.h>  // sqrt, usable in both host and device code
@@ -21,7 +26,8 @@
 namespace plab::model {
 
 /// Positive infinity: the time of an event that never happens.
-PLAB_HD inline double never() { return __builtin_huge_val(); }
+template <class Real = double>
+PLAB_HD inline Real never() { return Real(__builtin_huge_val()); }
 
 /// The two kinds of event; the value is the second component of the event key.
 enum EventKind : int {
@@ -52,27 +58,34 @@ PLAB_HD inline Event pair_event_key(double t, int i, int j) { return Event{t, kP
 
 /// Time for a centre at `pos` moving at `v` along one axis to reach a wall, start-of-step form:
 /// \f$ t = (pos - r)/(0 - v) \f$ if \f$v < 0\f$, else \f$ ((L - pos) - r)/v \f$; \f$+\infty\f$ if \f$v = 0\f$.
-PLAB_HD inline double axis_wall_time(double pos, double v, double L, double r) {
-  if (v == 0) return never();
+template <class Real>
+PLAB_HD inline Real axis_wall_time(Real pos, Real v, Real L, Real r) {
+  if (v == 0) return never<Real>();
   return (v < 0) ? (pos - r) / (0 - v) : ((L - pos) - r) / v;
 }
 
 /// The wall times of one particle along each axis.
-struct WallTimes {
-  double tx;  //!< time to reach a wall along x (steps; may be negative, +inf if vx == 0)
-  double ty;  //!< time to reach a wall along y
+template <class Real>
+struct WallTimesOf {
+  Real tx;  //!< time to reach a wall along x (steps; may be negative, +inf if vx == 0)
+  Real ty;  //!< time to reach a wall along y
 };
+/// The wall times in MODEL.md's doubles.
+using WallTimes = WallTimesOf<double>;
 
 /// Both axis wall times of a particle, from the start-of-step state.
-PLAB_HD inline WallTimes wall_times(double x, double y, double vx, double vy, double L, double r) {
-  return WallTimes{axis_wall_time(x, vx, L, r), axis_wall_time(y, vy, L, r)};
+template <class Real>
+PLAB_HD inline WallTimesOf<Real> wall_times(Real x, Real y, Real vx, Real vy, Real L, Real r) {
+  return WallTimesOf<Real>{axis_wall_time(x, vx, L, r), axis_wall_time(y, vy, L, r)};
 }
 
 /// The wall time of a particle: \f$ t_w = \min(t_x, t_y) \f$, written `(ty < tx) ? ty : tx`.
-PLAB_HD inline double wall_time(WallTimes w) { return (w.ty < w.tx) ? w.ty : w.tx; }
+template <class Real>
+PLAB_HD inline Real wall_time(WallTimesOf<Real> w) { return (w.ty < w.tx) ? w.ty : w.tx; }
 
 /// The wall time of a particle from its start-of-step state.
-PLAB_HD inline double wall_time(double x, double y, double vx, double vy, double L, double r) {
+template <class Real>
+PLAB_HD inline Real wall_time(Real x, Real y, Real vx, Real vy, Real L, Real r) {
   return wall_time(wall_times(x, y, vx, vy, L, r));
 }
 
@@ -82,22 +95,23 @@ PLAB_HD inline double wall_time(double x, double y, double vx, double vy, double
 /// \f$ a = \Delta v_x^2 + \Delta v_y^2 \f$, \f$ D = b^2 - (4a)c \f$.
 /// Returns \f$ t_1 = (-\sqrt D - b)/(2a) \f$ when positive, 0 when the pair overlaps now
 /// (\f$ t_1 \le 0 < t_2 \f$), and +inf when there is no event (\f$a = 0\f$, \f$D < 0\f$, or both roots past).
-PLAB_HD inline double pair_time(double xi, double yi, double vxi, double vyi,
-                                double xj, double yj, double vxj, double vyj, double r) {
-  const double dx = xi - xj;
-  const double dy = yi - yj;
-  const double dvx = vxi - vxj;
-  const double dvy = vyi - vyj;
-  const double c = (dx * dx + dy * dy) - (4 * r) * r;
-  const double b = 2 * (dx * dvx + dy * dvy);
-  const double a = dvx * dvx + dvy * dvy;
-  const double disc = b * b - (4 * a) * c;
-  if (a == 0 || disc < 0) return never();
-  const double t1 = (-sqrt(disc) - b) / (2 * a);
+template <class Real>
+PLAB_HD inline Real pair_time(Real xi, Real yi, Real vxi, Real vyi,
+                                Real xj, Real yj, Real vxj, Real vyj, Real r) {
+  const Real dx = xi - xj;
+  const Real dy = yi - yj;
+  const Real dvx = vxi - vxj;
+  const Real dvy = vyi - vyj;
+  const Real c = (dx * dx + dy * dy) - (4 * r) * r;
+  const Real b = 2 * (dx * dvx + dy * dvy);
+  const Real a = dvx * dvx + dvy * dvy;
+  const Real disc = b * b - (4 * a) * c;
+  if (a == 0 || disc < 0) return never<Real>();
+  const Real t1 = (-sqrt(disc) - b) / (2 * a);
   if (t1 > 0) return t1;
-  const double t2 = (sqrt(disc) - b) / (2 * a);
-  if (t2 > 0) return 0.0;
-  return never();
+  const Real t2 = (sqrt(disc) - b) / (2 * a);
+  if (t2 > 0) return Real(0);
+  return never<Real>();
 }
 
 /// The robust contact time of two disks (stage 07, the stress suite): the earliest \f$t \ge 0\f$
@@ -110,22 +124,25 @@ PLAB_HD inline double pair_time(double xi, double yi, double vxi, double vyi,
 /// which never subtracts two nearly equal numbers (the textbook \f$ (-b - \sqrt D)/a \f$ does,
 /// for grazing and near-contact pairs) and never divides by \f$ a = 0 \f$.
 /// This is not MODEL.md's pair time: the stepped stages must keep pair_time() for their bits.
-PLAB_HD inline double contact_time(double dx, double dy, double dvx, double dvy, double r) {
-  const double b = dx * dvx + dy * dvy;
-  if (!(b < 0)) return never();
-  const double c = (dx * dx + dy * dy) - (2 * r) * (2 * r);
-  if (c <= 0) return 0.0;
-  const double a = dvx * dvx + dvy * dvy;
-  const double disc = b * b - a * c;
-  if (!(disc > 0)) return never();
+template <class Real>
+PLAB_HD inline Real contact_time(Real dx, Real dy, Real dvx, Real dvy, Real r) {
+  const Real b = dx * dvx + dy * dvy;
+  if (!(b < 0)) return never<Real>();
+  const Real c = (dx * dx + dy * dy) - (2 * r) * (2 * r);
+  if (c <= 0) return Real(0);
+  const Real a = dvx * dvx + dvy * dvy;
+  const Real disc = b * b - a * c;
+  if (!(disc > 0)) return never<Real>();
   return c / (-b + sqrt(disc));
 }
 
 /// Whether an event at time `t` happens in this step (the window is half-open: \f$ t < 1 \f$).
-PLAB_HD inline bool in_step(double t) { return t < 1; }
+template <class Real>
+PLAB_HD inline bool in_step(Real t) { return t < 1; }
 
 /// A particle without an event moves a whole step: \f$ x \leftarrow x + v_x,\ y \leftarrow y + v_y \f$.
-PLAB_HD inline void free_move(double& x, double& y, double vx, double vy) {
+template <class Real>
+PLAB_HD inline void free_move(Real& x, Real& y, Real vx, Real vy) {
   x = x + vx;
   y = y + vy;
 }
@@ -133,16 +150,17 @@ PLAB_HD inline void free_move(double& x, double& y, double vx, double vy) {
 /// Applies a wall event to one particle (branchy form of MODEL.md), from its start-of-step state:
 /// move to the first wall, reflect, then move on for the rest of the step, stopping at the second
 /// wall if it is reached; at an exact corner both axes reflect. Increments `wc`.
-PLAB_HD inline void wall_event(double& x, double& y, double& vx, double& vy, long long& wc,
-                               double L, double r) {
-  const WallTimes w = wall_times(x, y, vx, vy, L, r);
-  const double tx = w.tx;
-  const double ty = w.ty;
+template <class Real>
+PLAB_HD inline void wall_event(Real& x, Real& y, Real& vx, Real& vy, long long& wc,
+                               Real L, Real r) {
+  const WallTimesOf<Real> w = wall_times(x, y, vx, vy, L, r);
+  const Real tx = w.tx;
+  const Real ty = w.ty;
   if (tx < ty) {
     x = x + tx * vx;
     y = y + tx * vy;
     vx = -vx;
-    const double m = (ty < 1) ? (ty - tx) : (1 - tx);
+    const Real m = (ty < 1) ? (ty - tx) : (1 - tx);
     x = x + m * vx;
     y = y + m * vy;
   } else if (tx == ty) {
@@ -156,7 +174,7 @@ PLAB_HD inline void wall_event(double& x, double& y, double& vx, double& vy, lon
     x = x + ty * vx;
     y = y + ty * vy;
     vy = -vy;
-    const double m = (tx < 1) ? (tx - ty) : (1 - ty);
+    const Real m = (tx < 1) ? (tx - ty) : (1 - ty);
     x = x + m * vx;
     y = y + m * vy;
   }
@@ -166,14 +184,15 @@ PLAB_HD inline void wall_event(double& x, double& y, double& vx, double& vy, lon
 /// The branchless wall event (used by the CUDA stages): \f$ e = \min(t_x, t_y) \f$, reflect every
 /// axis whose time equals \f$e\f$, then move \f$ \min(1, t_{later}) - e \f$ with \f$ t_{later} = 1 \f$
 /// at a corner. Gives the same bits as wall_event(); the tests check it.
-PLAB_HD inline void wall_event_branchless(double& x, double& y, double& vx, double& vy,
-                                          long long& wc, double L, double r) {
-  const WallTimes w = wall_times(x, y, vx, vy, L, r);
-  const double e = wall_time(w);
+template <class Real>
+PLAB_HD inline void wall_event_branchless(Real& x, Real& y, Real& vx, Real& vy,
+                                          long long& wc, Real L, Real r) {
+  const WallTimesOf<Real> w = wall_times(x, y, vx, vy, L, r);
+  const Real e = wall_time(w);
   const bool flip_x = (w.tx == e);
   const bool flip_y = (w.ty == e);
-  const double later = (flip_x && flip_y) ? 1.0 : (flip_x ? w.ty : w.tx);
-  const double m = ((later < 1) ? later : 1.0) - e;
+  const Real later = (flip_x && flip_y) ? Real(1) : (flip_x ? w.ty : w.tx);
+  const Real m = ((later < 1) ? later : Real(1)) - e;
   x = x + e * vx;
   y = y + e * vy;
   vx = flip_x ? -vx : vx;
@@ -185,41 +204,45 @@ PLAB_HD inline void wall_event_branchless(double& x, double& y, double& vx, doub
 
 /// Time along one axis to a wall after a pair collision (note the association `((L - r) - pos)`,
 /// which differs from axis_wall_time() and rounds differently: both are the original's).
-PLAB_HD inline double axis_rest_wall_time(double pos, double v, double L, double r) {
-  if (v == 0) return never();
+template <class Real>
+PLAB_HD inline Real axis_rest_wall_time(Real pos, Real v, Real L, Real r) {
+  if (v == 0) return never<Real>();
   return (v < 0) ? (pos - r) / (0 - v) : ((L - r) - pos) / v;
 }
 
 /// Moves a particle for the rest of the step after a collision at time `t`, stopping at a wall
 /// if one is reached before the step ends.
-PLAB_HD inline void rest_of_step(double& x, double& y, double vx, double vy, double t,
-                                 double L, double r) {
-  const double wx = axis_rest_wall_time(x, vx, L, r);
-  const double wy = axis_rest_wall_time(y, vy, L, r);
-  const double rest = 1 - t;
-  const double move = (wx >= rest && wy >= rest) ? rest : ((wy < wx) ? wy : wx);
+template <class Real>
+PLAB_HD inline void rest_of_step(Real& x, Real& y, Real vx, Real vy, Real t,
+                                 Real L, Real r) {
+  const Real wx = axis_rest_wall_time(x, vx, L, r);
+  const Real wy = axis_rest_wall_time(y, vy, L, r);
+  const Real rest = 1 - t;
+  const Real move = (wx >= rest && wy >= rest) ? rest : ((wy < wx) ? wy : wx);
   x = x + move * vx;
   y = y + move * vy;
 }
 
 /// A velocity component that equals zero is stored as +0.0.
-PLAB_HD inline double positive_zero(double v) { return (v == 0) ? 0.0 : v; }
+template <class Real>
+PLAB_HD inline Real positive_zero(Real v) { return (v == 0) ? Real(0) : v; }
 
 /// Applies the pair event of particles `i < j` at time `t`, from their start-of-step state:
 /// move both to time `t`, exchange the velocity components along the normal
 /// \f$ n = (p_i - p_j)/|p_i - p_j| \f$ (equal masses), then finish the step with rest_of_step().
 /// When the centres coincide at `t` the event is dropped: both move freely, nothing is counted.
 /// \return true when the collision happened (and `pci`, `pcj` were incremented).
-PLAB_HD inline bool pair_event(double& xi, double& yi, double& vxi, double& vyi, long long& pci,
-                               double& xj, double& yj, double& vxj, double& vyj, long long& pcj,
-                               double t, double L, double r) {
-  double pxi = xi + t * vxi;
-  double pyi = yi + t * vyi;
-  double pxj = xj + t * vxj;
-  double pyj = yj + t * vyj;
-  double nx = pxi - pxj;
-  double ny = pyi - pyj;
-  const double m = sqrt(nx * nx + ny * ny);
+template <class Real>
+PLAB_HD inline bool pair_event(Real& xi, Real& yi, Real& vxi, Real& vyi, long long& pci,
+                               Real& xj, Real& yj, Real& vxj, Real& vyj, long long& pcj,
+                               Real t, Real L, Real r) {
+  Real pxi = xi + t * vxi;
+  Real pyi = yi + t * vyi;
+  Real pxj = xj + t * vxj;
+  Real pyj = yj + t * vyj;
+  Real nx = pxi - pxj;
+  Real ny = pyi - pyj;
+  const Real m = sqrt(nx * nx + ny * ny);
   if (m == 0) {
     free_move(xi, yi, vxi, vyi);
     free_move(xj, yj, vxj, vyj);
@@ -227,12 +250,12 @@ PLAB_HD inline bool pair_event(double& xi, double& yi, double& vxi, double& vyi,
   }
   nx = nx / m;
   ny = ny / m;
-  const double tx = -ny;
-  const double ty = nx;
-  const double ain = nx * vxi + ny * vyi;
-  const double ait = tx * vxi + ty * vyi;
-  const double ajn = nx * vxj + ny * vyj;
-  const double ajt = tx * vxj + ty * vyj;
+  const Real tx = -ny;
+  const Real ty = nx;
+  const Real ain = nx * vxi + ny * vyi;
+  const Real ait = tx * vxi + ty * vyi;
+  const Real ajn = nx * vxj + ny * vyj;
+  const Real ajt = tx * vxj + ty * vyj;
   // Equal masses: the normal components are exchanged (ajn goes to i, ain to j).
   vxi = positive_zero(ajn * nx + ait * tx);
   vyi = positive_zero(ajn * ny + ait * ty);

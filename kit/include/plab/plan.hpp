@@ -49,20 +49,23 @@ struct Plan {
 
 /// Applies particle `i`'s planned event. A pair is applied by its lower index only, so calling
 /// this for every `i` in any order, or in parallel, writes each particle exactly once.
-inline void apply_one(const Box& box, Particles& p, const Plan& plan, int i) {
+template <class Real>
+inline void apply_one(const Box& box, ParticlesOf<Real>& p, const Plan& plan, int i) {
   const int j = plan.partner[i];
+  const Real L = static_cast<Real>(box.L), r = static_cast<Real>(box.r);
   if (j == Plan::kFree) {
     model::free_move(p.x[i], p.y[i], p.vx[i], p.vy[i]);
   } else if (j == Plan::kWall) {
-    model::wall_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], box.L, box.r);
+    model::wall_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], L, r);
   } else if (i < j) {
     model::pair_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.pc[i], p.x[j], p.y[j], p.vx[j], p.vy[j],
-                      p.pc[j], plan.time[i], box.L, box.r);
+                      p.pc[j], static_cast<Real>(plan.time[i]), L, r);
   }
 }
 
 /// Applies every planned event (sequentially).
-inline void apply(const Box& box, Particles& p, const Plan& plan) {
+template <class Real>
+inline void apply(const Box& box, ParticlesOf<Real>& p, const Plan& plan) {
   const int n = static_cast<int>(p.size());
   for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);
 }
@@ -78,15 +81,20 @@ inline Plan greedy_plan(std::vector<model::Event>& events, std::size_t n) {
   return plan;
 }
 
-/// The wall event of particle `i` as a candidate, from its start-of-step state.
-inline model::Event wall_candidate(const Box& box, const Particles& p, int i) {
-  return model::wall_event_key(model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r), i);
+/// The wall event of particle `i` as a candidate, from its start-of-step state (the time of a
+/// `float` run is kept exactly in the event's double).
+template <class Real>
+inline model::Event wall_candidate(const Box& box, const ParticlesOf<Real>& p, int i) {
+  return model::wall_event_key(model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i],
+                                                static_cast<Real>(box.L), static_cast<Real>(box.r)),
+                               i);
 }
 
 /// The pair event of particles `i < j` as a candidate, from their start-of-step state.
-inline model::Event pair_candidate(const Box& box, const Particles& p, int i, int j) {
+template <class Real>
+inline model::Event pair_candidate(const Box& box, const ParticlesOf<Real>& p, int i, int j) {
   return model::pair_event_key(model::pair_time(p.x[i], p.y[i], p.vx[i], p.vy[i], p.x[j], p.y[j],
-                                                p.vx[j], p.vy[j], box.r),
+                                                p.vx[j], p.vy[j], static_cast<Real>(box.r)),
                                i, j);
 }
 

@@ -49,4 +49,13 @@ inline std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p) {
 #endif
 #endif
 
+#if PLAB_FLOAT_STAGE
+/// The same step in `float` (a stage built with FLOAT: stage 06), for `plab accuracy` only.
+void step_float(const Box& box, ParticlesOf<float>& p);
+/// Starts a run of step_float() from `p` rounded to floats.
+inline std::unique_ptr<Stepper> make_float_stepper(const Box& box, Particles& p) {
+  return std::make_unique<RealStepper<float>>(step_float, box, p);
+}
+#endif
+
 }  // namespace plab

@@ -50,4 +50,23 @@ class HostStepper final : public Stepper {
   Particles* p_;
 };
 
+/// A CPU stage run in another real type (`plab accuracy`'s float variant, never a golden
+/// output): it keeps its own copy of the state in `Real` and rounds it to doubles when read.
+template <class Real>
+class RealStepper final : public Stepper {
+ public:
+  /// The stage's step function in `Real`.
+  using StepIn = void (*)(const Box&, ParticlesOf<Real>&);
+  /// Starts from `p`, each value rounded to `Real`.
+  RealStepper(StepIn step, const Box& box, const Particles& p)
+      : step_(step), box_(box), q_(p.template as<Real>()) {}
+  void step() override { step_(box_, q_); }
+  void read(Particles& p) override { p = q_.template as<double>(); }
+
+ private:
+  StepIn step_;
+  Box box_;
+  ParticlesOf<Real> q_;
+};
+
 }  // namespace plab

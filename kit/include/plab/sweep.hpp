@@ -101,19 +101,22 @@ inline Grid choose_for(const Box& box, std::size_t n, double vmax, double extent
 }
 
 /// The largest speed (times `headroom`) and the extent of a state, for choose_for().
-inline void speed_and_extent(const Box& box, const Particles& p, double& vmax, double& extent,
-                             double headroom = 1.0) {
+template <class Real>
+inline void speed_and_extent(const Box& box, const ParticlesOf<Real>& p, double& vmax,
+                             double& extent, double headroom = 1.0) {
   double v2 = 0;
   extent = box.L;
   for (std::size_t i = 0; i < p.size(); ++i) {
-    v2 = std::max(v2, p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i]);
-    extent = std::max({extent, std::fabs(p.x[i]), std::fabs(p.y[i])});
+    const double vx = p.vx[i], vy = p.vy[i];
+    v2 = std::max(v2, vx * vx + vy * vy);
+    extent = std::max({extent, std::fabs(double(p.x[i])), std::fabs(double(p.y[i]))});
   }
   vmax = std::sqrt(v2) * (1 + 1e-12) * headroom;
 }
 
 /// The grid for the current state (see choose_for()).
-inline Grid choose(const Box& box, const Particles& p) {
+template <class Real>
+inline Grid choose(const Box& box, const ParticlesOf<Real>& p) {
   double vmax = 0, extent = 0;
   speed_and_extent(box, p, vmax, extent);
   return choose_for(box, p.size(), vmax, extent);
