@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "plab/audit.hpp"
 #include "plab/datasets.hpp"
 #include "plab/diff.hpp"
 #include "plab/driver.hpp"
@@ -44,29 +45,15 @@ std::string run_stepped(plab::Scene scene) {
   return out.text();
 }
 
-double kinetic_energy(const plab::Particles& p) {
-  long double e = 0;  // summed in extended precision: the test measures the model, not the sum
-  for (std::size_t i = 0; i < p.size(); ++i)
-    e += 0.5L * (static_cast<long double>(p.vx[i]) * p.vx[i] + static_cast<long double>(p.vy[i]) * p.vy[i]);
-  return static_cast<double>(e);
+double energy(const plab::Particles& p) {
+  return static_cast<double>(plab::kinetic_energy(p));  // long double sum: the model, not the sum
 }
 
-/// The deepest overlap between two disks (0 when none), by a cell grid of side 2r.
+/// The deepest overlap between two disks in units of r (0 when none), by the kit's audit.
 double deepest_overlap(const plab::Box& box, const plab::Particles& p) {
-  const int cells = std::max(1, static_cast<int>(box.L / (2 * box.r)));
-  const double side = box.L / cells;
-  std::vector<std::vector<int>> grid(static_cast<std::size_t>(cells) * cells);
-  auto cell = [&](double v) { return std::clamp(static_cast<int>(v / side), 0, cells - 1); };
-  for (int i = 0; i < static_cast<int>(p.size()); ++i)
-    grid[static_cast<std::size_t>(cell(p.y[i])) * cells + cell(p.x[i])].push_back(i);
-  double deepest = 0;
-  for (int i = 0; i < static_cast<int>(p.size()); ++i)
-    for (int gy = std::max(0, cell(p.y[i]) - 1); gy <= std::min(cells - 1, cell(p.y[i]) + 1); ++gy)
-      for (int gx = std::max(0, cell(p.x[i]) - 1); gx <= std::min(cells - 1, cell(p.x[i]) + 1); ++gx)
-        for (const int j : grid[static_cast<std::size_t>(gy) * cells + gx])
-          if (j > i)
-            deepest = std::max(deepest, 2 * box.r - std::hypot(p.x[i] - p.x[j], p.y[i] - p.y[j]));
-  return deepest;
+  plab::Audit audit;
+  audit.state(box, p, 0);
+  return audit.deepest_overlap;
 }
 
 /// A gas of N disks of radius 1 at area fraction `eta`, speeds 1 to 2 per step.
@@ -98,14 +85,14 @@ TEST(ExactGolden, EveryScene) {
 TEST(Conservation, DenseGas) {
   const plab::Scene scene = gas(600, 0.35, 40, 11);
   plab::Particles p = scene.particles;
-  const double e0 = kinetic_energy(p);
+  const double e0 = energy(p);
   const auto stage = plab::make_stepper(scene.box, p);
   double worst_drift = 0, worst_overlap = 0, worst_outside = 0;
   for (long long s = 1; s <= scene.steps; ++s) {
     stage->step();
     stage->read(p);
-    worst_drift = std::max(worst_drift, std::abs(kinetic_energy(p) - e0) / e0);
-    worst_overlap = std::max(worst_overlap, deepest_overlap(scene.box, p));
+    worst_drift = std::max(worst_drift, std::abs(energy(p) - e0) / e0);
+    worst_overlap = std::max(worst_overlap, deepest_overlap(scene.box, p) * scene.box.r);
     for (std::size_t i = 0; i < p.size(); ++i) {
       ASSERT_TRUE(std::isfinite(p.x[i]) && std::isfinite(p.y[i]) && std::isfinite(p.vx[i]) &&
                   std::isfinite(p.vy[i])) << "particle " << i << " at step " << s;
@@ -253,7 +240,7 @@ TEST(CollisionRate, MatchesEnskogHenderson) {
     particle_time += bulk.size();
     for (const std::size_t i : bulk) collisions += p.pc[i] - pc0[i];
   }
-  const double kT = kinetic_energy(p) / p.size();
+  const double kT = energy(p) / p.size();
   const double n_bulk = particle_time / steps / ((L - 2 * margin) * (L - 2 * margin));
   const double measured = collisions / particle_time;
   const double theory = plab::theory::enskog_rate(n_bulk, r, kT);

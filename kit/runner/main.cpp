@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   bool quiet = false;
   int substeps = 1;
   std::string real = "double";
+  std::string audit_path, audit_log_path;
   CLI::App app{"Runs stage " PLAB_STAGE_ID " (" PLAB_IMPL ") on a scene and writes MODEL.md's output."};
   app.add_option("scene", scene_path, "scene file (MODEL.md's input format)")->required();
   app.add_option("--out", out_path, "write the output here instead of stdout (all or nothing)");
@@ -53,6 +54,11 @@ int main(int argc, char** argv) {
                  "plab accuracy: run the model in float (stages built with it: 06) instead of "
                  "MODEL.md's double; never for golden outputs")
       ->check(CLI::IsMember({"double", "float"}))->capture_default_str();
+  app.add_option("--audit", audit_path,
+                 "check every state and step at full precision (no NaN, centres in the box, "
+                 "overlaps, energy, counters, energy of each collision in ulps) and write the "
+                 "worst of each as JSON to this file (plab stress)");
+  app.add_option("--audit-log", audit_log_path, "with --audit: one JSON line per state here");
   app.add_flag("--quiet", quiet, "no timing summary on stderr");
   CLI11_PARSE(app, argc, argv);
 
@@ -97,13 +103,23 @@ int main(int argc, char** argv) {
     plab::OutputFile out(out_path);
     plab::OutputFile digest(digest_path, /*optional=*/true);
     plab::OutputFile events(events_path, /*optional=*/true);
+    plab::OutputFile audit_log(audit_log_path, /*optional=*/true);
+    plab::Audit audit;
+    audit.log = audit_log.get();
     plab::OutputWriter writer(out.get());
     const plab::RunStats stats =
         plab::simulate(scene, make, writer,
-                       {digest.get(), events.get(), !quiet && plab::stderr_is_terminal(), substeps});
+                       {digest.get(), events.get(), !quiet && plab::stderr_is_terminal(),
+                        audit_path.empty() ? nullptr : &audit, substeps});
     out.commit();
     digest.commit();
     events.commit();
+    audit_log.commit();
+    if (!audit_path.empty()) {
+      plab::OutputFile report(audit_path);
+      std::fputs(audit.json().c_str(), report.get());
+      report.commit();
+    }
     if (!report_path.empty()) {
       plab::OutputFile report(report_path);
       const nlohmann::json j = {

@@ -86,6 +86,12 @@ RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOpt
     }
   };
   Particles before = p;  // the counters at the start of the step (only kept for options.events)
+  Particles audited;     // the last audited state (options.audit)
+  const bool with_oracle = p.size() <= 3000;  // the oracle is O(N^2) a step
+  if (options.audit) {
+    options.audit->state(scene.box, p, 0);
+    audited = p;
+  }
   double clock_seconds = 0;
   for (long long s = 0; s < steps; ++s) {
     if (scene.mode == Mode::kPrint || s == 0) {
@@ -95,7 +101,12 @@ RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOpt
     const auto ts = Clock::now();
     for (int sub = 0; sub < k; ++sub) stage->step();
     clock_seconds += seconds_since(ts);
-    if (options.digest || options.events) read();
+    if (options.digest || options.events || options.audit) read();
+    if (options.audit) {
+      options.audit->state(scene.box, p, s + 1);
+      if (k == 1) options.audit->step(scene.box, audited, p, with_oracle);
+      audited = p;
+    }
     if (options.digest) std::fputs(digest_line(s + 1, digest(p)).c_str(), options.digest);
     if (options.events) write_events(s, before, p, options.events);
     progress.update(s + 1);

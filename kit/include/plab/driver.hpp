@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "plab/audit.hpp"
 #include "plab/io.hpp"
 #include "plab/scene.hpp"
 #include "plab/stepper.hpp"
@@ -34,6 +35,8 @@ struct RunOptions {
   std::FILE* events = nullptr;  //!< where to write `STEP INDEX wall|pair` for each collision in
                                 //!< step STEP (from the counters; optional, for plab render)
   bool progress = false;        //!< show progress on stderr
+  Audit* audit = nullptr;       //!< audit every state, and every step when substeps == 1
+                                //!< (plab stress, plab accuracy; optional)
   int substeps = 1;             //!< `plab accuracy`: K model steps per printed step (velocities
                                 //!< divided by K, K S steps, every K-th state printed with its
                                 //!< velocities times K); a power of two keeps both scalings exact
