@@ -10,6 +10,11 @@ DIR, by default beside itself; `plab docs` writes them into build/docs/figures)
   stage06-pairs.png     pairs tested per step by stage 06 against all pairs, and time per step
                         against N at the report's density (data/pairs-stage06.csv,
                         data/bench-stage0[36]-cpu-scale.csv, data/bench-stage06-gpu-scale.csv)
+  accuracy.png          run time against error of the stepped model's variants, against stage
+                        07's exact dynamics, best-for-its-cost variants ringed (data/accuracy.csv,
+                        from `plab accuracy --csv`)
+  pairtime-ulps.png     the pair time's error in ulps, MODEL.md's form and the robust one
+                        (data/pairtime-ulps.csv, from `plab stress --ulps-csv`)
 """
 import argparse
 import csv
@@ -127,6 +132,77 @@ def stage06_pairs():
     plt.close(fig)
 
 
+def frontier(points):
+    """The points no other point beats in both coordinates (lower is better in both)."""
+    return [p for p in points if not any(q[0] <= p[0] and q[1] <= p[1] and q != p for q in points)]
+
+
+def accuracy_frontier(path, out):
+    """Time against error, one panel per scene: mean position error after one printed step (left
+    axis) for each variant; the best-for-its-cost variants are ringed."""
+    with open(path, newline="") as f:
+        data = list(csv.DictReader(line for line in f if not line.startswith("#")))
+    scenes = list(dict.fromkeys(r["scene"] for r in data))
+    fig, axes = plt.subplots(1, len(scenes), figsize=(4.6 * len(scenes), 4), squeeze=False)
+    styles = {("cpu", "double"): ("o-", "tab:blue", "CPU double"), ("cpu", "float"): ("s--", "tab:orange", "CPU float"),
+              ("gpu", "double"): ("^-", "tab:green", "GPU double")}
+    for ax, scene in zip(axes[0], scenes):
+        rows_ = [r for r in data if r["scene"] == scene]
+        exact = next(r for r in rows_ if r["k"] == "0")
+        pts = []
+        for (device, real), (style, color, label) in styles.items():
+            line = sorted((int(r["k"]), float(r["seconds"]), float(r["position_error_1"]))
+                          for r in rows_ if r["device"] == device and r["real"] == real and r["k"] != "0")
+            line = [p for p in line if p[2] > 0]
+            if not line:
+                continue
+            ax.plot([p[1] for p in line], [p[2] for p in line], style, color=color, label=label)
+            for k, t, e in line:
+                if k in (1, 8, 64):
+                    ax.annotate(f"K={k}", (t, e), fontsize=7, textcoords="offset points", xytext=(4, 4))
+            pts += [(t, e) for _, t, e in line]
+        best = frontier(pts)
+        ax.plot([p[0] for p in best], [p[1] for p in best], "o", mfc="none", mec="k", ms=11,
+                label="best for its cost")
+        ax.axvline(float(exact["seconds"]), color="k", ls=":", label="stage 07 (exact, error 0)")
+        ax.set(xscale="log", yscale="log", xlabel="time in steps (s)",
+               ylabel="mean position error after 1 step (r)", title=scene)
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0][0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out, dpi=100)
+    plt.close(fig)
+
+
+def pairtime_ulps(path, out):
+    """Bars of the pair time's error in ulps: one panel per kind of pair, MODEL.md's form and the
+    robust one."""
+    data = {}
+    with open(path, newline="") as f:
+        for row in csv.DictReader(line for line in f if not line.startswith("#")):
+            if row["bucket"] != "missed":
+                data.setdefault(row["kind"], {}).setdefault(row["form"], []).append(
+                    (float(row["bucket"]), int(row["count"])))
+    kinds = list(data)
+    fig, axes = plt.subplots(1, len(kinds), figsize=(3.3 * len(kinds), 3.4), sharey=True)
+    for ax, kind in zip(axes, kinds):
+        for k, (form, color) in enumerate((("MODEL.md", "tab:red"), ("robust", "tab:blue"))):
+            buckets = data[kind][form]
+            total = sum(c for _, c in buckets) or 1
+            labels = ["0" if e == 0 else ("more" if e > 1e100 else f"<={e:g}") for e, _ in buckets]
+            ax.bar([i + (k - 0.5) * 0.4 for i in range(len(buckets))], [c / total for _, c in buckets],
+                   width=0.4, color=color, label=form)
+        ax.set_xticks(range(len(labels)), labels, rotation=60, fontsize=7)
+        ax.set_title(kind, fontsize=9)
+        ax.set_xlabel("error (ulps)", fontsize=8)
+    axes[0].set_ylabel("fraction of pairs")
+    axes[0].legend(fontsize=8)
+    fig.suptitle("Pair time in double against the robust form in long double", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(out, dpi=100)
+    plt.close(fig)
+
+
 def main():
     global OUT
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -137,6 +213,8 @@ def main():
     gpu_time()
     stage05_changes()
     stage06_pairs()
+    accuracy_frontier(HERE / "data" / "accuracy.csv", OUT / "accuracy.png")
+    pairtime_ulps(HERE / "data" / "pairtime-ulps.csv", OUT / "pairtime-ulps.png")
 
 
 if __name__ == "__main__":

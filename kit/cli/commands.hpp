@@ -6,10 +6,12 @@
 
 namespace plab::cli {
 
-void add_run(CLI::App& app);
-void add_render(CLI::App& app);
-void add_grade(CLI::App& app);
-void add_release(CLI::App& app); //!< `plab release`: the student version of the kit   //!< `plab grade`: the autograder  //!< `plab render`: animate a run, or two outputs side by side     //!< `plab run`: simulate a scene with one stage
+void add_run(CLI::App& app);     //!< `plab run`: simulate a scene with one stage
+void add_render(CLI::App& app);  //!< `plab render`: animate a run, or two outputs side by side
+void add_grade(CLI::App& app);   //!< `plab grade`: the autograder
+void add_release(CLI::App& app);  //!< `plab release`: the student version of the kit
+void add_accuracy(CLI::App& app); //!< `plab accuracy`: run time against error (stages 06, 07)
+void add_stress(CLI::App& app);   //!< `plab stress`: hostile scenes, invariants, pair-time ulps
 void add_gen(CLI::App& app);     //!< `plab gen`: write a reproducible random scene
 void add_diff(CLI::App& app);    //!< `plab diff`: where two outputs first differ
 void add_golden(CLI::App& app);  //!< `plab golden`: regenerate or check the golden files

@@ -14,6 +14,10 @@
 #include "plab/runtime.hpp"
 #include "plab/stage.hpp"
 
+#ifndef PLAB_EXACT_STAGE
+#define PLAB_EXACT_STAGE 0
+#endif
+
 int main(int argc, char** argv) {
   std::string scene_path, out_path, digest_path, report_path, events_path, mode, step_from, explain;
   long long steps = -1;
@@ -110,7 +114,8 @@ int main(int argc, char** argv) {
     const plab::RunStats stats =
         plab::simulate(scene, make, writer,
                        {digest.get(), events.get(), !quiet && plab::stderr_is_terminal(),
-                        audit_path.empty() ? nullptr : &audit, substeps});
+                        audit_path.empty() ? nullptr : &audit, /*audit_steps=*/!PLAB_EXACT_STAGE,
+                        substeps});
     out.commit();
     digest.commit();
     events.commit();

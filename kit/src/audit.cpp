@@ -27,7 +27,10 @@ double energy_of(const Particles& p, std::size_t i) {
 /// Disks overlapping another, and the deepest overlap, by a grid of cells 2r wide (O(N)).
 void overlaps(const Box& box, const Particles& p, long long& count, double& deepest) {
   const int n = static_cast<int>(p.size());
-  const int cells = std::clamp(static_cast<int>(box.L / (2 * box.r)), 1, 4096);
+  // Cells at least 2r wide (so that overlapping disks are in neighbouring cells), and no more
+  // than about 4N of them.
+  const double most = 2 * std::sqrt(static_cast<double>(n)) + 1;
+  const int cells = static_cast<int>(std::clamp(std::floor(box.L / (2 * box.r)), 1.0, most));
   const double side = box.L / cells;
   auto cell = [&](double v) {
     return std::isfinite(v) ? std::clamp(static_cast<int>(v / side), 0, cells - 1) : 0;
@@ -68,13 +71,14 @@ long double kinetic_energy(const Particles& p) {
 
 void Audit::state(const Box& box, const Particles& p, long long step_no) {
   long long bad = 0;
-  double outside = 0;
+  double outside = 0;  // in ulps of L: the rounding of x + t v near L is about that
+  const double ulp_of_l = std::nextafter(box.L, HUGE_VAL) - box.L;
   for (std::size_t i = 0; i < p.size(); ++i) {
     for (const double v : {p.x[i], p.y[i], p.vx[i], p.vy[i]}) bad += std::isfinite(v) ? 0 : 1;
     for (const double c : {p.x[i], p.y[i]}) {
       const double lo = box.r, hi = box.L - box.r;
-      if (c < lo) outside = std::max(outside, ulps_between(c, lo));
-      if (c > hi) outside = std::max(outside, ulps_between(c, hi));
+      if (c < lo) outside = std::max(outside, (lo - c) / ulp_of_l);
+      if (c > hi) outside = std::max(outside, (c - hi) / ulp_of_l);
     }
   }
   long long over = 0;

@@ -104,7 +104,7 @@ RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOpt
     if (options.digest || options.events || options.audit) read();
     if (options.audit) {
       options.audit->state(scene.box, p, s + 1);
-      if (k == 1) options.audit->step(scene.box, audited, p, with_oracle);
+      if (k == 1 && options.audit_steps) options.audit->step(scene.box, audited, p, with_oracle);
       audited = p;
     }
     if (options.digest) std::fputs(digest_line(s + 1, digest(p)).c_str(), options.digest);

@@ -17,6 +17,7 @@ struct Audit {
   long long steps = 0;            //!< steps whose collisions were audited
   long long nonfinite = 0;        //!< NaN or infinite values seen (any field, any state)
   double outside_ulps = 0;        //!< furthest a centre was outside [r, L - r], in ulps of L
+                                  //!< (the distance over the spacing of doubles at L)
   long long overlapping = 0;      //!< the most disks overlapping another, in one state
   double deepest_overlap = 0;     //!< the deepest overlap seen, in units of r
   double energy0 = 0;             //!< kinetic energy of the first audited state

@@ -37,6 +37,8 @@ struct RunOptions {
   bool progress = false;        //!< show progress on stderr
   Audit* audit = nullptr;       //!< audit every state, and every step when substeps == 1
                                 //!< (plab stress, plab accuracy; optional)
+  bool audit_steps = true;      //!< with `audit`: also the steps (MODEL.md's one event per
+                                //!< particle per step; off for the exact stage)
   int substeps = 1;             //!< `plab accuracy`: K model steps per printed step (velocities
                                 //!< divided by K, K S steps, every K-th state printed with its
                                 //!< velocities times K); a power of two keeps both scalings exact

@@ -1,0 +1,167 @@
+#!/usr/bin/env python3
+"""plab accuracy: run time against error, the stepped model against exact hard-disk dynamics.
+
+Started by `./plab accuracy`. For each scene it runs the exact event-driven stage (07) and, against
+it, the fastest stepped stage (06) in variants: K substeps per printed step (K = 1, 2, 4, ..., 64;
+velocities divided by K, K times the steps), in double (MODEL.md's contract) and in float, on the
+CPU and, where there is a GPU, on the GPU (double). Errors, at equal physical time:
+  collisions  the stepped run's pair collisions over the exact run's (1: none missed)
+  overlap     the mean fraction of disks overlapping another at the printed times, and the deepest
+  position    the mean distance from the exact positions after 1, 2 and 4 printed steps, in r
+  energy      the largest relative change of the kinetic energy over the run
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+
+SCENES = {
+    "report": ("the 2019 report's scene: N = 10^4, L = 20000, r = 1, MODEL.md's speeds",
+               ["--n", "10000", "--l", "20000", "--r", "1", "--steps", "8", "--seed", "6"]),
+    "dense-gas": ("a dense slow gas: N = 10^4, area fraction 0.3, speeds 1 to 2 (r = 1)",
+                  ["--n", "10000", "--l", "323.6", "--r", "1", "--steps", "8", "--speed", "1:2",
+                   "--seed", "3"]),
+    "cradle": ("the course's Newton's cradle (course-2)", None),
+}
+
+
+def read_output(path):
+    """Print-mode output: {step: (xs, ys)} and the final counters."""
+    blocks, pc = {}, 0
+    with open(path) as f:
+        for line in f:
+            t = line.split()
+            s = int(t[0])
+            xs, ys = blocks.setdefault(s, ([], []))
+            xs.append(float(t[2]))
+            ys.append(float(t[3]))
+            if len(t) > 6:
+                pc += int(t[6])
+    return blocks, pc // 2
+
+
+def read_audit_log(path):
+    with open(path) as f:
+        return [json.loads(line) for line in f]
+
+
+def run(program, scene, work, tag, extra, env=None):
+    out, rep, log = (os.path.join(work, f"{tag}.{x}") for x in ("out", "report.json", "audit.jsonl"))
+    p = subprocess.run([program, scene, "--quiet", "--mode", "print", "--out", out, "--report", rep,
+                        "--audit", os.path.join(work, f"{tag}.audit.json"), "--audit-log", log, *extra],
+                       capture_output=True, text=True, env=env)
+    if p.returncode != 0:
+        raise RuntimeError(f"{tag}: exit {p.returncode}: {p.stderr.strip()[:300]}")
+    with open(rep) as f:
+        report = json.load(f)
+    blocks, pairs = read_output(out)
+    os.remove(out)
+    return {"seconds": report["step_seconds"], "device": report["device"], "blocks": blocks,
+            "pairs": pairs, "log": read_audit_log(log)}
+
+
+def errors(exact, got, r):
+    """The error measures of one variant against the exact run."""
+    row = {"collision_ratio": got["pairs"] / exact["pairs"] if exact["pairs"] else float("nan")}
+    for t in (1, 2, 4):
+        if t in exact["blocks"] and t in got["blocks"]:
+            (ex, ey), (gx, gy) = exact["blocks"][t], got["blocks"][t]
+            row[f"position_error_{t}"] = sum(math.hypot(a - c, b - d) for a, b, c, d in zip(ex, ey, gx, gy)) / len(ex) / r
+        else:
+            row[f"position_error_{t}"] = float("nan")
+    n = len(exact["blocks"][0][0])
+    states = got["log"][1:]  # after each printed step
+    row["overlap_fraction"] = sum(s["overlapping"] for s in states) / max(1, len(states)) / n
+    row["deepest_overlap"] = max((s["deepest_overlap"] for s in states), default=0)
+    e0 = got["log"][0]["energy"]
+    row["energy_drift"] = max(abs(s["energy"] - e0) / e0 for s in got["log"]) if e0 else 0
+    return row
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--stepped", required=True, help="the fastest stepped stage's program (06)")
+    ap.add_argument("--exact", required=True, help="the exact stage's program (07)")
+    ap.add_argument("--plab", required=True)
+    ap.add_argument("--datasets", required=True)
+    ap.add_argument("--work", required=True)
+    ap.add_argument("--scene", action="append", default=[], help=f"scenes ({', '.join(SCENES)}; default all)")
+    ap.add_argument("--max-k", type=int, default=64)
+    ap.add_argument("--steps", type=int, help="printed steps (default 8; the cradle: its own)")
+    ap.add_argument("--csv", help="write the table here")
+    ap.add_argument("--plot", help="draw time against error (PNG or SVG)")
+    ap.add_argument("--figures", help="the folder of the handouts' figure code (for --plot)")
+    args = ap.parse_args()
+    os.makedirs(args.work, exist_ok=True)
+    names = args.scene or list(SCENES)
+    for n in names:
+        if n not in SCENES:
+            ap.error(f"unknown scene {n} (known: {', '.join(SCENES)})")
+
+    cpu_env = dict(os.environ, PLAB_DEVICE="cpu")
+    rows = []
+    print(f"{'scene':10} {'variant':22} {'time (s)':>9} {'collisions':>10} {'overlap':>8} {'deepest':>8} "
+          f"{'pos err 1':>9} {'pos err 2':>9} {'pos err 4':>9} {'E drift':>8}")
+    for name in names:
+        about, gen = SCENES[name]
+        scene = os.path.join(args.work, name + ".in")
+        if gen is None:
+            scene = os.path.join(args.datasets, "scenes", "course-2.in")
+        else:
+            g = list(gen)
+            if args.steps:
+                g[g.index("--steps") + 1] = str(args.steps)
+            subprocess.run([args.plab, "gen", *g, "--out", scene], check=True, stdout=subprocess.DEVNULL)
+        with open(scene) as f:
+            r = float(f.read().split()[2])
+        exact = run(args.exact, scene, args.work, f"{name}.exact", [])
+        variants = [("exact (stage 07)", exact, {"k": 0, "real": "double", "device": "cpu"})]
+        gpu = None
+        k = 1
+        while k <= args.max_k:
+            for real in ("double", "float"):
+                v = run(args.stepped, scene, args.work, f"{name}.{real}.{k}",
+                        ["--substeps", str(k), "--real", real], env=cpu_env)
+                variants.append((f"06 cpu {real} K={k}", v, {"k": k, "real": real, "device": "cpu"}))
+            if gpu is None or gpu:
+                v = run(args.stepped, scene, args.work, f"{name}.gpu.{k}", ["--substeps", str(k)])
+                gpu = v["device"] != "cpu"
+                if gpu:
+                    variants.append((f"06 gpu double K={k}", v, {"k": k, "real": "double", "device": "gpu"}))
+            k *= 2
+        for label, v, meta in variants:
+            row = {"scene": name, "variant": label, **meta, "seconds": v["seconds"], **errors(exact, v, r)}
+            rows.append(row)
+            print(f"{name:10} {label:22} {row['seconds']:9.4f} {row['collision_ratio']:10.4f} "
+                  f"{row['overlap_fraction']:8.2g} {row['deepest_overlap']:8.2g} {row['position_error_1']:9.2g} "
+                  f"{row['position_error_2']:9.2g} {row['position_error_4']:9.2g} {row['energy_drift']:8.2g}",
+                  flush=True)
+        print(f"{'':10} ({about}; exact: {exact['pairs']} pair collisions)")
+    if args.csv:
+        with open(args.csv, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+            w.writeheader()
+            w.writerows(rows)
+        print(f"wrote {args.csv}")
+    if args.plot:
+        sys.path.insert(0, args.figures)
+        import plot_bench
+        plot_bench.accuracy_frontier(args.csv or write_temp(rows, args.work), args.plot)
+        print(f"wrote {args.plot}")
+    return 0
+
+
+def write_temp(rows, work):
+    path = os.path.join(work, "accuracy.csv")
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
+    return path
+
+
+if __name__ == "__main__":
+    sys.exit(main())
