@@ -138,36 +138,44 @@ def frontier(points):
 
 
 def accuracy_frontier(path, out):
-    """Time against error, one panel per scene: mean position error after one printed step (left
-    axis) for each variant; the best-for-its-cost variants are ringed."""
+    """Time against error, one column per scene: the mean position error after one printed step
+    (top) and the fraction of collisions missed (bottom) of each variant against stage 07's exact
+    run; the best-for-its-cost variants (no other is both faster and closer) are ringed. Errors of
+    exactly 0 cannot sit on a log axis and are left out."""
     with open(path, newline="") as f:
         data = list(csv.DictReader(line for line in f if not line.startswith("#")))
     scenes = list(dict.fromkeys(r["scene"] for r in data))
-    fig, axes = plt.subplots(1, len(scenes), figsize=(4.6 * len(scenes), 4), squeeze=False)
-    styles = {("cpu", "double"): ("o-", "tab:blue", "CPU double"), ("cpu", "float"): ("s--", "tab:orange", "CPU float"),
-              ("gpu", "double"): ("^-", "tab:green", "GPU double")}
-    for ax, scene in zip(axes[0], scenes):
+    measures = (("position_error_1", lambda v: v, "mean position error after 1 step (r)"),
+                ("collision_ratio", lambda v: abs(1 - v), "collisions missed (fraction)"))
+    fig, axes = plt.subplots(2, len(scenes), figsize=(4.6 * len(scenes), 7.5), squeeze=False)
+    styles = {("cpu", "double"): ("o-", "tab:blue", "stage 06 CPU, double"),
+              ("cpu", "float"): ("s--", "tab:orange", "stage 06 CPU, float"),
+              ("gpu", "double"): ("^-", "tab:green", "stage 06 GPU, double")}
+    for col, scene in enumerate(scenes):
         rows_ = [r for r in data if r["scene"] == scene]
         exact = next(r for r in rows_ if r["k"] == "0")
-        pts = []
-        for (device, real), (style, color, label) in styles.items():
-            line = sorted((int(r["k"]), float(r["seconds"]), float(r["position_error_1"]))
-                          for r in rows_ if r["device"] == device and r["real"] == real and r["k"] != "0")
-            line = [p for p in line if p[2] > 0]
-            if not line:
-                continue
-            ax.plot([p[1] for p in line], [p[2] for p in line], style, color=color, label=label)
-            for k, t, e in line:
-                if k in (1, 8, 64):
-                    ax.annotate(f"K={k}", (t, e), fontsize=7, textcoords="offset points", xytext=(4, 4))
-            pts += [(t, e) for _, t, e in line]
-        best = frontier(pts)
-        ax.plot([p[0] for p in best], [p[1] for p in best], "o", mfc="none", mec="k", ms=11,
-                label="best for its cost")
-        ax.axvline(float(exact["seconds"]), color="k", ls=":", label="stage 07 (exact, error 0)")
-        ax.set(xscale="log", yscale="log", xlabel="time in steps (s)",
-               ylabel="mean position error after 1 step (r)", title=scene)
-        ax.grid(True, which="both", alpha=0.3)
+        for row, (field, err, label_y) in enumerate(measures):
+            ax = axes[row][col]
+            pts = []
+            for (device, real), (style, color, label) in styles.items():
+                line = sorted((int(r["k"]), float(r["seconds"]), err(float(r[field])))
+                              for r in rows_ if r["device"] == device and r["real"] == real and r["k"] != "0")
+                line = [p for p in line if p[2] > 0 and p[1] > 0]
+                if not line:
+                    continue
+                ax.plot([p[1] for p in line], [p[2] for p in line], style, color=color, label=label)
+                for k, t, e in line:
+                    if k in (1, 8, 64):
+                        ax.annotate(f"K={k}", (t, e), fontsize=7, textcoords="offset points", xytext=(4, 4))
+                pts += [(t, e) for _, t, e in line]
+            best = frontier(pts)
+            ax.plot([p[0] for p in best], [p[1] for p in best], "o", mfc="none", mec="k", ms=12,
+                    label="best for its cost")
+            ax.axvline(float(exact["seconds"]), color="k", ls=":", label="stage 07: exact (error 0)")
+            ax.set(xscale="log", yscale="log", xlabel="time in steps (s)", ylabel=label_y)
+            if row == 0:
+                ax.set_title(scene)
+            ax.grid(True, which="both", alpha=0.3)
     axes[0][0].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(out, dpi=100)

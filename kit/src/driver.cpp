@@ -68,53 +68,59 @@ RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOpt
   if (options.digest) std::fputs(digest_line(0, digest(p)).c_str(), options.digest);
   const int k = std::max(1, options.substeps);
   const double scale = k;
+  Particles& state = p;  // the stage's state (a CPU stage advances it in place)
+  const Particles initial = k > 1 ? p : Particles();  // the state as shown at step 0 (K > 1)
   if (k > 1) {  // K substeps: the same paths in steps of 1/K
     for (std::size_t i = 0; i < p.size(); ++i) {
-      p.vx[i] = p.vx[i] / scale;
-      p.vy[i] = p.vy[i] / scale;
+      state.vx[i] = state.vx[i] / scale;
+      state.vy[i] = state.vy[i] / scale;
     }
   }
-  const std::unique_ptr<Stepper> stage = make(scene.box, p);
-  // The state as printed: velocities back in length units per printed step.
-  auto read = [&] {
-    stage->read(p);
-    if (k > 1) {
-      for (std::size_t i = 0; i < p.size(); ++i) {
-        p.vx[i] = p.vx[i] * scale;
-        p.vy[i] = p.vy[i] * scale;
-      }
+  const std::unique_ptr<Stepper> stage = make(scene.box, state);
+  // What is printed, digested and audited: the state, with velocities in length units per
+  // printed step (a copy when K > 1, so that the stage's own state is never scaled).
+  Particles scaled;
+  auto read = [&]() -> const Particles& {
+    stage->read(state);
+    if (k == 1) return state;
+    scaled = state;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      scaled.vx[i] = scaled.vx[i] * scale;
+      scaled.vy[i] = scaled.vy[i] * scale;
     }
+    return scaled;
   };
+  const Particles* shown = k > 1 ? &initial : &state;  // the state as shown
   Particles before = p;  // the counters at the start of the step (only kept for options.events)
   Particles audited;     // the last audited state (options.audit)
   const bool with_oracle = p.size() <= 3000;  // the oracle is O(N^2) a step
   if (options.audit) {
-    options.audit->state(scene.box, p, 0);
-    audited = p;
+    options.audit->state(scene.box, *shown, 0);
+    audited = *shown;
   }
   double clock_seconds = 0;
   for (long long s = 0; s < steps; ++s) {
     if (scene.mode == Mode::kPrint || s == 0) {
-      if (s > 0) read();
-      out.block(s, p, false);
+      if (s > 0) shown = &read();
+      out.block(s, *shown, false);
     }
     const auto ts = Clock::now();
     for (int sub = 0; sub < k; ++sub) stage->step();
     clock_seconds += seconds_since(ts);
-    if (options.digest || options.events || options.audit) read();
+    if (options.digest || options.events || options.audit) shown = &read();
     if (options.audit) {
-      options.audit->state(scene.box, p, s + 1);
-      if (k == 1 && options.audit_steps) options.audit->step(scene.box, audited, p, with_oracle);
-      audited = p;
+      options.audit->state(scene.box, *shown, s + 1);
+      if (k == 1 && options.audit_steps) options.audit->step(scene.box, audited, *shown, with_oracle);
+      audited = *shown;
     }
-    if (options.digest) std::fputs(digest_line(s + 1, digest(p)).c_str(), options.digest);
-    if (options.events) write_events(s, before, p, options.events);
+    if (options.digest) std::fputs(digest_line(s + 1, digest(*shown)).c_str(), options.digest);
+    if (options.events) write_events(s, before, *shown, options.events);
     progress.update(s + 1);
   }
   const auto ts = Clock::now();
-  read();  // waits for queued steps: part of the step time on the driver's clock
+  shown = &read();  // waits for queued steps: part of the step time on the driver's clock
   clock_seconds += seconds_since(ts);
-  out.block(steps, p, true);
+  out.block(steps, *shown, true);
   out.flush();
   stats.step_seconds = stage->own_seconds() >= 0 ? stage->own_seconds() : clock_seconds;
   stats.timer = stage->own_seconds() >= 0 ? "cuda events" : "steady_clock";
