@@ -140,27 +140,19 @@ def main():
                   f"{row['position_error_2']:9.2g} {row['position_error_4']:9.2g} {row['energy_drift']:8.2g}",
                   flush=True)
         print(f"{'':10} ({about}; exact: {exact['pairs']} pair collisions)")
+    table = args.csv or os.path.join(args.work, "accuracy.csv")
+    with open(table, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
     if args.csv:
-        with open(args.csv, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-            w.writeheader()
-            w.writerows(rows)
         print(f"wrote {args.csv}")
     if args.plot:
         sys.path.insert(0, args.figures)
         import plot_bench
-        plot_bench.accuracy_frontier(args.csv or write_temp(rows, args.work), args.plot)
+        plot_bench.accuracy_frontier(table, args.plot)
         print(f"wrote {args.plot}")
     return 0
-
-
-def write_temp(rows, work):
-    path = os.path.join(work, "accuracy.csv")
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
-    return path
 
 
 if __name__ == "__main__":
