@@ -28,6 +28,15 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+/// Divides (`down`) or multiplies every velocity by `k` (exact when k is a power of two).
+void scale_velocities(Particles& p, int k, bool down) {
+  const double f = k;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    p.vx[i] = down ? p.vx[i] / f : p.vx[i] * f;
+    p.vy[i] = down ? p.vy[i] / f : p.vy[i] * f;
+  }
+}
+
 long long sum(const std::vector<long long>& v) { return std::accumulate(v.begin(), v.end(), 0LL); }
 
 /// Progress on stderr, at most a few times a second, only after the run has taken a moment.
@@ -66,38 +75,29 @@ RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOpt
   const long long wc0 = sum(p.wc);
   Progress progress(options.progress, steps);
   if (options.digest) std::fputs(digest_line(0, digest(p)).c_str(), options.digest);
+  // K substeps: the same paths in steps of 1/K. The stage runs on velocities divided by K; what
+  // is printed, digested and audited has them in length units per printed step again (a copy,
+  // so that the stage's own state is never scaled).
   const int k = std::max(1, options.substeps);
-  const double scale = k;
-  Particles& state = p;  // the stage's state (a CPU stage advances it in place)
   const Particles initial = k > 1 ? p : Particles();  // the state as shown at step 0 (K > 1)
-  if (k > 1) {  // K substeps: the same paths in steps of 1/K
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      state.vx[i] = state.vx[i] / scale;
-      state.vy[i] = state.vy[i] / scale;
-    }
-  }
-  const std::unique_ptr<Stepper> stage = make(scene.box, state);
-  // What is printed, digested and audited: the state, with velocities in length units per
-  // printed step (a copy when K > 1, so that the stage's own state is never scaled).
+  if (k > 1) scale_velocities(p, k, /*down=*/true);
+  const std::unique_ptr<Stepper> stage = make(scene.box, p);
   Particles scaled;
   auto read = [&]() -> const Particles& {
-    stage->read(state);
-    if (k == 1) return state;
-    scaled = state;
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      scaled.vx[i] = scaled.vx[i] * scale;
-      scaled.vy[i] = scaled.vy[i] * scale;
-    }
+    stage->read(p);
+    if (k == 1) return p;
+    scaled = p;
+    scale_velocities(scaled, k, /*down=*/false);
     return scaled;
   };
-  const Particles* shown = k > 1 ? &initial : &state;  // the state as shown
+  const Particles* shown = k > 1 ? &initial : &p;  // the state as shown
   Particles before = p;  // the counters at the start of the step (only kept for options.events)
-  Particles audited;     // the last audited state (options.audit)
+  // Steps are audited from the state before them (MODEL.md's steps only: K == 1, not stage 07).
+  const bool audit_steps = options.audit && options.audit_steps && k == 1;
   const bool with_oracle = p.size() <= 3000;  // the oracle is O(N^2) a step
-  if (options.audit) {
-    options.audit->state(scene.box, *shown, 0);
-    audited = *shown;
-  }
+  Particles audited;  // the state before the step (audit_steps)
+  if (options.audit) options.audit->state(scene.box, *shown, 0);
+  if (audit_steps) audited = *shown;
   double clock_seconds = 0;
   for (long long s = 0; s < steps; ++s) {
     if (scene.mode == Mode::kPrint || s == 0) {
@@ -108,9 +108,9 @@ RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOpt
     for (int sub = 0; sub < k; ++sub) stage->step();
     clock_seconds += seconds_since(ts);
     if (options.digest || options.events || options.audit) shown = &read();
-    if (options.audit) {
-      options.audit->state(scene.box, *shown, s + 1);
-      if (k == 1 && options.audit_steps) options.audit->step(scene.box, audited, *shown, with_oracle);
+    if (options.audit) options.audit->state(scene.box, *shown, s + 1);
+    if (audit_steps) {
+      options.audit->step(scene.box, audited, *shown, with_oracle);
       audited = *shown;
     }
     if (options.digest) std::fputs(digest_line(s + 1, digest(*shown)).c_str(), options.digest);

@@ -186,9 +186,8 @@ def main():
             problems.append(f"{worst['counter_errors']} counter errors")
         if not ran:
             problems.append("no stage ran")
-        expected = name == "faster-than-box" and worst["outside_ulps"] > OUTSIDE_ULPS and \
-            all("outside [r, L - r]" in p or "differs" not in p and "NaN" not in p and "counter" not in p
-                and "energy" not in p and "failed" not in p for p in problems)
+        # The one scene built to leave the box: expected when leaving the box is all that happened.
+        expected = name == "faster-than-box" and all("outside [r, L - r]" in p for p in problems)
         verdict = "ok" if not problems else ("expected: the model's limit" if expected else "VIOLATION")
         violations += bool(problems) and not expected
         print(f"{name:20} {n:5d} {steps:7d} {','.join(ran):14} {worst['outside_ulps']:8.3g} "
