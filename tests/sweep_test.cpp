@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <random>
+#include <vector>
 
 #include "plab/model.hpp"
 #include "plab/plan.hpp"
@@ -12,25 +13,36 @@
 
 namespace {
 
-/// Whether the broad phase finds particles 0 and 1 of `p` in some slab: close_in_slab() holds at
-/// the slab's midpoint and their cells are the same or adjacent (what stage 06 searches).
-bool found(const plab::Particles& p, const plab::sweep::Grid& g) {
-  for (int k = 0; k < g.slabs; ++k) {
+/// Whether the broad phase finds particles 0 and 1 of `p` in some slab, as stage 06 searches:
+/// both take part in the slab (before their last slabs), close_in_slab() holds at the slab's
+/// midpoint, and their cells are within the larger of their search radii (1: neighbours).
+bool found(const plab::Particles& p, const std::vector<double>& end, const plab::sweep::Grid& g) {
+  for (int k = 0; k <= std::min(plab::sweep::last_slab(end[0], g), plab::sweep::last_slab(end[1], g));
+       ++k) {
     const double tm = plab::sweep::slab_mid(k, g);
-    double mx[2], my[2], ra[2];
+    double mx[2], my[2];
+    int reach = 0;
     for (int i = 0; i < 2; ++i) {
       mx[i] = p.x[i] + tm * p.vx[i];
       my[i] = p.y[i] + tm * p.vy[i];
-      ra[i] = plab::sweep::slab_reach(p.vx[i], p.vy[i], g);
+      reach = std::max(reach, plab::sweep::search_radius(p.vx[i], p.vy[i], g));
     }
     const int dx = plab::sweep::cell_of(mx[0], g) - plab::sweep::cell_of(mx[1], g);
     const int dy = plab::sweep::cell_of(my[0], g) - plab::sweep::cell_of(my[1], g);
-    if (std::abs(dx) <= 1 && std::abs(dy) <= 1 &&
+    if (std::abs(dx) <= reach && std::abs(dy) <= reach &&
         plab::sweep::close_in_slab(mx[0] - mx[1], my[0] - my[1], p.vx[0] - p.vx[1],
-                                   p.vy[0] - p.vy[1], ra[0], ra[1], g))
+                                   p.vy[0] - p.vy[1], g))
       return true;
   }
   return false;
+}
+
+/// Each particle's path end (sweep::path_end() of its wall time).
+std::vector<double> path_ends(const plab::Box& box, const plab::Particles& p) {
+  std::vector<double> end(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i)
+    end[i] = plab::sweep::path_end(plab::wall_candidate(box, p, static_cast<int>(i)).t);
+  return end;
 }
 
 /// A scene of `n` particles whose grid is used, with particles 0 and 1 the pair under test.
@@ -85,11 +97,15 @@ TEST(Sweep, NeverDropsAPairThatMeetsInTheStep) {
     const double miss = (u(rng) - 0.5) * 8 * std::numeric_limits<double>::epsilon() * L;
     Case c = make_case(rng, L, r, speed, n, u(rng), miss, trial % 2 == 0);
     const double t = plab::pair_candidate(c.box, c.p, 0, 1).t;
-    if (!plab::model::in_step(t)) continue;
+    const std::vector<double> end = path_ends(c.box, c.p);
+    // A pair at or after either wall time loses to that wall and is never accepted.
+    if (!plab::model::in_step(t) || !(t < end[0]) || !(t < end[1])) continue;
     ++checked;
-    const plab::sweep::Grid g = plab::sweep::choose(c.box, c.p);
-    ASSERT_TRUE(found(c.p, g)) << "pair time " << t << " dropped: L " << L << " r " << r
-                               << " speed " << speed << " slabs " << g.slabs;
+    std::vector<double> scratch;
+    const plab::sweep::Grid g = plab::sweep::choose(c.box, c.p, end, scratch, trial % 3 / 2.0);
+    ASSERT_TRUE(found(c.p, end, g)) << "pair time " << t << " dropped: L " << L << " r " << r
+                                    << " speed " << speed << " slabs " << g.slabs
+                                    << " v_cut " << g.v_cut;
   }
   EXPECT_GT(checked, 50000);
 }
@@ -105,13 +121,62 @@ TEST(Sweep, GridFromTheScene) {
     p.vx[i] = 5000 * (2 * u(rng) - 1) / std::sqrt(2.0);
     p.vy[i] = 5000 * (2 * u(rng) - 1) / std::sqrt(2.0);
   }
-  const plab::sweep::Grid g = plab::sweep::choose({20000, 1}, p);
+  std::vector<double> scratch;
+  const plab::Box box{20000, 1};
+  plab::sweep::Grid g = plab::sweep::choose(box, p, path_ends(box, p), scratch);
   EXPECT_GT(g.slabs, 1);  // long sweeps: several slabs
   EXPECT_LT(g.cell, 2 + 6000.0 / g.slabs);
-  EXPECT_GE(1 << g.bucket_bits, 20000);
+  EXPECT_LE(g.cells(), 2 * 10000);  // no more cells than about 2N
+  EXPECT_LT(g.v_cut, 5000);         // the fastest 10% search wider
+  p.vx[0] = 1e6;  // one very fast particle changes only the rounding margin (a millionth of it)
+  const plab::sweep::Grid hot = plab::sweep::choose(box, p, path_ends(box, p), scratch);
+  EXPECT_EQ(hot.slabs, g.slabs);
+  EXPECT_NEAR(hot.cell, g.cell, 0.02 * g.cell);
+  EXPECT_GT(plab::sweep::search_radius(p.vx[0], p.vy[0], g), 1);
   p.vx.assign(p.size(), 0);
   p.vy.assign(p.size(), 0);
-  EXPECT_EQ(plab::sweep::choose({20000, 1}, p).slabs, 1);  // at rest: one slab, cells of 2r
+  g = plab::sweep::choose(box, p, path_ends(box, p), scratch);
+  EXPECT_EQ(g.slabs, 1);  // at rest: one slab, cells of about 2r (at most 2N of them)
+  EXPECT_EQ(plab::sweep::search_radius(0, 0, g), 1);
+}
+
+TEST(Sweep, WallsEndPaths) {
+  plab::sweep::Grid g;
+  g.slabs = 8;
+  EXPECT_EQ(plab::sweep::last_slab(plab::sweep::path_end(2.0), g), 7);   // no wall this step
+  EXPECT_EQ(plab::sweep::last_slab(plab::sweep::path_end(0.3), g), 2);   // wall at 0.3: slabs 0-2
+  EXPECT_EQ(plab::sweep::last_slab(plab::sweep::path_end(0.0), g), -1);  // the wall wins at 0
+  EXPECT_EQ(plab::sweep::last_slab(plab::sweep::path_end(-1.0), g), -1);
+  EXPECT_EQ(plab::sweep::last_slab(plab::sweep::path_end(NAN), g), 7);  // no wall candidate
+}
+
+TEST(Plan, SparseGreedyIsGreedy) {
+  std::mt19937_64 rng(7);
+  std::uniform_int_distribution<int> pick(0, 39);
+  std::uniform_int_distribution<int> step(0, 7);
+  for (int trial = 0; trial < 2000; ++trial) {
+    std::vector<double> wall(40);
+    std::vector<plab::model::Event> all, pairs;
+    for (int i = 0; i < 40; ++i) {
+      wall[i] = step(rng) / 4.0;  // many ties, some walls after the step
+      if (plab::model::in_step(wall[i])) all.push_back(plab::model::wall_event_key(wall[i], i));
+    }
+    for (int e = 0; e < 30; ++e) {
+      const int i = pick(rng), j = pick(rng);
+      if (i == j) continue;
+      const auto pair = plab::model::pair_event_key(step(rng) / 8.0, std::min(i, j), std::max(i, j));
+      all.push_back(pair);
+      pairs.push_back(pair);
+      if (e % 5 == 0) pairs.push_back(pair);  // found twice
+    }
+    const plab::Plan want = plab::greedy_plan(all, wall.size());
+    const plab::Plan got = plab::sparse_greedy_plan(pairs, wall);
+    ASSERT_EQ(got.partner, want.partner) << "trial " << trial;
+    for (int i = 0; i < 40; ++i)
+      if (want.partner[i] >= 0) {
+        ASSERT_EQ(got.time[i], want.time[i]);
+      }
+  }
 }
 
 }  // namespace

@@ -23,7 +23,6 @@ constexpr int kResolveThreads = 1024;  //!< the one block of resolve
 /// What the host reads after a batch of steps.
 struct Flags {
   int overflow;          //!< largest slot count needed, when a step ran out of slots (else 0)
-  int too_fast;          //!< 1 when a particle got faster than the grid allows
   long long steps_done;  //!< steps applied so far
   int contested;         //!< resolve_grid: particles with pair events this step
   int open[3];           //!< resolve_grid: someone left unresolved in round r (at r % 3)
@@ -31,14 +30,14 @@ struct Flags {
 
 /// The grid of the batch, as the kernels see it.
 struct DeviceGrid {
-  sweep::Grid g;      //!< slabs, cells, buckets
-  int buckets;        //!< 2^g.bucket_bits
-  double v2_limit;    //!< the largest squared speed the grid was made for
+  sweep::Grid g;  //!< slabs, cells, v_cut
+  int cells;      //!< g.cells(): slab k's cells are buckets [k * cells, (k + 1) * cells)
 };
 
 /// One step's working arrays (pointers into memory the host class owns).
 struct StepArrays {
   double* wall;      //!< wall time of each particle
+  int* last;         //!< the last slab each particle takes part in (sweep::last_slab())
   int* count;        //!< pair events found for each particle (can exceed `cap`)
   int* other;        //!< slot `s` of particle `i` at `[s * n + i]`: the other particle
   double* time;      //!< ... and the pair time
@@ -48,58 +47,68 @@ struct StepArrays {
   int* contested;    //!< the particles with at least one pair event
   int* partner;      //!< the plan: kFree, kWall, or the other particle of its pair
   double* ptime;     //!< the plan's pair time
-  int* start;        //!< K * buckets + 1: bucket b of slab k holds entries [start[kB+b], start[kB+b+1])
-  int* fill;         //!< scatter cursors (a copy of start)
-  int* entry_id;     //!< K * N entries: the particle
+  int* filled;       //!< K * cells + 1: entries counted into each bucket
+  int* start;        //!< K * cells + 1: bucket b holds entries [start[b], start[b + 1])
+  int* bucket;       //!< per (slab, particle) at [k * n + i]: its bucket
+  int* rank;         //!< ... and its place in the bucket
+  int* entry_id;     //!< per entry (at most K * N): the particle
   int* entry_k;      //!< ... its slab
-  double* entry_x;   //!< ... its midpoint position
+  double* entry_x;   //!< ... its midpoint position and velocity
   double* entry_y;
+  double* entry_vx;
+  double* entry_vy;
   Flags* flags;      //!< see Flags
 };
 
-/// Wall times, counters cleared, and the speed check of the grid.
+/// Wall times, the last slab of each particle, counters cleared.
 __global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= p.n) return;
   a.wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
+  a.last[i] = sweep::last_slab(sweep::path_end(a.wall[i]), d.g);
   a.count[i] = 0;
-  if (p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i] > d.v2_limit) a.flags->too_fast = 1;
   if (i == 0) {
     a.flags->contested = 0;
     a.flags->open[0] = a.flags->open[1] = a.flags->open[2] = 0;
   }
 }
 
-/// The bucket (in slab k's range) of particle i's midpoint cell.
-__device__ inline int entry_bucket(const ParticlesView& p, int i, int k, const DeviceGrid& d,
-                                   double& mx, double& my) {
+/// Particle i's midpoint position in slab k.
+__device__ inline void midpoint(const ParticlesView& p, int i, int k, const DeviceGrid& d,
+                                double& mx, double& my) {
   const double tm = sweep::slab_mid(k, d.g);
   mx = p.x[i] + tm * p.vx[i];
   my = p.y[i] + tm * p.vy[i];
-  return k * d.buckets +
-         static_cast<int>(sweep::bucket_of(sweep::cell_of(mx, d.g), sweep::cell_of(my, d.g), d.g));
 }
 
-/// Counting sort, pass 1: entries per bucket (grid: particles x slabs), into start[b + 1].
+/// Counting sort, pass 1 (grid: particles x slabs): each particle that takes part in slab k
+/// counts itself into its bucket, and keeps its bucket and its place there.
 __global__ void bin_count(ParticlesView p, StepArrays a, DeviceGrid d) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   const int k = blockIdx.y;
-  if (i >= p.n) return;
+  if (i >= p.n || a.last[i] < k) return;
   double mx, my;
-  atomicAdd(&a.start[entry_bucket(p, i, k, d, mx, my) + 1], 1);
+  midpoint(p, i, k, d, mx, my);
+  const int b = k * d.cells + sweep::cell_of(my, d.g) * d.g.side + sweep::cell_of(mx, d.g);
+  a.bucket[k * p.n + i] = b;
+  a.rank[k * p.n + i] = atomicAdd(&a.filled[b], 1);
 }
 
-/// Counting sort, pass 2 (after the scan): each entry to its bucket's next free place.
+/// Counting sort, pass 2 (after the exclusive scan of `filled` into `start`): each entry to its
+/// place, with what the search reads.
 __global__ void bin_scatter(ParticlesView p, StepArrays a, DeviceGrid d) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   const int k = blockIdx.y;
-  if (i >= p.n) return;
+  if (i >= p.n || a.last[i] < k) return;
+  const int e = a.start[a.bucket[k * p.n + i]] + a.rank[k * p.n + i];
   double mx, my;
-  const int s = atomicAdd(&a.fill[entry_bucket(p, i, k, d, mx, my)], 1);
-  a.entry_id[s] = i;
-  a.entry_k[s] = k;
-  a.entry_x[s] = mx;
-  a.entry_y[s] = my;
+  midpoint(p, i, k, d, mx, my);
+  a.entry_id[e] = i;
+  a.entry_k[e] = k;
+  a.entry_x[e] = mx;
+  a.entry_y[e] = my;
+  a.entry_vx[e] = p.vx[i];
+  a.entry_vy[e] = p.vy[i];
 }
 
 /// Files the pair event (i, o) at time t under particle i (any order: the key orders them).
@@ -112,51 +121,57 @@ __device__ inline void add_slot(const StepArrays& a, int n, int i, int o, double
 }
 
 /// Whether particles i and j pass the slab test in slab k (then slab k's search finds them).
-__device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, int k, double ri,
-                                        double rj, const DeviceGrid& d) {
-  const double tm = sweep::slab_mid(k, d.g);
-  return sweep::close_in_slab((p.x[i] + tm * p.vx[i]) - (p.x[j] + tm * p.vx[j]),
-                              (p.y[i] + tm * p.vy[i]) - (p.y[j] + tm * p.vy[j]),
-                              p.vx[i] - p.vx[j], p.vy[i] - p.vy[j], ri, rj, d.g);
+__device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, int k,
+                                        const DeviceGrid& d) {
+  double xi, yi, xj, yj;
+  midpoint(p, i, k, d, xi, yi);
+  midpoint(p, j, k, d, xj, yj);
+  return sweep::close_in_slab(xi - xj, yi - yj, p.vx[i] - p.vx[j], p.vy[i] - p.vy[j], d.g);
 }
 
-/// The pair search: one thread per entry, against the later entries of its own bucket and the
-/// entries of the buckets of cells (+1, 0), (-1, +1), (0, +1), (+1, +1) in the same slab; the
-/// pairs that pass sweep::close_in_slab() get MODEL.md's pair time, unless slab k - 1 found them
-/// already (a pair listed twice is harmless to the rounds, but it fills slots).
-__global__ void find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d, int entries) {
-  const int e = blockIdx.x * blockDim.x + threadIdx.x;
-  if (e >= entries || a.flags->overflow || a.flags->too_fast) return;
+/// Entry e against entries [from, to) of its slab: the pairs that pass sweep::close_in_slab()
+/// get MODEL.md's pair time, unless slab k - 1 found them already (a pair listed twice is
+/// harmless to the rounds, but it fills slots), and are filed when the pair comes before both
+/// particles' walls.
+__device__ inline void test_entries(const ParticlesView& p, const Box& box, const StepArrays& a,
+                                    const DeviceGrid& d, int e, int from, int to) {
   const int i = a.entry_id[e], k = a.entry_k[e];
-  const double vxi = p.vx[i], vyi = p.vy[i];
-  const double ri = sweep::slab_reach(vxi, vyi, d.g);
-  const double mx = a.entry_x[e], my = a.entry_y[e];
-  const int cx = sweep::cell_of(mx, d.g), cy = sweep::cell_of(my, d.g);
-  constexpr int kNext[5][2] = {{0, 0}, {1, 0}, {-1, 1}, {0, 1}, {1, 1}};
-  int seen[5];
-  for (int q = 0; q < 5; ++q) {
-    const int nb = k * d.buckets +
-                   static_cast<int>(sweep::bucket_of(cx + kNext[q][0], cy + kNext[q][1], d.g));
-    seen[q] = nb;
-    bool again = false;  // two neighbour cells hashed to one bucket: search it once
-    for (int r = 0; r < q; ++r) again |= (seen[r] == nb);
-    if (again) continue;
-    for (int f = (q == 0) ? e + 1 : a.start[nb]; f < a.start[nb + 1]; ++f) {
-      const int j = a.entry_id[f];
-      const double vxj = p.vx[j], vyj = p.vy[j];
-      const double rj = sweep::slab_reach(vxj, vyj, d.g);
-      if (j == i || !sweep::close_in_slab(mx - a.entry_x[f], my - a.entry_y[f], vxi - vxj,
-                                          vyi - vyj, ri, rj, d.g))
-        continue;
-      if (k > 0 && close_in_slab_at(p, i, j, k - 1, ri, rj, d)) continue;  // found in slab k - 1
-      const int lo = i < j ? i : j, hi = i < j ? j : i;
-      const double t = model::pair_time(p.x[lo], p.y[lo], p.vx[lo], p.vy[lo], p.x[hi], p.y[hi],
-                                        p.vx[hi], p.vy[hi], box.r);
-      if (model::in_step(t)) {
-        add_slot(a, p.n, lo, hi, t);
-        add_slot(a, p.n, hi, lo, t);
-      }
+  const double x = a.entry_x[e], y = a.entry_y[e], vx = a.entry_vx[e], vy = a.entry_vy[e];
+  for (int f = from; f < to; ++f) {
+    if (f == e || !sweep::close_in_slab(x - a.entry_x[f], y - a.entry_y[f], vx - a.entry_vx[f],
+                                        vy - a.entry_vy[f], d.g))
+      continue;
+    const int j = a.entry_id[f];
+    if (k > 0 && close_in_slab_at(p, i, j, k - 1, d)) continue;  // found in slab k - 1
+    const int lo = i < j ? i : j, hi = i < j ? j : i;
+    const double t = model::pair_time(p.x[lo], p.y[lo], p.vx[lo], p.vy[lo], p.x[hi], p.y[hi],
+                                      p.vx[hi], p.vy[hi], box.r);
+    if (model::in_step(t) && !(a.wall[lo] <= t) && !(a.wall[hi] <= t)) {
+      add_slot(a, p.n, lo, hi, t);
+      add_slot(a, p.n, hi, lo, t);
     }
+  }
+}
+
+/// The pair search, one thread per entry (as step.cpp): against the later entries of its own
+/// cell and the cells (+1, 0), (-1, +1), (0, +1), (+1, +1) of the same slab, two runs of
+/// entries; a fast entry against every cell within its search radius.
+__global__ void find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
+  const int e = blockIdx.x * blockDim.x + threadIdx.x;
+  if (e >= a.start[d.g.slabs * d.cells] || a.flags->overflow) return;
+  const int side = d.g.side, base = a.entry_k[e] * d.cells;
+  const int cx = sweep::cell_of(a.entry_x[e], d.g), cy = sweep::cell_of(a.entry_y[e], d.g);
+  const int rho = sweep::search_radius(a.entry_vx[e], a.entry_vy[e], d.g);
+  const int* row = a.start + base;
+  if (rho == 1) {
+    const int left = max(cx - 1, 0), right = min(cx + 1, side - 1);
+    test_entries(p, box, a, d, e, e + 1, row[cy * side + right + 1]);
+    if (cy + 1 < side)
+      test_entries(p, box, a, d, e, row[(cy + 1) * side + left], row[(cy + 1) * side + right + 1]);
+  } else {
+    const int x0 = max(cx - rho, 0), x1 = min(cx + rho, side - 1);
+    for (int y = max(cy - rho, 0); y <= min(cy + rho, side - 1); ++y)
+      test_entries(p, box, a, d, e, row[y * side + x0], row[y * side + x1 + 1]);
   }
 }
 
@@ -194,10 +209,10 @@ __device__ inline bool accept_one(int i, const StepArrays& a) {
 }
 
 /// Every round of the step in one block (stage 05's resolve over the sparse candidates); skips
-/// the step when slots ran out or a particle is faster than the grid allows.
+/// the step when slots ran out.
 __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) {
   __shared__ int contested;
-  if (a.flags->overflow || a.flags->too_fast) return;
+  if (a.flags->overflow) return;
   if (threadIdx.x == 0) contested = 0;
   __syncthreads();
   int over = 0;
@@ -234,7 +249,7 @@ __global__ void resolve_grid(int n, StepArrays a) {
   Flags* f = a.flags;
   const int stride = gridDim.x * blockDim.x;
   const int me = blockIdx.x * blockDim.x + threadIdx.x;
-  const bool skipped = f->overflow || f->too_fast;  // read before anyone writes them below
+  const bool skipped = f->overflow;  // read before anyone writes them below
   grid.sync();
   if (skipped) return;
   for (int i = me; i < n; i += stride) {
@@ -266,7 +281,7 @@ __global__ void resolve_grid(int n, StepArrays a) {
 /// Applies the plan (branchless walls); nothing when the step was skipped.
 __global__ void apply(ParticlesView p, Box box, StepArrays a) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= p.n || a.flags->overflow || a.flags->too_fast) return;
+  if (i >= p.n || a.flags->overflow) return;
   const int j = a.partner[i];
   if (j == kFree) {
     model::free_move(p.x[i], p.y[i], p.vx[i], p.vy[i]);

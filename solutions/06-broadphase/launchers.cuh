@@ -28,15 +28,17 @@ inline void bin_count(const cuda::ParticlesView& p, const kernels::StepArrays& a
   PLAB_CUDA_CHECK_LAUNCH("bin_count");
 }
 
-/// start[] becomes the prefix sums of the counts (CUB; `temp` of `temp_bytes` from scan_bytes()).
-inline void scan(int* start, int size, void* temp, std::size_t temp_bytes, cudaStream_t s) {
-  PLAB_CUDA_CHECK(cub::DeviceScan::InclusiveSum(temp, temp_bytes, start, start, size, s));
+/// start[b] becomes the number of entries in buckets before b (CUB's exclusive scan of `filled`;
+/// `temp` of `temp_bytes` from scan_bytes()).
+inline void scan(const int* filled, int* start, int size, void* temp, std::size_t temp_bytes,
+                 cudaStream_t s) {
+  PLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(temp, temp_bytes, filled, start, size, s));
 }
 
 /// Bytes of temporary storage scan() needs for `size` counters.
 inline std::size_t scan_bytes(int size) {
   std::size_t bytes = 0;
-  PLAB_CUDA_CHECK(cub::DeviceScan::InclusiveSum(nullptr, bytes, static_cast<int*>(nullptr),
+  PLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, bytes, static_cast<const int*>(nullptr),
                                                 static_cast<int*>(nullptr), size));
   return bytes;
 }
@@ -49,8 +51,8 @@ inline void bin_scatter(const cuda::ParticlesView& p, const kernels::StepArrays&
 
 inline void find_pairs(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
                        const kernels::DeviceGrid& d, cudaStream_t s) {
-  const int entries = p.n * d.g.slabs;
-  kernels::find_pairs<<<blocks(entries), kThreads, 0, s>>>(p, box, a, d, entries);
+  const long long most = static_cast<long long>(p.n) * d.g.slabs;  // entries this step, at most
+  kernels::find_pairs<<<blocks(most), kThreads, 0, s>>>(p, box, a, d);
   PLAB_CUDA_CHECK_LAUNCH("find_pairs");
 }
 

@@ -5,16 +5,18 @@
 //
 // =================================================================================================
 //  GOAL   step.cpp's idea with every phase on the device and no host round trip in a step:
-//         start_step (wall times, counters, speed check) -> bin_count -> CUB scan -> bin_scatter
+//         start_step (wall times, last slabs, counters) -> bin_count -> CUB scan -> bin_scatter
 //         -> find_pairs -> resolve -> apply, recorded once as a graph. The grid is chosen on the
-//         host for the batch with 25% speed headroom; a particle that outruns it, or one with
-//         more pair events than slots, stops the batch on the device, and the host redoes it.
+//         host from the first state; particles that get faster than v_cut search wider, so it
+//         stays exact for any speed. A particle with more pair events than slots stops the batch
+//         on the device, and the host redoes it with more slots.
 //  READ   handouts/06-broadphase.md     TEST   ./plab test --stage 06 (on a GPU machine)
 // =================================================================================================
 #include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "launchers.cuh"
 #include "plab/stage.hpp"
@@ -27,7 +29,7 @@ class CudaStepper final : public Stepper {
  public:
   CudaStepper(const Box& box, const Particles& p, std::string device)
       : device_(std::move(device)), box_(box), p_(p, main_), n_(p_.size()), wall_(n_),
-        count_(n_), best_(n_), resolved_(n_), contested_(n_), partner_(n_), ptime_(n_),
+        last_(n_), count_(n_), best_(n_), resolved_(n_), contested_(n_), partner_(n_), ptime_(n_),
         flags_(1) {
     PLAB_CUDA_CHECK(cudaMemsetAsync(flags_.get(), 0, flags_.bytes(), main_));
     grow_slots(16);
@@ -55,11 +57,12 @@ class CudaStepper final : public Stepper {
   [[nodiscard]] double own_seconds() const override { return timer_.seconds(); }
   [[nodiscard]] std::string device() const override { return device_; }
   [[nodiscard]] std::size_t device_bytes() const override {
-    return p_.bytes() + wall_.bytes() + count_.bytes() + other_.bytes() + time_.bytes() +
-           best_.bytes() + resolved_.bytes() + contested_.bytes() + partner_.bytes() +
-           ptime_.bytes() + start_.bytes() + fill_.bytes() + entry_id_.bytes() +
-           entry_k_.bytes() + entry_x_.bytes() + entry_y_.bytes() + temp_.bytes() +
-           flags_.bytes();
+    return p_.bytes() + wall_.bytes() + last_.bytes() + count_.bytes() + other_.bytes() +
+           time_.bytes() + best_.bytes() + resolved_.bytes() + contested_.bytes() +
+           partner_.bytes() + ptime_.bytes() + filled_.bytes() + start_.bytes() +
+           bucket_.bytes() + rank_.bytes() + entry_id_.bytes() + entry_k_.bytes() +
+           entry_x_.bytes() + entry_y_.bytes() + entry_vx_.bytes() + entry_vy_.bytes() +
+           temp_.bytes() + flags_.bytes();
   }
 
  private:
@@ -76,11 +79,10 @@ class CudaStepper final : public Stepper {
   void queue_kernels() {
     const auto a = arrays();
     launch::start_step(p_.view(), box_, a, grid_, main_);
-    PLAB_CUDA_CHECK(cudaMemsetAsync(start_.get(), 0, start_.bytes(), main_));
+    PLAB_CUDA_CHECK(cudaMemsetAsync(filled_.get(), 0, filled_.bytes(), main_));
     launch::bin_count(p_.view(), a, grid_, main_);
-    launch::scan(start_.get(), static_cast<int>(start_.size()), temp_.get(), temp_.size(), main_);
-    PLAB_CUDA_CHECK(cudaMemcpyAsync(fill_.get(), start_.get(), fill_.bytes(),
-                                    cudaMemcpyDeviceToDevice, main_));
+    launch::scan(filled_.get(), start_.get(), static_cast<int>(start_.size()), temp_.get(),
+                 temp_.size(), main_);
     launch::bin_scatter(p_.view(), a, grid_, main_);
     launch::find_pairs(p_.view(), box_, a, grid_, main_);
     if (n_ >= kGridResolveFrom)
@@ -90,43 +92,36 @@ class CudaStepper final : public Stepper {
     launch::apply(p_.view(), box_, a, main_);
   }
 
-  /// Waits for the queued steps; redoes those a stop on the device skipped (more slots, or a new
-  /// grid for faster particles).
+  /// Waits for the queued steps; redoes those a stop on the device skipped (more slots).
   void catch_up() {
     for (;;) {
       kernels::Flags f{};
       PLAB_CUDA_CHECK(cudaMemcpyAsync(&f, flags_.get(), sizeof f, cudaMemcpyDeviceToHost, main_));
       main_.sync();
-      if (f.steps_done == asked_ || (f.overflow == 0 && f.too_fast == 0)) return;
-      if (f.overflow) grow_slots(2 * f.overflow);
-      if (f.too_fast) {
-        Particles now;
-        p_.download(now, main_);
-        set_grid(now);
-      }
-      PLAB_CUDA_CHECK(cudaMemsetAsync(flags_.get(), 0, 2 * sizeof(int), main_));  // the two stops
+      if (f.steps_done == asked_ || f.overflow == 0) return;
+      grow_slots(2 * f.overflow);
+      PLAB_CUDA_CHECK(cudaMemsetAsync(flags_.get(), 0, sizeof(int), main_));  // the stop
       for (long long s = f.steps_done; s < asked_; ++s) queue_step();
       timer_.stop(main_);
     }
   }
 
-  /// The grid for the state `p` with 25% speed headroom, and the arrays it needs.
+  /// The grid for the state `p` (sweep::choose(), the fastest 10% search wider), and the
+  /// arrays it needs.
   void set_grid(const Particles& p) {
     main_.sync();
-    double vmax = 0, extent = 0;
-    sweep::speed_and_extent(box_, p, vmax, extent, 1.25);
+    std::vector<double> end(p.size()), scratch;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      end[i] = sweep::path_end(model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box_.L, box_.r));
     const char* alpha = std::getenv("PLAB_SWEEP_ALPHA");  // a tuning knob: slabs per sqrt(N) v/L
-    grid_.g = sweep::choose_for(box_, p.size(), vmax, extent, alpha ? std::atof(alpha) : 1.0);
-    grid_.buckets = 1 << grid_.g.bucket_bits;
-    grid_.v2_limit = std::isfinite(vmax) ? vmax * vmax : HUGE_VAL;
-    const std::size_t entries = static_cast<std::size_t>(n_) * grid_.g.slabs;
-    const int size = grid_.g.slabs * grid_.buckets + 1;
+    grid_.g = sweep::choose(box_, p, end, scratch, 0.9, alpha ? std::atof(alpha) : kAlpha);
+    grid_.cells = grid_.g.cells();
+    const std::size_t per_slab = static_cast<std::size_t>(n_) * grid_.g.slabs;
+    const int size = grid_.g.slabs * grid_.cells + 1;
+    filled_.resize(size);
     start_.resize(size);
-    fill_.resize(size);
-    entry_id_.resize(entries);
-    entry_k_.resize(entries);
-    entry_x_.resize(entries);
-    entry_y_.resize(entries);
+    for (auto* v : {&bucket_, &rank_, &entry_id_, &entry_k_}) v->resize(per_slab);
+    for (auto* v : {&entry_x_, &entry_y_, &entry_vx_, &entry_vy_}) v->resize(per_slab);
     temp_.resize(launch::scan_bytes(size));
     stale_ = true;
   }
@@ -141,14 +136,16 @@ class CudaStepper final : public Stepper {
   }
 
   [[nodiscard]] kernels::StepArrays arrays() const {
-    return {wall_.get(),     count_.get(),   other_.get(),    time_.get(),     cap_,
-            best_.get(),     resolved_.get(), contested_.get(), partner_.get(), ptime_.get(),
-            start_.get(),    fill_.get(),    entry_id_.get(), entry_k_.get(), entry_x_.get(),
-            entry_y_.get(),  flags_.get()};
+    return {wall_.get(),     last_.get(),     count_.get(),     other_.get(),    time_.get(),
+            cap_,            best_.get(),     resolved_.get(),  contested_.get(), partner_.get(),
+            ptime_.get(),    filled_.get(),   start_.get(),     bucket_.get(),   rank_.get(),
+            entry_id_.get(), entry_k_.get(),  entry_x_.get(),   entry_y_.get(),  entry_vx_.get(),
+            entry_vy_.get(), flags_.get()};
   }
 
   static constexpr long long kCheckEvery = 32;  //!< steps between two looks at the flags
   static constexpr int kGridResolveFrom = 50000;  //!< from this N the rounds use the whole GPU
+  static constexpr double kAlpha = 1.0;  //!< slabs per sqrt(N) v_cut / L (more, smaller searches)
   std::string device_;
   cuda::Stream main_;
   Box box_;
@@ -158,14 +155,14 @@ class CudaStepper final : public Stepper {
   long long asked_ = 0;
   kernels::DeviceGrid grid_{};
   cuda::DeviceArray<double> wall_;
-  cuda::DeviceArray<int> count_, other_;
+  cuda::DeviceArray<int> last_, count_, other_;
   cuda::DeviceArray<double> time_;
   cuda::DeviceArray<model::Event> best_;
   cuda::DeviceArray<char> resolved_;
   cuda::DeviceArray<int> contested_, partner_;
   cuda::DeviceArray<double> ptime_;
-  cuda::DeviceArray<int> start_, fill_, entry_id_, entry_k_;
-  cuda::DeviceArray<double> entry_x_, entry_y_;
+  cuda::DeviceArray<int> filled_, start_, bucket_, rank_, entry_id_, entry_k_;
+  cuda::DeviceArray<double> entry_x_, entry_y_, entry_vx_, entry_vy_;
   cuda::DeviceArray<unsigned char> temp_;
   cuda::DeviceArray<kernels::Flags> flags_;
   cuda::Graph graph_;

@@ -23,7 +23,6 @@ constexpr int kResolveThreads = 1024;  //!< the one block of resolve
 /// What the host reads after a batch of steps.
 struct Flags {
   int overflow;          //!< largest slot count needed, when a step ran out of slots (else 0)
-  int too_fast;          //!< 1 when a particle got faster than the grid allows
   long long steps_done;  //!< steps applied so far
   int contested;         //!< resolve_grid: particles with pair events this step
   int open[3];           //!< resolve_grid: someone left unresolved in round r (at r % 3)
@@ -31,14 +30,14 @@ struct Flags {
 
 /// The grid of the batch, as the kernels see it.
 struct DeviceGrid {
-  sweep::Grid g;      //!< slabs, cells, buckets
-  int buckets;        //!< 2^g.bucket_bits
-  double v2_limit;    //!< the largest squared speed the grid was made for
+  sweep::Grid g;  //!< slabs, cells, v_cut
+  int cells;      //!< g.cells(): slab k's cells are buckets [k * cells, (k + 1) * cells)
 };
 
 /// One step's working arrays (pointers into memory the host class owns).
 struct StepArrays {
   double* wall;      //!< wall time of each particle
+  int* last;         //!< the last slab each particle takes part in (sweep::last_slab())
   int* count;        //!< pair events found for each particle (can exceed `cap`)
   int* other;        //!< slot `s` of particle `i` at `[s * n + i]`: the other particle
   double* time;      //!< ... and the pair time
@@ -48,42 +47,46 @@ struct StepArrays {
   int* contested;    //!< the particles with at least one pair event
   int* partner;      //!< the plan: kFree, kWall, or the other particle of its pair
   double* ptime;     //!< the plan's pair time
-  int* start;        //!< K * buckets + 1: bucket b of slab k holds entries [start[kB+b], start[kB+b+1])
-  int* fill;         //!< scatter cursors (a copy of start)
-  int* entry_id;     //!< K * N entries: the particle
+  int* filled;       //!< K * cells + 1: entries counted into each bucket
+  int* start;        //!< K * cells + 1: bucket b holds entries [start[b], start[b + 1])
+  int* bucket;       //!< per (slab, particle) at [k * n + i]: its bucket
+  int* rank;         //!< ... and its place in the bucket
+  int* entry_id;     //!< per entry (at most K * N): the particle
   int* entry_k;      //!< ... its slab
-  double* entry_x;   //!< ... its midpoint position
+  double* entry_x;   //!< ... its midpoint position and velocity
   double* entry_y;
+  double* entry_vx;
+  double* entry_vy;
   Flags* flags;      //!< see Flags
 };
 
-/// Wall times, counters cleared, and the speed check of the grid.
+/// Wall times, the last slab of each particle, counters cleared.
 __global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= p.n) return;
   a.wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
+  a.last[i] = sweep::last_slab(sweep::path_end(a.wall[i]), d.g);
   a.count[i] = 0;
-  if (p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i] > d.v2_limit) a.flags->too_fast = 1;
   if (i == 0) {
     a.flags->contested = 0;
     a.flags->open[0] = a.flags->open[1] = a.flags->open[2] = 0;
   }
 }
 
-/// The bucket (in slab k's range) of particle i's midpoint cell.
-__device__ inline int entry_bucket(const ParticlesView& p, int i, int k, const DeviceGrid& d,
-                                   double& mx, double& my) {
+/// Particle i's midpoint position in slab k.
+__device__ inline void midpoint(const ParticlesView& p, int i, int k, const DeviceGrid& d,
+                                double& mx, double& my) {
   const double tm = sweep::slab_mid(k, d.g);
   mx = p.x[i] + tm * p.vx[i];
   my = p.y[i] + tm * p.vy[i];
-  return k * d.buckets +
-         static_cast<int>(sweep::bucket_of(sweep::cell_of(mx, d.g), sweep::cell_of(my, d.g), d.g));
 }
 
 // EXERCISE 4: the broad phase on the GPU, as step.cpp's EXERCISE 1 with one thread per
-// (particle, slab): bin_count (atomicAdd on start[bucket + 1], using entry_bucket()), and after
-// the host's scan, bin_scatter (atomicAdd on fill[bucket] gives the entry's place; store its
-// particle, slab and midpoint position).
+// (particle, slab), blockIdx.y the slab: bin_count (a particle with a.last[i] >= k finds its bucket
+// k * d.cells + cell from its midpoint(), keeps it in a.bucket[k * n + i] and its place,
+// atomicAdd(&a.filled[bucket], 1), in a.rank[k * n + i]); after the host's exclusive scan of
+// `filled` into `start`, bin_scatter (entry start[bucket] + rank gets the particle, its slab,
+// midpoint position and velocity).
 
 /// Files the pair event (i, o) at time t under particle i (any order: the key orders them).
 __device__ inline void add_slot(const StepArrays& a, int n, int i, int o, double t) {
@@ -95,19 +98,43 @@ __device__ inline void add_slot(const StepArrays& a, int n, int i, int o, double
 }
 
 /// Whether particles i and j pass the slab test in slab k (then slab k's search finds them).
-__device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, int k, double ri,
-                                        double rj, const DeviceGrid& d) {
-  const double tm = sweep::slab_mid(k, d.g);
-  return sweep::close_in_slab((p.x[i] + tm * p.vx[i]) - (p.x[j] + tm * p.vx[j]),
-                              (p.y[i] + tm * p.vy[i]) - (p.y[j] + tm * p.vy[j]),
-                              p.vx[i] - p.vx[j], p.vy[i] - p.vy[j], ri, rj, d.g);
+__device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, int k,
+                                        const DeviceGrid& d) {
+  double xi, yi, xj, yj;
+  midpoint(p, i, k, d, xi, yi);
+  midpoint(p, j, k, d, xj, yj);
+  return sweep::close_in_slab(xi - xj, yi - yj, p.vx[i] - p.vx[j], p.vy[i] - p.vy[j], d.g);
 }
 
-// EXERCISE 4: find_pairs, one thread per entry: the later entries of its own bucket and the
-// entries of the buckets of cells (+1, 0), (-1, +1), (0, +1), (+1, +1) of the same slab (a bucket
-// two neighbours hash to, once); for each pair that passes sweep::close_in_slab() and did not
-// pass it in slab k - 1 (close_in_slab_at()), MODEL.md's pair time (lower index first), and if it
-// is in the step, add_slot() under both particles.
+/// Entry e against entries [from, to) of its slab: the pairs that pass sweep::close_in_slab()
+/// get MODEL.md's pair time, unless slab k - 1 found them already (a pair listed twice is
+/// harmless to the rounds, but it fills slots), and are filed when the pair comes before both
+/// particles' walls.
+__device__ inline void test_entries(const ParticlesView& p, const Box& box, const StepArrays& a,
+                                    const DeviceGrid& d, int e, int from, int to) {
+  const int i = a.entry_id[e], k = a.entry_k[e];
+  const double x = a.entry_x[e], y = a.entry_y[e], vx = a.entry_vx[e], vy = a.entry_vy[e];
+  for (int f = from; f < to; ++f) {
+    if (f == e || !sweep::close_in_slab(x - a.entry_x[f], y - a.entry_y[f], vx - a.entry_vx[f],
+                                        vy - a.entry_vy[f], d.g))
+      continue;
+    const int j = a.entry_id[f];
+    if (k > 0 && close_in_slab_at(p, i, j, k - 1, d)) continue;  // found in slab k - 1
+    const int lo = i < j ? i : j, hi = i < j ? j : i;
+    const double t = model::pair_time(p.x[lo], p.y[lo], p.vx[lo], p.vy[lo], p.x[hi], p.y[hi],
+                                      p.vx[hi], p.vy[hi], box.r);
+    if (model::in_step(t) && !(a.wall[lo] <= t) && !(a.wall[hi] <= t)) {
+      add_slot(a, p.n, lo, hi, t);
+      add_slot(a, p.n, hi, lo, t);
+    }
+  }
+}
+
+// EXERCISE 4: find_pairs, one thread per entry e < a.start[slabs * cells] (the entries of this
+// step): as step.cpp's search, test_entries() over the later entries of its cell and cell
+// (+1, 0), then over cells (-1 .. +1, +1), two runs of entries of its slab (slab k's cells start
+// at a.start + k * d.cells); a fast entry (sweep::search_radius() > 1) over every cell within its
+// radius.
 
 /// A round's first half for particle i: its earliest event among its wall and its pairs with
 /// unresolved partners (or `none`, which sorts after every real event).
@@ -143,10 +170,10 @@ __device__ inline bool accept_one(int i, const StepArrays& a) {
 }
 
 /// Every round of the step in one block (stage 05's resolve over the sparse candidates); skips
-/// the step when slots ran out or a particle is faster than the grid allows.
+/// the step when slots ran out.
 __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) {
   __shared__ int contested;
-  if (a.flags->overflow || a.flags->too_fast) return;
+  if (a.flags->overflow) return;
   if (threadIdx.x == 0) contested = 0;
   __syncthreads();
   int over = 0;
@@ -183,7 +210,7 @@ __global__ void resolve_grid(int n, StepArrays a) {
   Flags* f = a.flags;
   const int stride = gridDim.x * blockDim.x;
   const int me = blockIdx.x * blockDim.x + threadIdx.x;
-  const bool skipped = f->overflow || f->too_fast;  // read before anyone writes them below
+  const bool skipped = f->overflow;  // read before anyone writes them below
   grid.sync();
   if (skipped) return;
   for (int i = me; i < n; i += stride) {
@@ -215,7 +242,7 @@ __global__ void resolve_grid(int n, StepArrays a) {
 /// Applies the plan (branchless walls); nothing when the step was skipped.
 __global__ void apply(ParticlesView p, Box box, StepArrays a) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= p.n || a.flags->overflow || a.flags->too_fast) return;
+  if (i >= p.n || a.flags->overflow) return;
   const int j = a.partner[i];
   if (j == kFree) {
     model::free_move(p.x[i], p.y[i], p.vx[i], p.vy[i]);

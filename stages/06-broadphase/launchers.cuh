@@ -30,15 +30,17 @@ inline void bin_count([[maybe_unused]] const cuda::ParticlesView& p,
   PLAB_EXERCISE(4, "the broad phase on the GPU: kernels bin_count, bin_scatter, find_pairs");
 }
 
-/// start[] becomes the prefix sums of the counts (CUB; `temp` of `temp_bytes` from scan_bytes()).
-inline void scan(int* start, int size, void* temp, std::size_t temp_bytes, cudaStream_t s) {
-  PLAB_CUDA_CHECK(cub::DeviceScan::InclusiveSum(temp, temp_bytes, start, start, size, s));
+/// start[b] becomes the number of entries in buckets before b (CUB's exclusive scan of `filled`;
+/// `temp` of `temp_bytes` from scan_bytes()).
+inline void scan(const int* filled, int* start, int size, void* temp, std::size_t temp_bytes,
+                 cudaStream_t s) {
+  PLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(temp, temp_bytes, filled, start, size, s));
 }
 
 /// Bytes of temporary storage scan() needs for `size` counters.
 inline std::size_t scan_bytes(int size) {
   std::size_t bytes = 0;
-  PLAB_CUDA_CHECK(cub::DeviceScan::InclusiveSum(nullptr, bytes, static_cast<int*>(nullptr),
+  PLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, bytes, static_cast<const int*>(nullptr),
                                                 static_cast<int*>(nullptr), size));
   return bytes;
 }
@@ -55,7 +57,7 @@ inline void find_pairs([[maybe_unused]] const cuda::ParticlesView& p,
                        [[maybe_unused]] const Box& box, [[maybe_unused]] const kernels::StepArrays& a,
                        [[maybe_unused]] const kernels::DeviceGrid& d,
                        [[maybe_unused]] cudaStream_t s) {
-  // EXERCISE 4: launch kernels::find_pairs, one thread per entry (N x slabs of them).
+  // EXERCISE 4: launch kernels::find_pairs, one thread per possible entry (N x slabs of them).
   PLAB_EXERCISE(4, "the broad phase on the GPU: kernels bin_count, bin_scatter, find_pairs");
 }
 

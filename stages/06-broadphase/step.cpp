@@ -6,17 +6,25 @@
 // =================================================================================================
 //  GOAL   Stage 03 tests N^2/2 pairs a step; at N = 10^4 in the report's box only about 2000 can
 //         meet. Find them, and few others, with plab::sweep (read sweep.hpp first):
-//         1. broad phase: for each time slab k (in parallel), sort the particles into the grid's
-//            cells by their positions at the slab's midpoint (a counting sort), then test each
-//            particle against the same and the next cells (half of the 3 x 3 neighbourhood) with
+//         1. broad phase: for each time slab k (in parallel), sort the particles that take part
+//            into the grid's cells by their positions at the slab's midpoint (a counting sort),
+//            then test each against the same and the next cells (half of the 3 x 3
+//            neighbourhood; a fast particle: every cell within its search radius) with
 //            sweep::close_in_slab();
-//         2. narrow phase: MODEL.md's pair time for each pair that passed; wall times;
-//         3. MODEL.md's greedy selection over the sparse candidates (plab::greedy_plan), then apply.
-//            A pair found in two slabs is listed twice: harmless, the greedy pass takes it once.
+//         2. narrow phase: MODEL.md's pair time for each pair that passed, kept when it beats
+//            both wall times;
+//         3. MODEL.md's greedy selection over the sparse candidates, then apply.
 //         Memory O(N + candidates + cells): no N x N anything.
 //  READ   handouts/06-broadphase.md     TEST   ./plab test --impl student --stage 06
 // =================================================================================================
 #include <omp.h>
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define PLAB_AVX2 1  // the pair test has an AVX2 path, chosen at run time
+#else
+#define PLAB_AVX2 0
+#endif
 
 #include <cmath>
 #include <vector>
@@ -25,28 +33,181 @@
 #include "plab/sweep.hpp"
 
 namespace plab {
+namespace {
+
+constexpr int kLanes = 8;          //!< close_in_slab() is evaluated for this many entries at a time
+constexpr double kQuantile = 0.9;  //!< the fastest 10% search wider (sweep::choose())
+constexpr double kAlpha = 0.4;     //!< slabs per sqrt(N) v_cut / L, measured best on the report's scene
+
+/// One thread's slab: the particles that take part, in cell order, one array per field.
+struct Slab {
+  std::vector<int> start;             //!< cell c holds entries [start[c], start[c + 1])
+  std::vector<int> cell;              //!< per particle: its cell in this slab
+  std::vector<double> mx, my;         //!< per particle: its midpoint position
+  std::vector<int> id;                //!< per entry: the particle
+  std::vector<double> x, y, vx, vy;   //!< per entry: midpoint position and velocity (padded)
+  std::vector<std::pair<int, int>> hits;  //!< entry pairs that passed close_in_slab()
+  std::vector<model::Event> found;    //!< this thread's pair candidates
+};
+
+/// Slab k's counting sort: the particles that take part (last[i] >= k), by the cell of their
+/// midpoint positions.
+template <class Real>
+void bin(Slab& s, const ParticlesOf<Real>& p, const std::vector<int>& last, int k,
+         const sweep::Grid& g) {
+  // EXERCISE 1: a counting sort of the particles that take part in slab k (last[i] >= k) by the
+  // cell of their midpoint positions p + slab_mid(k) v (cell = cell_of(y) * g.side +
+  // cell_of(x)): count per cell into s.start[cell + 1], prefix sums, then scatter each particle's
+  // id, midpoint position and velocity to its cell's next place. On return, cell c must hold
+  // entries [s.start[c], s.start[c + 1]).
+  (void)s, (void)p, (void)last, (void)k, (void)g;
+  PLAB_EXERCISE(1, "the broad phase: each slab's particles binned, neighbouring cells tested");
+}
+
+/// Bit u of the result: whether entry `a` and entry `b0 + u` pass close_in_slab(), u < kLanes.
+inline unsigned close_lanes(const Slab& s, int a, int b0, const sweep::Grid& g) {
+  unsigned lanes = 0;
+  for (int u = 0; u < kLanes; ++u)
+    lanes |= unsigned{sweep::close_in_slab(s.x[a] - s.x[b0 + u], s.y[a] - s.y[b0 + u],
+                                           s.vx[a] - s.vx[b0 + u], s.vy[a] - s.vy[b0 + u], g)}
+             << u;
+  return lanes;
+}
+
+#if PLAB_AVX2
+/// close_lanes() with AVX2, four lanes a register: the operations of close_in_slab() in the
+/// same order (no FMA), so every lane gives the bits of the scalar test.
+__attribute__((target("avx2"))) inline unsigned close_lanes_avx2(const Slab& s, int a, int b0,
+                                                                 const sweep::Grid& g) {
+  const __m256d xa = _mm256_set1_pd(s.x[a]), ya = _mm256_set1_pd(s.y[a]);
+  const __m256d vxa = _mm256_set1_pd(s.vx[a]), vya = _mm256_set1_pd(s.vy[a]);
+  const __m256d h = _mm256_set1_pd(g.half), two_h = _mm256_set1_pd(2 * g.half);
+  const __m256d hh = _mm256_set1_pd(g.half * g.half), rr = _mm256_set1_pd(g.reach * g.reach);
+  const __m256d sign = _mm256_set1_pd(-0.0);
+  unsigned lanes = 0;
+  for (int u = 0; u < kLanes; u += 4) {
+    const __m256d dx = _mm256_sub_pd(xa, _mm256_loadu_pd(&s.x[b0 + u]));
+    const __m256d dy = _mm256_sub_pd(ya, _mm256_loadu_pd(&s.y[b0 + u]));
+    const __m256d wx = _mm256_sub_pd(vxa, _mm256_loadu_pd(&s.vx[b0 + u]));
+    const __m256d wy = _mm256_sub_pd(vya, _mm256_loadu_pd(&s.vy[b0 + u]));
+    const __m256d dd = _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy));
+    const __m256d ww = _mm256_add_pd(_mm256_mul_pd(wx, wx), _mm256_mul_pd(wy, wy));
+    const __m256d q =
+        _mm256_andnot_pd(sign, _mm256_add_pd(_mm256_mul_pd(dx, wx), _mm256_mul_pd(dy, wy)));
+    const __m256d inside = _mm256_cmp_pd(q, _mm256_mul_pd(h, ww), _CMP_LE_OQ);
+    const __m256d far_inside = _mm256_cmp_pd(
+        _mm256_sub_pd(_mm256_mul_pd(dd, ww), _mm256_mul_pd(q, q)), _mm256_mul_pd(rr, ww),
+        _CMP_GT_OQ);
+    const __m256d far_end = _mm256_cmp_pd(
+        _mm256_add_pd(_mm256_sub_pd(dd, _mm256_mul_pd(two_h, q)), _mm256_mul_pd(hh, ww)), rr,
+        _CMP_GT_OQ);
+    // close = (inside & !far_inside) | (!inside & !far_end)
+    const __m256d far = _mm256_or_pd(_mm256_and_pd(inside, far_inside),
+                                     _mm256_andnot_pd(inside, far_end));
+    lanes |= static_cast<unsigned>(~_mm256_movemask_pd(far) & 0xF) << u;
+  }
+  return lanes;
+}
+#endif
+
+/// Files entry `a` with every entry of [from, to) but itself that passes close_in_slab(),
+/// kLanes entries at a time (the arrays are padded: lanes past `to` are masked off).
+template <bool kAvx2>
+inline void test_range(Slab& s, int a, int from, int to, const sweep::Grid& g) {
+  for (int b0 = from; b0 < to; b0 += kLanes) {
+#if PLAB_AVX2
+    unsigned lanes = kAvx2 ? close_lanes_avx2(s, a, b0, g) : close_lanes(s, a, b0, g);
+#else
+    unsigned lanes = close_lanes(s, a, b0, g);
+#endif
+    if (to - b0 < kLanes) lanes &= (1u << (to - b0)) - 1;
+    for (; lanes != 0; lanes &= lanes - 1) {
+      const int b = b0 + __builtin_ctz(lanes);
+      if (b != a) s.hits.emplace_back(a, b);
+    }
+  }
+}
+
+/// Slab k's search, cell by cell: each entry against the later entries of its cell and the
+/// cells (+1, 0), (-1, +1), (0, +1), (+1, +1), which are two runs of entries in row-major order;
+/// a fast entry against every cell within its search radius.
+template <bool kAvx2>
+inline void search_cells(Slab& s, const std::vector<int>& radius, const sweep::Grid& g) {
+  s.hits.clear();
+  // EXERCISE 1: for every cell (cx, cy) and every entry a in it: if its search radius
+  // (radius[s.id[a]]) is 1, test_range<kAvx2>() over the later entries of its cell and cell
+  // (cx + 1, cy), which follow it in row-major order, then over cells (cx - 1 .. cx + 1, cy + 1),
+  // one run of entries (clamp the columns to the grid). Why is half of the 3 x 3 neighbourhood
+  // enough? (handout 06) A fast entry (radius rho > 1): every row cy - rho .. cy + rho, columns
+  // cx - rho .. cx + rho.
+  (void)radius, (void)g;
+  PLAB_EXERCISE(1, "the broad phase: each slab's particles binned, neighbouring cells tested");
+}
+
+#if PLAB_AVX2
+__attribute__((target("avx2"), flatten)) void search_avx2(Slab& s, const std::vector<int>& radius,
+                                                 const sweep::Grid& g) {
+  search_cells<true>(s, radius, g);
+}
+#endif
+
+/// Slab k's search, with AVX2 where the CPU has it.
+void search(Slab& s, const std::vector<int>& radius, const sweep::Grid& g) {
+#if PLAB_AVX2
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2) return search_avx2(s, radius, g);
+#endif
+  search_cells<false>(s, radius, g);
+}
+
+}  // namespace
 
 /// One step in reals of type `Real`: `double` is MODEL.md's step, `float` the variant that
 /// `plab accuracy` measures (the broad phase always works in double).
 template <class Real>
-void step_in([[maybe_unused]] const Box& box, ParticlesOf<Real>& p) {
-  [[maybe_unused]] const int n = static_cast<int>(p.size());
-  [[maybe_unused]] const sweep::Grid g = sweep::choose(box, p);
-  [[maybe_unused]] std::vector<model::Event> events;
+void step_in(const Box& box, ParticlesOf<Real>& p) {
+  const int n = static_cast<int>(p.size());
+  static std::vector<double> wall, end, scratch;  // working memory, kept between steps
+  static std::vector<int> last, radius;
+  static std::vector<Slab> slabs;
+  wall.resize(n);
+  end.resize(n);
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < n; ++i) {
+    wall[i] = wall_candidate(box, p, i).t;
+    end[i] = sweep::path_end(wall[i]);
+  }
+  const sweep::Grid g = sweep::choose(box, p, end, scratch, kQuantile, kAlpha);
+  last.resize(n);
+  radius.resize(n);
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < n; ++i) {
+    last[i] = sweep::last_slab(end[i], g);
+    radius[i] = sweep::search_radius(p.vx[i], p.vy[i], g);
+  }
+  slabs.resize(omp_get_max_threads());
 
-  // EXERCISE 1: for each slab k (an OpenMP loop over slabs: each thread keeps its own arrays and
-  // its own list of events), sort the particles into buckets by the cells of their midpoint
-  // positions p + slab_mid(k) v: count per bucket (sweep::bucket_of(cx, cy, g)), prefix sums,
-  // scatter (copy the midpoint positions and velocities in bucket order: the next loop reads
-  // them in that order). Then test every particle against the later particles of its own bucket
-  // and all particles of the buckets of cells (+1, 0), (-1, +1), (0, +1), (+1, +1) with
-  // sweep::close_in_slab(). Why only half of the 3 x 3 neighbourhood? (handout 06)
-  // EXERCISE 2: for each pair that passed, MODEL.md's pair time (pair_candidate(box, p, i, j),
-  // i < j); keep it if model::in_step(). Add every wall event of the step (wall_candidate()).
-  PLAB_EXERCISE(1, "the broad phase: each slab's particles binned, neighbouring cells tested");
+#pragma omp parallel
+  {
+    Slab& s = slabs[omp_get_thread_num()];
+    s.found.clear();
+    for (auto* v : {&s.cell, &s.id}) v->resize(n + kLanes);
+    for (auto* v : {&s.mx, &s.my, &s.x, &s.y, &s.vx, &s.vy}) v->resize(n + kLanes);
+#pragma omp for schedule(dynamic, 1)
+    for (int k = 0; k < g.slabs; ++k) {
+      bin(s, p, last, k, g);
+      search(s, radius, g);
+      // EXERCISE 2: the narrow phase. For each entry pair (a, b) in s.hits: the particles
+      // i < j, MODEL.md's pair time (pair_candidate(box, p, i, j)); keep it in s.found if it is
+      // in the step and comes before both wall times (wall[i], wall[j]): why may the others be
+      // dropped? (handout 06)
+      PLAB_EXERCISE(2, "the narrow phase: pair times of the pairs that passed");
+    }
+  }
 
-  // EXERCISE 3: choose the events (plab::greedy_plan(), MODEL.md's greedy rule over the sparse
-  // candidates) and apply them in parallel (plab::apply_one()).
+  // EXERCISE 3: gather every thread's s.found, choose the events (plab::sparse_greedy_plan(),
+  // MODEL.md's greedy rule over the sparse candidates and the walls) and apply them in parallel
+  // (plab::apply_one()).
   PLAB_EXERCISE(3, "select the events and apply them");
 }
 

@@ -73,10 +73,35 @@ inline void apply(const Box& box, ParticlesOf<Real>& p, const Plan& plan) {
 /// MODEL.md's selection over a list of candidate events (walls and pairs with t < 1): in key
 /// order, each event is accepted when its particles are still free. Sorts `events`.
 inline Plan greedy_plan(std::vector<model::Event>& events, std::size_t n) {
-  std::sort(events.begin(), events.end(), model::key_less);
+  std::sort(events.begin(), events.end(),
+            [](const model::Event& a, const model::Event& b) { return model::key_less(a, b); });
   Plan plan;
   plan.reset(n);
   for (const model::Event& e : events)
+    if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
+  return plan;
+}
+
+/// greedy_plan() when most particles meet nothing but, perhaps, a wall: `pairs` holds the pair
+/// candidates (t < 1, in any order, repeats allowed) and `wall[i]` each particle's wall time.
+/// A particle in no pair candidate competes with nothing, so its wall (if `wall[i] < 1`) is
+/// accepted outright; only the pairs and the walls of their particles are sorted, which gives
+/// the same plan as sorting every candidate. Sorts `pairs` and appends those walls to it.
+inline Plan sparse_greedy_plan(std::vector<model::Event>& pairs, const std::vector<double>& wall) {
+  const int n = static_cast<int>(wall.size());
+  Plan plan;
+  plan.partner.resize(n);
+  plan.time.assign(n, 0.0);
+  for (int i = 0; i < n; ++i) plan.partner[i] = model::in_step(wall[i]) ? Plan::kWall : Plan::kFree;
+  const std::size_t m = pairs.size();
+  for (std::size_t e = 0; e < m; ++e)  // contested: clear, and list its wall once
+    for (const int i : {pairs[e].lo, pairs[e].hi}) {
+      if (plan.partner[i] == Plan::kWall) pairs.push_back(model::wall_event_key(wall[i], i));
+      plan.partner[i] = Plan::kFree;
+    }
+  std::sort(pairs.begin(), pairs.end(),
+            [](const model::Event& a, const model::Event& b) { return model::key_less(a, b); });
+  for (const model::Event& e : pairs)
     if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
   return plan;
 }

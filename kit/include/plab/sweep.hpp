@@ -3,18 +3,27 @@
 /// step, and few others, without testing all N^2/2 pairs.
 ///
 /// The step is split into \f$K\f$ equal time slabs. In slab \f$k\f$, with midpoint \f$t_m\f$ and
-/// half-width \f$h = 1/(2K)\f$, each particle is binned by its position \f$p + t_m v\f$ into square
-/// cells of side \f$c \ge 2r + v_{max}/K + m\f$. If MODEL.md's pair time \f$t < 1\f$, the centres are
-/// (within rounding) \f$2r\f$ apart at \f$t\f$, which lies in some slab, \f$|t - t_m| \le h\f$; so
-/// their relative position \f$d\f$ at \f$t_m\f$ and relative velocity \f$w\f$ satisfy
-/// \f$\min_{|s| \le h} |d + s w| \le 2r + m\f$ (close_in_slab()), which puts them in the same or
-/// adjacent cells. Each slab costs a pass over the particles, and fewer slabs mean larger cells
-/// with more pairs to test: choose() balances the two from the scene. The margin \f$m\f$ (a
-/// millionth of the scene's scale) covers rounding, so no pair with \f$t < 1\f$ is ever dropped.
+/// half-width \f$h = 1/(2K)\f$, each particle is binned by its position \f$p + t_m v\f$ into a dense
+/// grid of square cells of side \f$c \ge 2r + 2 h v_{cut} + m\f$. If MODEL.md's pair time
+/// \f$t < 1\f$, the centres are (within rounding) \f$2r\f$ apart at \f$t\f$, which lies in some slab,
+/// \f$|t - t_m| \le h\f$; so their relative position \f$d\f$ at \f$t_m\f$ and relative velocity
+/// \f$w\f$ satisfy \f$\min_{|s| \le h} |d + s w| \le 2r + m\f$ (close_in_slab()), and their midpoint
+/// positions are at most \f$2r + m + h(|v_a| + |v_b|)\f$ apart. For two particles no faster than
+/// \f$v_{cut}\f$ that puts them in the same or adjacent cells. A faster particle ("fast") searches
+/// the cells within its own search_radius() instead, which covers every partner no faster than
+/// itself (a partner faster still searches for it). So the cell size follows the bulk of the
+/// speeds, not the single fastest particle of a hot gas.
+///
+/// Two more things no pair needs: time after a particle's wall time (MODEL.md's key puts the wall
+/// first, so a later pair event of that particle is never accepted: path_end(), last_slab()),
+/// and cells outside the box (paths before their wall time stay inside; cell_of() clamps, which
+/// never separates two neighbours). The margin \f$m\f$ (a millionth of the scene's scale) covers
+/// rounding, so no pair with \f$t < 1\f$ that can be accepted is ever dropped.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "plab/model.hpp"
 #include "plab/scene.hpp"
@@ -23,13 +32,18 @@ namespace plab::sweep {
 
 /// The space-time grid of one step.
 struct Grid {
-  int slabs = 1;          //!< time slabs K
-  double cell = 1;        //!< side of a square cell (length units)
-  double inv_cell = 1;    //!< 1 / cell
-  double origin = 0;      //!< x and y of the grid's low corner
-  int side = 1;           //!< cells per side
-  int bucket_bits = 0;    //!< cells are hashed into 2^bucket_bits buckets (about 2N)
-  double reach = 0;       //!< 2r + margin: the distance that makes a candidate
+  int slabs = 1;           //!< time slabs K
+  double half = 0.5;       //!< half a slab, h = 1 / (2K)
+  double cell = 1;         //!< side of a square cell (length units)
+  double inv_cell = 1;     //!< 1 / cell
+  int side = 1;            //!< cells per side: the grid covers [0, side * cell)^2, row-major
+  double reach = 0;        //!< 2r + margin: the distance that makes a candidate
+  double margin = 0;       //!< the rounding margin m
+  double v_cut = 0;        //!< particles no faster than this find each other in adjacent cells
+  double v_cut2 = 0;       //!< v_cut^2 (a particle is fast when its squared speed exceeds it)
+  int active = 0;          //!< particles that take part (see last_slab())
+  /// Number of cells, side^2.
+  [[nodiscard]] PLAB_HD int cells() const { return side * side; }
 };
 
 /// Midpoint time of slab `k`.
@@ -37,89 +51,112 @@ PLAB_HD inline double slab_mid(int k, const Grid& g) { return (k + 0.5) / g.slab
 
 /// The cell column (or row) of coordinate `v`, clamped to the grid (0 for not-a-number).
 PLAB_HD inline int cell_of(double v, const Grid& g) {
-  const double c = floor((v - g.origin) * g.inv_cell);
+  const double c = floor(v * g.inv_cell);
   if (!(c > 0)) return 0;
   return c >= g.side ? g.side - 1 : static_cast<int>(c);
 }
 
-/// The bucket of cell (cx, cy): a multiplicative hash of its index. Cells that share a bucket only
-/// add pairs to test (close_in_slab() sorts them out), so the grid can be fine without its memory
-/// and its per-slab clearing growing with the number of cells.
-PLAB_HD inline unsigned bucket_of(int cx, int cy, const Grid& g) {
-  const unsigned long long index = static_cast<unsigned long long>(cy) * g.side + cx;
-  return g.bucket_bits == 0
-             ? 0u
-             : static_cast<unsigned>((index * 0x9E3779B97F4A7C15ull) >> (64 - g.bucket_bits));
+/// When a particle's path stops mattering for pairs: its wall time `tw` if that is in the step
+/// (a pair event at or after it loses to the wall and is never accepted), else 1. Not-a-number
+/// gives 1 (the wall is then no candidate).
+PLAB_HD inline double path_end(double tw) { return (tw < 1) ? tw : 1.0; }
+
+/// The last slab a particle whose path ends at `end` takes part in (slabs 0 .. last_slab), or -1
+/// when no pair of it can be accepted (its wall comes at or before time 0).
+PLAB_HD inline int last_slab(double end, const Grid& g) {
+  if (!(end > 0)) return -1;
+  const double k = floor(end * g.slabs);
+  return k >= g.slabs - 1 ? g.slabs - 1 : static_cast<int>(k);
 }
 
-/// How far a particle of velocity (vx, vy) moves in half a slab, a hair over (for rounding): the
-/// quick-reject distance close_in_slab() takes for each particle.
-PLAB_HD inline double slab_reach(double vx, double vy, const Grid& g) {
-  return sqrt(vx * vx + vy * vy) * (0.5 / g.slabs) * (1 + 1e-9);
+/// How many cells around its own a particle of velocity (vx, vy) searches: 1 (half of the 3 x 3
+/// neighbourhood, see stage 06) for speeds up to v_cut; for a fast one the whole square of cells
+/// within \f$2r + m + 2h|v|\f$, which holds every partner no faster than itself.
+PLAB_HD inline int search_radius(double vx, double vy, const Grid& g) {
+  const double v2 = vx * vx + vy * vy;
+  if (!(v2 > g.v_cut2)) return 1;
+  const double cells = ceil((g.reach + g.margin + 2 * g.half * sqrt(v2)) * g.inv_cell * (1 + 1e-9));
+  return cells >= g.side ? g.side : static_cast<int>(cells);  // infinite speeds: every cell
 }
 
 /// Whether two particles, `d` apart (relative position at the slab's midpoint) with relative
 /// velocity `w`, come within the grid's reach during the slab: \f$\min_{|s| \le h} |d + s w| \le
-/// reach\f$, without a division. `ra`, `rb`: each particle's \f$h |v|\f$, for a quick reject.
-PLAB_HD inline bool close_in_slab(double dx, double dy, double wx, double wy, double ra, double rb,
-                                  const Grid& g) {
+/// reach\f$. Written without branches or divisions so that a loop over candidates vectorises: the
+/// closest approach lies inside the slab when \f$|d \cdot w| \le h |w|^2\f$, and then its squared
+/// distance times \f$|w|^2\f$ is \f$|d|^2 |w|^2 - (d \cdot w)^2\f$; otherwise the nearer end of the
+/// slab is closest, at squared distance \f$|d|^2 - 2h|d \cdot w| + h^2 |w|^2\f$. Not-a-number
+/// counts as close.
+PLAB_HD inline bool close_in_slab(double dx, double dy, double wx, double wy, const Grid& g) {
   const double dd = dx * dx + dy * dy;
-  const double far = g.reach + (ra + rb);  // symmetric in the two particles, bit for bit
-  if (dd > far * far) return false;  // farther apart than both can close in half a slab
-  const double h = 0.5 / g.slabs;
   const double ww = wx * wx + wy * wy;
-  const double q = dx * wx + dy * wy;  // the closest approach is at s = -q / ww
+  const double q = fabs(dx * wx + dy * wy);
   const double rr = g.reach * g.reach;
-  if (q <= h * ww && q >= -h * ww) return !(dd * ww - q * q > rr * ww);
-  const double s = (q > 0) ? -h : h;  // the end of the slab nearer to the closest approach
-  const double ex = dx + s * wx, ey = dy + s * wy;
-  return !(ex * ex + ey * ey > rr);  // not-a-number counts as close
+  const bool inside = q <= g.half * ww;
+  const bool near_inside = !(dd * ww - q * q > rr * ww);
+  const bool near_end = !((dd - 2 * g.half * q) + g.half * g.half * ww > rr);
+  return (inside & near_inside) | (!inside & near_end);
 }
 
-/// Chooses the grid for `n` particles of speed at most `vmax` whose coordinates stay within
-/// `extent` of the origin: \f$K \approx \alpha \sqrt N \, v_{max} / L\f$ slabs (between 1 and 256),
-/// cells of side \f$2r + v_{max}/K + m\f$, at most `max_side` per side, hashed into about \f$2N\f$
-/// buckets.
-inline Grid choose_for(const Box& box, std::size_t n, double vmax, double extent,
-                       double alpha = 1.0, int max_side = 1 << 20) {
+/// Chooses the grid for `active` particles, most no faster than `v_cut`, the fastest `vmax`, in a
+/// box of side `extent`: \f$K = \lceil \alpha \sqrt N \, v_{cut} / L \rceil\f$ slabs (between 1
+/// and 256), which balances the per-slab pass over the particles (cost \f$\propto K N\f$) against
+/// the pairs in neighbouring cells (\f$\propto N^2 v_{cut}^2 / (K L^2)\f$); cells of side
+/// \f$2r + v_{cut}/K + m\f$, no more of them than about \f$2N\f$.
+inline Grid choose_for(const Box& box, int active, double v_cut, double vmax, double extent,
+                       double alpha = 1.0) {
   Grid g;
-  if (!std::isfinite(vmax) || !std::isfinite(extent)) {  // no geometry to trust: one cell
-    g.reach = HUGE_VAL;
+  g.active = active;
+  if (!std::isfinite(vmax) || !std::isfinite(extent) || !std::isfinite(v_cut)) {
+    g.reach = g.margin = g.cell = HUGE_VAL;  // no geometry to trust: one cell, all pairs
+    g.inv_cell = 0;
     return g;
   }
-  const double margin = 1e-6 * (extent + vmax + box.r);
-  g.reach = 2 * box.r + margin;
+  g.margin = 1e-6 * (extent + vmax + box.r);
+  g.reach = 2 * box.r + g.margin;
   g.slabs = static_cast<int>(std::clamp(
-      std::ceil(alpha * std::sqrt(static_cast<double>(n)) * vmax / extent), 1.0, 256.0));
-  const double span = extent + 2 * (vmax + g.reach);  // paths leave the box by at most vmax
-  g.origin = -(vmax + g.reach);
-  g.cell = std::max(g.reach + vmax / g.slabs + margin, span / max_side);
+      std::ceil(alpha * std::sqrt(static_cast<double>(std::max(active, 1))) * v_cut / extent),
+      1.0, 256.0));
+  g.half = 0.5 / g.slabs;
+  g.v_cut = v_cut;
+  g.v_cut2 = v_cut * v_cut;
+  const double wanted = g.reach + 2 * g.half * v_cut * (1 + 1e-9) + g.margin;
+  const int most = std::max(1, static_cast<int>(std::sqrt(2.0 * std::max(active, 1))));
+  g.side = std::clamp(static_cast<int>(std::min(std::ceil(extent / wanted), 1e9)), 1, most);
+  g.cell = std::max(wanted, extent / g.side);
   g.inv_cell = 1 / g.cell;
-  g.side = std::max(1, static_cast<int>(std::ceil(span * g.inv_cell)));
-  while ((std::size_t{1} << g.bucket_bits) < 2 * n && g.bucket_bits < 30) ++g.bucket_bits;
   return g;
 }
 
-/// The largest speed (times `headroom`) and the extent of a state, for choose_for().
+/// Chooses the grid for a state whose paths end at `end` (path_end() of each wall time): the
+/// particles that take part, the fastest of them, and `v_cut` at the `quantile` of their speeds
+/// (the rest are fast), estimated from at most about 4096 of them taken at even strides.
+/// `scratch` is working memory.
 template <class Real>
-inline void speed_and_extent(const Box& box, const ParticlesOf<Real>& p, double& vmax,
-                             double& extent, double headroom = 1.0) {
-  double v2 = 0;
-  extent = box.L;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    const double vx = p.vx[i], vy = p.vy[i];
-    v2 = std::max(v2, vx * vx + vy * vy);
-    extent = std::max({extent, std::fabs(double(p.x[i])), std::fabs(double(p.y[i]))});
+inline Grid choose(const Box& box, const ParticlesOf<Real>& p, const std::vector<double>& end,
+                   std::vector<double>& scratch, double quantile = 0.9, double alpha = 1.0) {
+  const std::size_t n = p.size(), stride = std::max<std::size_t>(1, n / 4096);
+  scratch.clear();
+  int active = 0;
+  double max2 = 0;
+  bool unordered = false;  // a not-a-number speed: no geometry to trust
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(end[i] > 0)) continue;  // takes no part (path_end() is never not-a-number)
+    const double v2 = double(p.vx[i]) * double(p.vx[i]) + double(p.vy[i]) * double(p.vy[i]);
+    unordered |= (v2 != v2);
+    max2 = std::max(max2, v2);
+    if (active++ % stride == 0) scratch.push_back(v2);
   }
-  vmax = std::sqrt(v2) * (1 + 1e-12) * headroom;
-}
-
-/// The grid for the current state (see choose_for()).
-template <class Real>
-inline Grid choose(const Box& box, const ParticlesOf<Real>& p) {
-  double vmax = 0, extent = 0;
-  speed_and_extent(box, p, vmax, extent);
-  return choose_for(box, p.size(), vmax, extent);
+  double cut2 = 0;
+  if (unordered) {
+    cut2 = max2 = HUGE_VAL;
+  } else if (!scratch.empty()) {
+    const std::size_t m = scratch.size();
+    auto at = scratch.begin() + std::min<std::size_t>(m - 1, static_cast<std::size_t>(quantile * m));
+    std::nth_element(scratch.begin(), at, scratch.end());
+    cut2 = *at;
+  }
+  return choose_for(box, active, std::sqrt(cut2) * (1 + 1e-12), std::sqrt(max2) * (1 + 1e-12),
+                    box.L, alpha);
 }
 
 }  // namespace plab::sweep
