@@ -14,25 +14,36 @@
 namespace {
 
 /// Whether the broad phase finds particles 0 and 1 of `p` in some slab, as stage 06 searches:
-/// both take part in the slab (before their last slabs), close_in_slab() holds at the slab's
-/// midpoint, and their cells are within the larger of their search radii (1: neighbours).
+/// both take part in the slab (up to their last slabs), close_in_slab() holds at the slab's
+/// midpoint, and either neither is fast and their cells are neighbours, or the cell of one lies
+/// within the reach of the other, which is fast and at least as fast (sweep::search_of()).
 bool found(const plab::Particles& p, const std::vector<double>& end, const plab::sweep::Grid& g) {
-  for (int k = 0; k <= std::min(plab::sweep::last_slab(end[0], g), plab::sweep::last_slab(end[1], g));
-       ++k) {
-    const double tm = plab::sweep::slab_mid(k, g);
+  namespace sweep = plab::sweep;
+  const sweep::Search q[2] = {sweep::search_of(p.vx[0], p.vy[0], g),
+                              sweep::search_of(p.vx[1], p.vy[1], g)};
+  const double v2[2] = {p.vx[0] * p.vx[0] + p.vy[0] * p.vy[0],
+                        p.vx[1] * p.vx[1] + p.vy[1] * p.vy[1]};
+  for (int k = 0; k <= std::min(sweep::last_slab(end[0], g), sweep::last_slab(end[1], g)); ++k) {
+    const double tm = sweep::slab_mid(k, g);
     double mx[2], my[2];
-    int reach = 0;
     for (int i = 0; i < 2; ++i) {
       mx[i] = p.x[i] + tm * p.vx[i];
       my[i] = p.y[i] + tm * p.vy[i];
-      reach = std::max(reach, plab::sweep::search_radius(p.vx[i], p.vy[i], g));
     }
-    const int dx = plab::sweep::cell_of(mx[0], g) - plab::sweep::cell_of(mx[1], g);
-    const int dy = plab::sweep::cell_of(my[0], g) - plab::sweep::cell_of(my[1], g);
-    if (std::abs(dx) <= reach && std::abs(dy) <= reach &&
-        plab::sweep::close_in_slab(mx[0] - mx[1], my[0] - my[1], p.vx[0] - p.vx[1],
-                                   p.vy[0] - p.vy[1], g))
-      return true;
+    if (!sweep::close_in_slab(mx[0] - mx[1], my[0] - my[1], p.vx[0] - p.vx[1], p.vy[0] - p.vy[1],
+                              g))
+      continue;
+    const int cx[2] = {sweep::cell_of(mx[0], g), sweep::cell_of(mx[1], g)};
+    const int cy[2] = {sweep::cell_of(my[0], g), sweep::cell_of(my[1], g)};
+    if (!q[0].fast && !q[1].fast) {
+      if (std::abs(cx[0] - cx[1]) <= 1 && std::abs(cy[0] - cy[1]) <= 1) return true;
+      continue;
+    }
+    const int a = (q[0].fast && (!q[1].fast || v2[0] >= v2[1])) ? 0 : 1, b = 1 - a;
+    int x0, x1, y0, y1;
+    sweep::cells_within(mx[a], q[a].d, g, x0, x1);
+    sweep::cells_within(my[a], q[a].d, g, y0, y1);
+    if (x0 <= cx[b] && cx[b] <= x1 && y0 <= cy[b] && cy[b] <= y1) return true;
   }
   return false;
 }
@@ -132,12 +143,13 @@ TEST(Sweep, GridFromTheScene) {
   const plab::sweep::Grid hot = plab::sweep::choose(box, p, path_ends(box, p), scratch);
   EXPECT_EQ(hot.slabs, g.slabs);
   EXPECT_NEAR(hot.cell, g.cell, 0.02 * g.cell);
-  EXPECT_GT(plab::sweep::search_radius(p.vx[0], p.vy[0], g), 1);
+  EXPECT_TRUE(plab::sweep::search_of(p.vx[0], p.vy[0], g).fast);
+  EXPECT_GT(plab::sweep::search_of(p.vx[0], p.vy[0], g).d, 1e6 / g.slabs);
   p.vx.assign(p.size(), 0);
   p.vy.assign(p.size(), 0);
   g = plab::sweep::choose(box, p, path_ends(box, p), scratch);
   EXPECT_EQ(g.slabs, 1);  // at rest: one slab, cells of about 2r (at most 2N of them)
-  EXPECT_EQ(plab::sweep::search_radius(0, 0, g), 1);
+  EXPECT_FALSE(plab::sweep::search_of(0, 0, g).fast);
 }
 
 TEST(Sweep, WallsEndPaths) {

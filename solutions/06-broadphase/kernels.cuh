@@ -155,22 +155,24 @@ __device__ inline void test_entries(const ParticlesView& p, const Box& box, cons
 
 /// The pair search, one thread per entry (as step.cpp): against the later entries of its own
 /// cell and the cells (+1, 0), (-1, +1), (0, +1), (+1, +1) of the same slab, two runs of
-/// entries; a fast entry against every cell within its search radius.
+/// entries; a fast entry against every cell within its reach (sweep::search_of()).
 __global__ void find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
   const int e = blockIdx.x * blockDim.x + threadIdx.x;
   if (e >= a.start[d.g.slabs * d.cells] || a.flags->overflow) return;
   const int side = d.g.side, base = a.entry_k[e] * d.cells;
   const int cx = sweep::cell_of(a.entry_x[e], d.g), cy = sweep::cell_of(a.entry_y[e], d.g);
-  const int rho = sweep::search_radius(a.entry_vx[e], a.entry_vy[e], d.g);
+  const sweep::Search q = sweep::search_of(a.entry_vx[e], a.entry_vy[e], d.g);
   const int* row = a.start + base;
-  if (rho == 1) {
+  if (!q.fast) {
     const int left = max(cx - 1, 0), right = min(cx + 1, side - 1);
     test_entries(p, box, a, d, e, e + 1, row[cy * side + right + 1]);
     if (cy + 1 < side)
       test_entries(p, box, a, d, e, row[(cy + 1) * side + left], row[(cy + 1) * side + right + 1]);
-  } else {
-    const int x0 = max(cx - rho, 0), x1 = min(cx + rho, side - 1);
-    for (int y = max(cy - rho, 0); y <= min(cy + rho, side - 1); ++y)
+  } else {  // every row within reach (a pair found twice is harmless)
+    int x0, x1, y0, y1;
+    sweep::cells_within(a.entry_x[e], q.d, d.g, x0, x1);
+    sweep::cells_within(a.entry_y[e], q.d, d.g, y0, y1);
+    for (int y = y0; y <= y1; ++y)
       test_entries(p, box, a, d, e, row[y * side + x0], row[y * side + x1 + 1]);
   }
 }

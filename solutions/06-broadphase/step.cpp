@@ -21,12 +21,14 @@
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
-#define PLAB_AVX2 1  // the pair test has an AVX2 path, chosen at run time
+#define PLAB_AVX2 1  // the pair test has AVX2 and AVX-512 paths, chosen at run time
 #else
 #define PLAB_AVX2 0
 #endif
 
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <vector>
 
 #include "plab/stage.hpp"
@@ -82,6 +84,7 @@ void bin(Slab& s, const ParticlesOf<Real>& p, const std::vector<int>& last, int 
 /// Bit u of the result: whether entry `a` and entry `b0 + u` pass close_in_slab(), u < kLanes.
 inline unsigned close_lanes(const Slab& s, int a, int b0, const sweep::Grid& g) {
   unsigned lanes = 0;
+#pragma omp simd reduction(| : lanes)
   for (int u = 0; u < kLanes; ++u)
     lanes |= unsigned{sweep::close_in_slab(s.x[a] - s.x[b0 + u], s.y[a] - s.y[b0 + u],
                                            s.vx[a] - s.vx[b0 + u], s.vy[a] - s.vy[b0 + u], g)}
@@ -123,15 +126,43 @@ __attribute__((target("avx2"))) inline unsigned close_lanes_avx2(const Slab& s, 
   }
   return lanes;
 }
+
+/// close_lanes() with AVX-512, all eight lanes in one register: the same operations again.
+__attribute__((target("avx512f"))) inline unsigned close_lanes_avx512(const Slab& s, int a, int b0,
+                                                                     const sweep::Grid& g) {
+  const __m512d dx = _mm512_sub_pd(_mm512_set1_pd(s.x[a]), _mm512_loadu_pd(&s.x[b0]));
+  const __m512d dy = _mm512_sub_pd(_mm512_set1_pd(s.y[a]), _mm512_loadu_pd(&s.y[b0]));
+  const __m512d wx = _mm512_sub_pd(_mm512_set1_pd(s.vx[a]), _mm512_loadu_pd(&s.vx[b0]));
+  const __m512d wy = _mm512_sub_pd(_mm512_set1_pd(s.vy[a]), _mm512_loadu_pd(&s.vy[b0]));
+  const __m512d dd = _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy));
+  const __m512d ww = _mm512_add_pd(_mm512_mul_pd(wx, wx), _mm512_mul_pd(wy, wy));
+  const __m512d q = _mm512_abs_pd(_mm512_add_pd(_mm512_mul_pd(dx, wx), _mm512_mul_pd(dy, wy)));
+  const __mmask8 inside =
+      _mm512_cmp_pd_mask(q, _mm512_mul_pd(_mm512_set1_pd(g.half), ww), _CMP_LE_OQ);
+  const __mmask8 far_inside = _mm512_cmp_pd_mask(
+      _mm512_sub_pd(_mm512_mul_pd(dd, ww), _mm512_mul_pd(q, q)),
+      _mm512_mul_pd(_mm512_set1_pd(g.reach * g.reach), ww), _CMP_GT_OQ);
+  const __mmask8 far_end = _mm512_cmp_pd_mask(
+      _mm512_add_pd(_mm512_sub_pd(dd, _mm512_mul_pd(_mm512_set1_pd(2 * g.half), q)),
+                    _mm512_mul_pd(_mm512_set1_pd(g.half * g.half), ww)),
+      _mm512_set1_pd(g.reach * g.reach), _CMP_GT_OQ);
+  // close = (inside & !far_inside) | (!inside & !far_end)
+  return static_cast<unsigned>(~((inside & far_inside) | (~inside & far_end)) & 0xFF);
+}
 #endif
 
 /// Files entry `a` with every entry of [from, to) but itself that passes close_in_slab(),
 /// kLanes entries at a time (the arrays are padded: lanes past `to` are masked off).
-template <bool kAvx2>
+/// The instruction sets the pair test has a path for, chosen once at run time.
+enum class Isa { kPortable, kAvx2, kAvx512 };
+
+template <Isa kIsa>
 inline void test_range(Slab& s, int a, int from, int to, const sweep::Grid& g) {
   for (int b0 = from; b0 < to; b0 += kLanes) {
 #if PLAB_AVX2
-    unsigned lanes = kAvx2 ? close_lanes_avx2(s, a, b0, g) : close_lanes(s, a, b0, g);
+    unsigned lanes = kIsa == Isa::kAvx512 ? close_lanes_avx512(s, a, b0, g)
+                     : kIsa == Isa::kAvx2 ? close_lanes_avx2(s, a, b0, g)
+                                          : close_lanes(s, a, b0, g);
 #else
     unsigned lanes = close_lanes(s, a, b0, g);
 #endif
@@ -143,11 +174,11 @@ inline void test_range(Slab& s, int a, int from, int to, const sweep::Grid& g) {
   }
 }
 
-/// Slab k's search, cell by cell: each entry against the later entries of its cell and the
-/// cells (+1, 0), (-1, +1), (0, +1), (+1, +1), which are two runs of entries in row-major order;
-/// a fast entry against every cell within its search radius.
-template <bool kAvx2>
-inline void search_cells(Slab& s, const std::vector<int>& radius, const sweep::Grid& g) {
+/// Slab k's search, cell by cell: each entry against the later entries of its cell and cell
+/// (+1, 0), then cells (-1, +1), (0, +1), (+1, +1), two runs of entries in row-major order; a fast
+/// entry (sweep::search_of()) against every cell within its reach, one run per row.
+template <Isa kIsa>
+inline void search_cells(Slab& s, const std::vector<sweep::Search>& reach, const sweep::Grid& g) {
   s.hits.clear();
   const int side = g.side;
   for (int cy = 0; cy < side; ++cy) {
@@ -160,14 +191,16 @@ inline void search_cells(Slab& s, const std::vector<int>& radius, const sweep::G
       const int lo2 = up ? s.start[(cy + 1) * side + left] : 0;
       const int hi2 = up ? s.start[(cy + 1) * side + right + 1] : 0;
       for (int a = lo; a < hi; ++a) {
-        const int rho = radius[s.id[a]];
-        if (rho == 1) {
-          test_range<kAvx2>(s, a, a + 1, end, g);
-          test_range<kAvx2>(s, a, lo2, hi2, g);
-        } else {  // fast: every cell within rho (a pair found twice is harmless)
-          const int x0 = std::max(cx - rho, 0), x1 = std::min(cx + rho, side - 1);
-          for (int y = std::max(cy - rho, 0); y <= std::min(cy + rho, side - 1); ++y)
-            test_range<kAvx2>(s, a, s.start[y * side + x0], s.start[y * side + x1 + 1], g);
+        const sweep::Search q = reach[s.id[a]];
+        if (!q.fast) {
+          test_range<kIsa>(s, a, a + 1, end, g);
+          test_range<kIsa>(s, a, lo2, hi2, g);
+        } else {  // a pair found twice is harmless
+          int x0, x1, y0, y1;
+          sweep::cells_within(s.x[a], q.d, g, x0, x1);
+          sweep::cells_within(s.y[a], q.d, g, y0, y1);
+          for (int y = y0; y <= y1; ++y)
+            test_range<kIsa>(s, a, s.start[y * side + x0], s.start[y * side + x1 + 1], g);
         }
       }
     }
@@ -175,19 +208,40 @@ inline void search_cells(Slab& s, const std::vector<int>& radius, const sweep::G
 }
 
 #if PLAB_AVX2
-__attribute__((target("avx2"), flatten)) void search_avx2(Slab& s, const std::vector<int>& radius,
-                                                 const sweep::Grid& g) {
-  search_cells<true>(s, radius, g);
+__attribute__((target("avx512f"), flatten)) void search_avx512(
+    Slab& s, const std::vector<sweep::Search>& reach, const sweep::Grid& g) {
+  search_cells<Isa::kAvx512>(s, reach, g);
+}
+
+__attribute__((target("avx2"), flatten)) void search_avx2(
+    Slab& s, const std::vector<sweep::Search>& reach, const sweep::Grid& g) {
+  search_cells<Isa::kAvx2>(s, reach, g);
 }
 #endif
 
-/// Slab k's search, with AVX2 where the CPU has it.
-void search(Slab& s, const std::vector<int>& radius, const sweep::Grid& g) {
+/// The widest vectors the CPU has, or narrower ones if PLAB_SIMD says so (`portable`, `avx2`:
+/// the tests run every path the machine has and compare their bits).
+Isa chosen_isa() {
+  Isa best = Isa::kPortable;
 #if PLAB_AVX2
-  static const bool avx2 = __builtin_cpu_supports("avx2");
-  if (avx2) return search_avx2(s, radius, g);
+  best = __builtin_cpu_supports("avx512f") ? Isa::kAvx512
+         : __builtin_cpu_supports("avx2")  ? Isa::kAvx2
+                                           : Isa::kPortable;
 #endif
-  search_cells<false>(s, radius, g);
+  const char* asked = std::getenv("PLAB_SIMD");
+  if (asked && std::strcmp(asked, "portable") == 0) return Isa::kPortable;
+  if (asked && std::strcmp(asked, "avx2") == 0 && best == Isa::kAvx512) return Isa::kAvx2;
+  return best;
+}
+
+/// Slab k's search, with the chosen vectors.
+void search(Slab& s, const std::vector<sweep::Search>& reach, const sweep::Grid& g) {
+  static const Isa isa = chosen_isa();
+#if PLAB_AVX2
+  if (isa == Isa::kAvx512) return search_avx512(s, reach, g);
+  if (isa == Isa::kAvx2) return search_avx2(s, reach, g);
+#endif
+  search_cells<Isa::kPortable>(s, reach, g);
 }
 
 }  // namespace
@@ -198,7 +252,8 @@ template <class Real>
 void step_in(const Box& box, ParticlesOf<Real>& p) {
   const int n = static_cast<int>(p.size());
   static std::vector<double> wall, end, scratch;  // working memory, kept between steps
-  static std::vector<int> last, radius;
+  static std::vector<int> last;
+  static std::vector<sweep::Search> reach;
   static std::vector<Slab> slabs;
   wall.resize(n);
   end.resize(n);
@@ -209,11 +264,11 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
   }
   const sweep::Grid g = sweep::choose(box, p, end, scratch, kQuantile, kAlpha);
   last.resize(n);
-  radius.resize(n);
+  reach.resize(n);
 #pragma omp parallel for schedule(static)
   for (int i = 0; i < n; ++i) {
     last[i] = sweep::last_slab(end[i], g);
-    radius[i] = sweep::search_radius(p.vx[i], p.vy[i], g);
+    reach[i] = sweep::search_of(p.vx[i], p.vy[i], g);
   }
   slabs.resize(omp_get_max_threads());
 
@@ -226,7 +281,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
 #pragma omp for schedule(dynamic, 1)
     for (int k = 0; k < g.slabs; ++k) {
       bin(s, p, last, k, g);
-      search(s, radius, g);
+      search(s, reach, g);
       for (const auto& [a, b] : s.hits) {  // the narrow phase: kept when before both walls
         const int i = std::min(s.id[a], s.id[b]), j = std::max(s.id[a], s.id[b]);
         const model::Event e = pair_candidate(box, p, i, j);

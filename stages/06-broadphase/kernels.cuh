@@ -133,8 +133,8 @@ __device__ inline void test_entries(const ParticlesView& p, const Box& box, cons
 // EXERCISE 4: find_pairs, one thread per entry e < a.start[slabs * cells] (the entries of this
 // step): as step.cpp's search, test_entries() over the later entries of its cell and cell
 // (+1, 0), then over cells (-1 .. +1, +1), two runs of entries of its slab (slab k's cells start
-// at a.start + k * d.cells); a fast entry (sweep::search_radius() > 1) over every cell within its
-// radius.
+// at a.start + k * d.cells); a fast entry (sweep::search_of()) over every row within its reach
+// (sweep::cells_within()).
 
 /// A round's first half for particle i: its earliest event among its wall and its pairs with
 /// unresolved partners (or `none`, which sorts after every real event).

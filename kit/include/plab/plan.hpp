@@ -82,27 +82,26 @@ inline Plan greedy_plan(std::vector<model::Event>& events, std::size_t n) {
   return plan;
 }
 
-/// greedy_plan() when most particles meet nothing but, perhaps, a wall: `pairs` holds the pair
-/// candidates (t < 1, in any order, repeats allowed) and `wall[i]` each particle's wall time.
-/// A particle in no pair candidate competes with nothing, so its wall (if `wall[i] < 1`) is
-/// accepted outright; only the pairs and the walls of their particles are sorted, which gives
-/// the same plan as sorting every candidate. Sorts `pairs` and appends those walls to it.
+/// greedy_plan() for a broad phase's sparse candidates: `pairs` holds pair candidates (t < 1,
+/// in any order, repeats allowed) and `wall[i]` is each particle's wall time. A pair at or after
+/// either particle's wall time is dropped first: the wall comes first in key order and takes the
+/// particle, or the particle is taken already. Every pair left comes before both its walls, so
+/// the greedy pass over the pairs alone, in key order, decides every pair, and each particle it
+/// leaves free takes its wall if `wall[i] < 1`: the same plan as sorting every candidate, with
+/// only the pairs sorted. Reorders `pairs` and keeps only the pairs it did not drop.
 inline Plan sparse_greedy_plan(std::vector<model::Event>& pairs, const std::vector<double>& wall) {
-  const int n = static_cast<int>(wall.size());
-  Plan plan;
-  plan.partner.resize(n);
-  plan.time.assign(n, 0.0);
-  for (int i = 0; i < n; ++i) plan.partner[i] = model::in_step(wall[i]) ? Plan::kWall : Plan::kFree;
-  const std::size_t m = pairs.size();
-  for (std::size_t e = 0; e < m; ++e)  // contested: clear, and list its wall once
-    for (const int i : {pairs[e].lo, pairs[e].hi}) {
-      if (plan.partner[i] == Plan::kWall) pairs.push_back(model::wall_event_key(wall[i], i));
-      plan.partner[i] = Plan::kFree;
-    }
+  const auto dominated = [&](const model::Event& e) {
+    return wall[e.lo] <= e.t || wall[e.hi] <= e.t;  // a not-a-number wall is no candidate
+  };
+  pairs.erase(std::remove_if(pairs.begin(), pairs.end(), dominated), pairs.end());
   std::sort(pairs.begin(), pairs.end(),
             [](const model::Event& a, const model::Event& b) { return model::key_less(a, b); });
+  Plan plan;
+  plan.reset(wall.size());
   for (const model::Event& e : pairs)
     if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
+  for (std::size_t i = 0; i < wall.size(); ++i)
+    if (!plan.taken(static_cast<int>(i)) && model::in_step(wall[i])) plan.partner[i] = Plan::kWall;
   return plan;
 }
 

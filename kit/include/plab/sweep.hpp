@@ -69,14 +69,38 @@ PLAB_HD inline int last_slab(double end, const Grid& g) {
   return k >= g.slabs - 1 ? g.slabs - 1 : static_cast<int>(k);
 }
 
-/// How many cells around its own a particle of velocity (vx, vy) searches: 1 (half of the 3 x 3
-/// neighbourhood, see stage 06) for speeds up to v_cut; for a fast one the whole square of cells
-/// within \f$2r + m + 2h|v|\f$, which holds every partner no faster than itself.
-PLAB_HD inline int search_radius(double vx, double vy, const Grid& g) {
+/// What a particle searches for partners in each slab: the entries whose midpoint positions lie
+/// within `d` of its own along both axes; a particle no faster than v_cut only those after it in
+/// cell order (row-major: the rest of its row and the rows above), a fast one all of them.
+struct Search {
+  double d;   //!< how far, along each axis
+  bool fast;  //!< whether it searches every entry around it, not only the later ones
+};
+
+/// The search of a particle of velocity (vx, vy). Two particles that meet in a slab are at most
+/// \f$2r + m + h(|v_a| + |v_b|)\f$ apart at its midpoint; a particle no faster than v_cut covers
+/// every partner no faster than v_cut with \f$d = 2r + 2m + h(|v| + v_{cut})\f$, whichever of the
+/// two comes first in cell order; a fast one covers every partner no faster than itself with
+/// \f$d = 2r + 2m + 2h|v|\f$ (a partner faster still searches for it). The cell size changes
+/// how many entries are tested, never which pairs are found.
+PLAB_HD inline Search search_of(double vx, double vy, const Grid& g) {
   const double v2 = vx * vx + vy * vy;
-  if (!(v2 > g.v_cut2)) return 1;
-  const double cells = ceil((g.reach + g.margin + 2 * g.half * sqrt(v2)) * g.inv_cell * (1 + 1e-9));
-  return cells >= g.side ? g.side : static_cast<int>(cells);  // infinite speeds: every cell
+  const bool fast = v2 > g.v_cut2;
+  const double v = sqrt(v2);
+  return {(g.reach + g.margin + g.half * (fast ? 2 * v : v + g.v_cut)) * (1 + 1e-9), fast};
+}
+
+/// The cells [lo, hi] along one axis whose coordinates lie within `d` of `v` (every cell when
+/// either end is not a number).
+PLAB_HD inline void cells_within(double v, double d, const Grid& g, int& lo, int& hi) {
+  const double from = v - d, to = v + d;
+  if (!(from == from) || !(to == to)) {
+    lo = 0;
+    hi = g.side - 1;
+    return;
+  }
+  lo = cell_of(from, g);
+  hi = cell_of(to, g);
 }
 
 /// Whether two particles, `d` apart (relative position at the slab's midpoint) with relative
