@@ -34,6 +34,13 @@ struct DeviceGrid {
   int cells;      //!< g.cells(): slab k's cells are buckets [k * cells, (k + 1) * cells)
 };
 
+/// What the pair search reads of an entry, in one 32-byte sector (the scatter writes it at a
+/// random place: one sector, not four).
+struct alignas(32) Entry {
+  double x, y;    //!< midpoint position
+  double vx, vy;  //!< velocity
+};
+
 /// One step's working arrays (pointers into memory the host class owns).
 struct StepArrays {
   double* wall;      //!< wall time of each particle
@@ -53,10 +60,7 @@ struct StepArrays {
   int* rank;         //!< ... and its place in the bucket
   int* entry_id;     //!< per entry (at most K * N): the particle
   int* entry_k;      //!< ... its slab
-  double* entry_x;   //!< ... its midpoint position and velocity
-  double* entry_y;
-  double* entry_vx;
-  double* entry_vy;
+  Entry* entry;      //!< ... its midpoint position and velocity
   Flags* flags;      //!< see Flags
 };
 
@@ -105,10 +109,7 @@ __global__ void bin_scatter(ParticlesView p, StepArrays a, DeviceGrid d) {
   midpoint(p, i, k, d, mx, my);
   a.entry_id[e] = i;
   a.entry_k[e] = k;
-  a.entry_x[e] = mx;
-  a.entry_y[e] = my;
-  a.entry_vx[e] = p.vx[i];
-  a.entry_vy[e] = p.vy[i];
+  a.entry[e] = Entry{mx, my, p.vx[i], p.vy[i]};
 }
 
 /// Files the pair event (i, o) at time t under particle i (any order: the key orders them).
@@ -136,10 +137,10 @@ __device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, in
 __device__ inline void test_entries(const ParticlesView& p, const Box& box, const StepArrays& a,
                                     const DeviceGrid& d, int e, int from, int to) {
   const int i = a.entry_id[e], k = a.entry_k[e];
-  const double x = a.entry_x[e], y = a.entry_y[e], vx = a.entry_vx[e], vy = a.entry_vy[e];
+  const Entry me = a.entry[e];
   for (int f = from; f < to; ++f) {
-    if (f == e || !sweep::close_in_slab(x - a.entry_x[f], y - a.entry_y[f], vx - a.entry_vx[f],
-                                        vy - a.entry_vy[f], d.g))
+    const Entry o = a.entry[f];
+    if (f == e || !sweep::close_in_slab(me.x - o.x, me.y - o.y, me.vx - o.vx, me.vy - o.vy, d.g))
       continue;
     const int j = a.entry_id[f];
     if (k > 0 && close_in_slab_at(p, i, j, k - 1, d)) continue;  // found in slab k - 1
@@ -160,8 +161,9 @@ __global__ void find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d)
   const int e = blockIdx.x * blockDim.x + threadIdx.x;
   if (e >= a.start[d.g.slabs * d.cells] || a.flags->overflow) return;
   const int side = d.g.side, base = a.entry_k[e] * d.cells;
-  const int cx = sweep::cell_of(a.entry_x[e], d.g), cy = sweep::cell_of(a.entry_y[e], d.g);
-  const sweep::Search q = sweep::search_of(a.entry_vx[e], a.entry_vy[e], d.g);
+  const Entry me = a.entry[e];
+  const int cx = sweep::cell_of(me.x, d.g), cy = sweep::cell_of(me.y, d.g);
+  const sweep::Search q = sweep::search_of(me.vx, me.vy, d.g);
   const int* row = a.start + base;
   if (!q.fast) {
     const int left = max(cx - 1, 0), right = min(cx + 1, side - 1);
@@ -170,8 +172,8 @@ __global__ void find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d)
       test_entries(p, box, a, d, e, row[(cy + 1) * side + left], row[(cy + 1) * side + right + 1]);
   } else {  // every row within reach (a pair found twice is harmless)
     int x0, x1, y0, y1;
-    sweep::cells_within(a.entry_x[e], q.d, d.g, x0, x1);
-    sweep::cells_within(a.entry_y[e], q.d, d.g, y0, y1);
+    sweep::cells_within(me.x, q.d, d.g, x0, x1);
+    sweep::cells_within(me.y, q.d, d.g, y0, y1);
     for (int y = y0; y <= y1; ++y)
       test_entries(p, box, a, d, e, row[y * side + x0], row[y * side + x1 + 1]);
   }

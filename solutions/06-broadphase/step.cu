@@ -61,7 +61,7 @@ class CudaStepper final : public Stepper {
            time_.bytes() + best_.bytes() + resolved_.bytes() + contested_.bytes() +
            partner_.bytes() + ptime_.bytes() + filled_.bytes() + start_.bytes() +
            bucket_.bytes() + rank_.bytes() + entry_id_.bytes() + entry_k_.bytes() +
-           entry_x_.bytes() + entry_y_.bytes() + entry_vx_.bytes() + entry_vy_.bytes() +
+           entry_.bytes() +
            temp_.bytes() + flags_.bytes();
   }
 
@@ -121,7 +121,7 @@ class CudaStepper final : public Stepper {
     filled_.resize(size);
     start_.resize(size);
     for (auto* v : {&bucket_, &rank_, &entry_id_, &entry_k_}) v->resize(per_slab);
-    for (auto* v : {&entry_x_, &entry_y_, &entry_vx_, &entry_vy_}) v->resize(per_slab);
+    entry_.resize(per_slab);
     temp_.resize(launch::scan_bytes(size));
     stale_ = true;
   }
@@ -139,13 +139,12 @@ class CudaStepper final : public Stepper {
     return {wall_.get(),     last_.get(),     count_.get(),     other_.get(),    time_.get(),
             cap_,            best_.get(),     resolved_.get(),  contested_.get(), partner_.get(),
             ptime_.get(),    filled_.get(),   start_.get(),     bucket_.get(),   rank_.get(),
-            entry_id_.get(), entry_k_.get(),  entry_x_.get(),   entry_y_.get(),  entry_vx_.get(),
-            entry_vy_.get(), flags_.get()};
+            entry_id_.get(), entry_k_.get(),  entry_.get(),     flags_.get()};
   }
 
   static constexpr long long kCheckEvery = 32;  //!< steps between two looks at the flags
   static constexpr int kGridResolveFrom = 50000;  //!< from this N the rounds use the whole GPU
-  static constexpr double kAlpha = 1.0;  //!< slabs per sqrt(N) v_cut / L (more, smaller searches)
+  static constexpr double kAlpha = 0.5;  //!< slabs per sqrt(N) v_cut / L (measured best on an H100)
   std::string device_;
   cuda::Stream main_;
   Box box_;
@@ -162,7 +161,7 @@ class CudaStepper final : public Stepper {
   cuda::DeviceArray<int> contested_, partner_;
   cuda::DeviceArray<double> ptime_;
   cuda::DeviceArray<int> filled_, start_, bucket_, rank_, entry_id_, entry_k_;
-  cuda::DeviceArray<double> entry_x_, entry_y_, entry_vx_, entry_vy_;
+  cuda::DeviceArray<kernels::Entry> entry_;
   cuda::DeviceArray<unsigned char> temp_;
   cuda::DeviceArray<kernels::Flags> flags_;
   cuda::Graph graph_;

@@ -34,6 +34,13 @@ struct DeviceGrid {
   int cells;      //!< g.cells(): slab k's cells are buckets [k * cells, (k + 1) * cells)
 };
 
+/// What the pair search reads of an entry, in one 32-byte sector (the scatter writes it at a
+/// random place: one sector, not four).
+struct alignas(32) Entry {
+  double x, y;    //!< midpoint position
+  double vx, vy;  //!< velocity
+};
+
 /// One step's working arrays (pointers into memory the host class owns).
 struct StepArrays {
   double* wall;      //!< wall time of each particle
@@ -53,10 +60,7 @@ struct StepArrays {
   int* rank;         //!< ... and its place in the bucket
   int* entry_id;     //!< per entry (at most K * N): the particle
   int* entry_k;      //!< ... its slab
-  double* entry_x;   //!< ... its midpoint position and velocity
-  double* entry_y;
-  double* entry_vx;
-  double* entry_vy;
+  Entry* entry;      //!< ... its midpoint position and velocity
   Flags* flags;      //!< see Flags
 };
 
@@ -113,10 +117,10 @@ __device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, in
 __device__ inline void test_entries(const ParticlesView& p, const Box& box, const StepArrays& a,
                                     const DeviceGrid& d, int e, int from, int to) {
   const int i = a.entry_id[e], k = a.entry_k[e];
-  const double x = a.entry_x[e], y = a.entry_y[e], vx = a.entry_vx[e], vy = a.entry_vy[e];
+  const Entry me = a.entry[e];
   for (int f = from; f < to; ++f) {
-    if (f == e || !sweep::close_in_slab(x - a.entry_x[f], y - a.entry_y[f], vx - a.entry_vx[f],
-                                        vy - a.entry_vy[f], d.g))
+    const Entry o = a.entry[f];
+    if (f == e || !sweep::close_in_slab(me.x - o.x, me.y - o.y, me.vx - o.vx, me.vy - o.vy, d.g))
       continue;
     const int j = a.entry_id[f];
     if (k > 0 && close_in_slab_at(p, i, j, k - 1, d)) continue;  // found in slab k - 1
