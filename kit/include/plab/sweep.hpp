@@ -10,9 +10,9 @@
 /// \f$w\f$ satisfy \f$\min_{|s| \le h} |d + s w| \le 2r + m\f$ (close_in_slab()), and their midpoint
 /// positions are at most \f$2r + m + h(|v_a| + |v_b|)\f$ apart. For two particles no faster than
 /// \f$v_{cut}\f$ that puts them in the same or adjacent cells. A faster particle ("fast") searches
-/// the cells within its own search_radius() instead, which covers every partner no faster than
-/// itself (a partner faster still searches for it). So the cell size follows the bulk of the
-/// speeds, not the single fastest particle of a hot gas.
+/// the cells within its own reach instead (search_of()), which covers every partner no faster
+/// than itself (a partner faster still searches for it). So the cell size follows the bulk of
+/// the speeds, not the single fastest particle of a hot gas.
 ///
 /// Two more things no pair needs: time after a particle's wall time (MODEL.md's key puts the wall
 /// first, so a later pair event of that particle is never accepted: path_end(), last_slab()),
@@ -69,25 +69,22 @@ PLAB_HD inline int last_slab(double end, const Grid& g) {
   return k >= g.slabs - 1 ? g.slabs - 1 : static_cast<int>(k);
 }
 
-/// What a particle searches for partners in each slab: the entries whose midpoint positions lie
-/// within `d` of its own along both axes; a particle no faster than v_cut only those after it in
-/// cell order (row-major: the rest of its row and the rows above), a fast one all of them.
+/// What a particle searches for partners in each slab. One no faster than v_cut searches half of
+/// the 3 x 3 cells around its own (the later entries of its cell and cell (+1, 0), then cells
+/// (-1 .. +1, +1)): two such particles that meet are at most \f$2r + m + 2h v_{cut} \le c\f$ apart
+/// at the slab's midpoint, so one of the two finds the other. A fast one searches every entry
+/// whose midpoint position lies within `d` of its own along both axes.
 struct Search {
-  double d;   //!< how far, along each axis
-  bool fast;  //!< whether it searches every entry around it, not only the later ones
+  double d;   //!< how far a fast particle searches, along each axis
+  bool fast;  //!< faster than v_cut
 };
 
 /// The search of a particle of velocity (vx, vy). Two particles that meet in a slab are at most
-/// \f$2r + m + h(|v_a| + |v_b|)\f$ apart at its midpoint; a particle no faster than v_cut covers
-/// every partner no faster than v_cut with \f$d = 2r + 2m + h(|v| + v_{cut})\f$, whichever of the
-/// two comes first in cell order; a fast one covers every partner no faster than itself with
-/// \f$d = 2r + 2m + 2h|v|\f$ (a partner faster still searches for it). The cell size changes
-/// how many entries are tested, never which pairs are found.
+/// \f$2r + m + h(|v_a| + |v_b|)\f$ apart at its midpoint, so a fast particle covers every partner
+/// no faster than itself with \f$d = 2r + 2m + 2h|v|\f$ (a partner faster still searches for it).
 PLAB_HD inline Search search_of(double vx, double vy, const Grid& g) {
   const double v2 = vx * vx + vy * vy;
-  const bool fast = v2 > g.v_cut2;
-  const double v = sqrt(v2);
-  return {(g.reach + g.margin + g.half * (fast ? 2 * v : v + g.v_cut)) * (1 + 1e-9), fast};
+  return {(g.reach + g.margin + 2 * g.half * sqrt(v2)) * (1 + 1e-9), v2 > g.v_cut2};
 }
 
 /// The cells [lo, hi] along one axis whose coordinates lie within `d` of `v` (every cell when
