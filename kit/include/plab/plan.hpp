@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <utility>
 #include <vector>
 
 #include "plab/model.hpp"
@@ -88,20 +89,39 @@ inline Plan greedy_plan(std::vector<model::Event>& events, std::size_t n) {
 /// particle, or the particle is taken already. Every pair left comes before both its walls, so
 /// the greedy pass over the pairs alone, in key order, decides every pair, and each particle it
 /// leaves free takes its wall if `wall[i] < 1`: the same plan as sorting every candidate, with
-/// only the pairs sorted. Reorders `pairs` and keeps only the pairs it did not drop.
+/// only the pairs sorted; a pair whose particles meet no other is accepted without sorting.
+/// Reorders `pairs` and keeps only the pairs it did not drop.
 inline Plan sparse_greedy_plan(std::vector<model::Event>& pairs, const std::vector<double>& wall) {
   const auto dominated = [&](const model::Event& e) {
     return wall[e.lo] <= e.t || wall[e.hi] <= e.t;  // a not-a-number wall is no candidate
   };
   pairs.erase(std::remove_if(pairs.begin(), pairs.end(), dominated), pairs.end());
-  std::sort(pairs.begin(), pairs.end(),
-            [](const model::Event& a, const model::Event& b) { return model::key_less(a, b); });
   Plan plan;
   plan.reset(wall.size());
+  // A pair whose particles are in no other pair (found once or more) meets nothing earlier: it is
+  // accepted without sorting. `plan.partner` holds each particle's only partner so far, or kWall
+  // once it has two (as a mark; the plan proper is written after).
+  for (const model::Event& e : pairs)
+    for (const auto& [i, o] : {std::pair{e.lo, e.hi}, std::pair{e.hi, e.lo}})
+      plan.partner[i] = (plan.partner[i] == Plan::kFree || plan.partner[i] == o) ? o : Plan::kWall;
+  const auto alone = [&](const model::Event& e) {
+    return plan.partner[e.lo] == e.hi && plan.partner[e.hi] == e.lo;
+  };
+  std::vector<model::Event> isolated;
+  for (const model::Event& e : pairs)
+    if (alone(e)) isolated.push_back(e);
+  pairs.erase(std::remove_if(pairs.begin(), pairs.end(), alone), pairs.end());
+  std::sort(pairs.begin(), pairs.end(),
+            [](const model::Event& a, const model::Event& b) { return model::key_less(a, b); });
+  plan.reset(wall.size());
+  for (const model::Event& e : isolated)  // the earliest, should one pair come with two times
+    if (!plan.taken(e.lo) || model::key_less(e, model::pair_event_key(plan.time[e.lo], e.lo, e.hi)))
+      plan.accept(e);
   for (const model::Event& e : pairs)
     if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
   for (std::size_t i = 0; i < wall.size(); ++i)
     if (!plan.taken(static_cast<int>(i)) && model::in_step(wall[i])) plan.partner[i] = Plan::kWall;
+  pairs.insert(pairs.end(), isolated.begin(), isolated.end());
   return plan;
 }
 

@@ -150,12 +150,12 @@ inline Grid choose_for(const Box& box, int active, double v_cut, double vmax, do
 
 /// Chooses the grid for a state whose paths end at `end` (path_end() of each wall time): the
 /// particles that take part, the fastest of them, and `v_cut` at the `quantile` of their speeds
-/// (the rest are fast), estimated from at most about 4096 of them taken at even strides.
+/// (the rest are fast), estimated from at most about 1024 of them taken at even strides.
 /// `scratch` is working memory.
 template <class Real>
 inline Grid choose(const Box& box, const ParticlesOf<Real>& p, const std::vector<double>& end,
                    std::vector<double>& scratch, double quantile = 0.9, double alpha = 1.0) {
-  const std::size_t n = p.size(), stride = std::max<std::size_t>(1, n / 4096);
+  const std::size_t n = p.size(), stride = std::max<std::size_t>(1, n / 1024);
   scratch.clear();
   int active = 0;
   double max2 = 0;
