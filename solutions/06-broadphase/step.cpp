@@ -21,8 +21,10 @@
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
-#define PLAB_AVX2 1  // the pair test has AVX2 and AVX-512 paths, chosen at run time
+/// 1 where the pair test has AVX2 and AVX-512 paths (x86-64, chosen at run time), else 0.
+#define PLAB_AVX2 1
 #else
+/// 0: no vector paths here; the portable pair test only.
 #define PLAB_AVX2 0
 #endif
 
