@@ -93,7 +93,7 @@ __global__ void bin_count(ParticlesView p, StepArrays a, DeviceGrid d) {
   if (i >= p.n || a.last[i] < k) return;
   double mx, my;
   midpoint(p, i, k, d, mx, my);
-  const int b = k * d.cells + sweep::cell_of(my, d.g) * d.g.side + sweep::cell_of(mx, d.g);
+  const int b = k * d.cells + sweep::cell_of(mx, my, d.g);
   a.bucket[k * p.n + i] = b;
   a.rank[k * p.n + i] = atomicAdd(&a.filled[b], 1);
 }
@@ -154,28 +154,29 @@ __device__ inline void test_entries(const ParticlesView& p, const Box& box, cons
   }
 }
 
-/// The pair search, one thread per entry (as step.cpp): against the later entries of its own
-/// cell and the cells (+1, 0), (-1, +1), (0, +1), (+1, +1) of the same slab, two runs of
-/// entries; a fast entry against every cell within its reach (sweep::search_of()).
+/// The pair search, one thread per entry (as step.cpp): a slow entry against the later entries of
+/// its row up to the last column within its reach, then the columns within reach of the row
+/// above (two runs of entries of its slab); a fast entry against every entry within its reach
+/// (sweep::search_of()), one run per row.
 __global__ void find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
   const int e = blockIdx.x * blockDim.x + threadIdx.x;
   if (e >= a.start[d.g.slabs * d.cells] || a.flags->overflow) return;
-  const int side = d.g.side, base = a.entry_k[e] * d.cells;
+  const int columns = d.g.columns;
+  const int* row = a.start + a.entry_k[e] * d.cells;  // this slab's cells
   const Entry me = a.entry[e];
-  const int cx = sweep::cell_of(me.x, d.g), cy = sweep::cell_of(me.y, d.g);
   const sweep::Search q = sweep::search_of(me.vx, me.vy, d.g);
-  const int* row = a.start + base;
+  int x0, x1;
+  sweep::columns_within(me.x, q.d, d.g, x0, x1);
   if (!q.fast) {
-    const int left = max(cx - 1, 0), right = min(cx + 1, side - 1);
-    test_entries(p, box, a, d, e, e + 1, row[cy * side + right + 1]);
-    if (cy + 1 < side)
-      test_entries(p, box, a, d, e, row[(cy + 1) * side + left], row[(cy + 1) * side + right + 1]);
-  } else {  // every row within reach (a pair found twice is harmless)
-    int x0, x1, y0, y1;
-    sweep::cells_within(me.x, q.d, d.g, x0, x1);
-    sweep::cells_within(me.y, q.d, d.g, y0, y1);
+    const int y = sweep::row_of(me.y, d.g);
+    test_entries(p, box, a, d, e, e + 1, row[y * columns + x1 + 1]);
+    if (y + 1 < d.g.rows)
+      test_entries(p, box, a, d, e, row[(y + 1) * columns + x0], row[(y + 1) * columns + x1 + 1]);
+  } else {  // a pair found twice is harmless
+    int y0, y1;
+    sweep::rows_within(me.y, q.d, d.g, y0, y1);
     for (int y = y0; y <= y1; ++y)
-      test_entries(p, box, a, d, e, row[y * side + x0], row[y * side + x1 + 1]);
+      test_entries(p, box, a, d, e, row[y * columns + x0], row[y * columns + x1 + 1]);
   }
 }
 

@@ -41,7 +41,7 @@ namespace {
 
 constexpr int kLanes = 8;          //!< close_in_slab() is evaluated for this many entries at a time
 constexpr double kQuantile = 0.9;  //!< the fastest 10% search wider (sweep::choose())
-constexpr double kAlpha = 0.4;     //!< slabs per sqrt(N) v_cut / L, measured best on the report's scene
+constexpr double kAlpha = 0.3;     //!< slabs per sqrt(N) v_cut / L, measured best on the report's scene
 
 /// One thread's slab: the particles that take part, in cell order, one array per field.
 struct Slab {
@@ -66,7 +66,7 @@ void bin(Slab& s, const ParticlesOf<Real>& p, const std::vector<int>& last, int 
     if (last[i] < k) continue;
     s.mx[i] = p.x[i] + tm * p.vx[i];
     s.my[i] = p.y[i] + tm * p.vy[i];
-    s.cell[i] = sweep::cell_of(s.my[i], g) * g.side + sweep::cell_of(s.mx[i], g);
+    s.cell[i] = sweep::cell_of(s.mx[i], s.my[i], g);
     ++s.start[s.cell[i] + 1];
   }
   for (int c = 0; c < g.cells(); ++c) s.start[c + 1] += s.start[c];
@@ -176,34 +176,29 @@ inline void test_range(Slab& s, int a, int from, int to, const sweep::Grid& g) {
   }
 }
 
-/// Slab k's search, cell by cell: each entry against the later entries of its cell and cell
-/// (+1, 0), then cells (-1, +1), (0, +1), (+1, +1), two runs of entries in row-major order; a fast
-/// entry (sweep::search_of()) against every cell within its reach, one run per row.
+/// Slab k's search, entry by entry (sweep::search_of()): a slow entry against the later entries of
+/// its row up to the last column within its reach, then the columns within reach of the row
+/// above, two runs of entries in row-major order; a fast entry against every entry within its
+/// reach, one run per row.
 template <Isa kIsa>
 inline void search_cells(Slab& s, const std::vector<sweep::Search>& reach, const sweep::Grid& g) {
   s.hits.clear();
-  const int side = g.side;
-  for (int cy = 0; cy < side; ++cy) {
-    for (int cx = 0; cx < side; ++cx) {
-      const int lo = s.start[cy * side + cx], hi = s.start[cy * side + cx + 1];
-      if (lo == hi) continue;
-      const int left = std::max(cx - 1, 0), right = std::min(cx + 1, side - 1);
-      const int end = s.start[cy * side + right + 1];
-      const bool up = cy + 1 < side;
-      const int lo2 = up ? s.start[(cy + 1) * side + left] : 0;
-      const int hi2 = up ? s.start[(cy + 1) * side + right + 1] : 0;
-      for (int a = lo; a < hi; ++a) {
-        const sweep::Search q = reach[s.id[a]];
-        if (!q.fast) {
-          test_range<kIsa>(s, a, a + 1, end, g);
-          test_range<kIsa>(s, a, lo2, hi2, g);
-        } else {  // a pair found twice is harmless
-          int x0, x1, y0, y1;
-          sweep::cells_within(s.x[a], q.d, g, x0, x1);
-          sweep::cells_within(s.y[a], q.d, g, y0, y1);
-          for (int y = y0; y <= y1; ++y)
-            test_range<kIsa>(s, a, s.start[y * side + x0], s.start[y * side + x1 + 1], g);
-        }
+  const int columns = g.columns;
+  for (int row = 0, a = 0; row < g.rows; ++row) {
+    for (const int end = s.start[(row + 1) * columns]; a < end; ++a) {
+      const sweep::Search q = reach[s.id[a]];
+      int x0, x1;
+      sweep::columns_within(s.x[a], q.d, g, x0, x1);
+      if (!q.fast) {
+        test_range<kIsa>(s, a, a + 1, s.start[row * columns + x1 + 1], g);
+        if (row + 1 < g.rows)
+          test_range<kIsa>(s, a, s.start[(row + 1) * columns + x0],
+                           s.start[(row + 1) * columns + x1 + 1], g);
+      } else {  // a pair found twice is harmless
+        int y0, y1;
+        sweep::rows_within(s.y[a], q.d, g, y0, y1);
+        for (int y = y0; y <= y1; ++y)
+          test_range<kIsa>(s, a, s.start[y * columns + x0], s.start[y * columns + x1 + 1], g);
       }
     }
   }

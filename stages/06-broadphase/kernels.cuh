@@ -135,10 +135,10 @@ __device__ inline void test_entries(const ParticlesView& p, const Box& box, cons
 }
 
 // EXERCISE 4: find_pairs, one thread per entry e < a.start[slabs * cells] (the entries of this
-// step): as step.cpp's search, test_entries() over the later entries of its cell and cell
-// (+1, 0), then over cells (-1 .. +1, +1), two runs of entries of its slab (slab k's cells start
-// at a.start + k * d.cells); a fast entry (sweep::search_of()) over every row within its reach
-// (sweep::cells_within()).
+// step): as step.cpp's search (slab k's cells start at a.start + k * d.cells), with
+// sweep::search_of(), sweep::columns_within(), sweep::rows_within() and test_entries(): a slow
+// entry over the later entries of its row up to the last column within reach, then the columns
+// within reach of the next row; a fast entry over every row within reach.
 
 /// A round's first half for particle i: its earliest event among its wall and its pairs with
 /// unresolved partners (or `none`, which sorts after every real event).

@@ -41,7 +41,7 @@ namespace {
 
 constexpr int kLanes = 8;          //!< close_in_slab() is evaluated for this many entries at a time
 constexpr double kQuantile = 0.9;  //!< the fastest 10% search wider (sweep::choose())
-constexpr double kAlpha = 0.4;     //!< slabs per sqrt(N) v_cut / L, measured best on the report's scene
+constexpr double kAlpha = 0.3;     //!< slabs per sqrt(N) v_cut / L, measured best on the report's scene
 
 /// One thread's slab: the particles that take part, in cell order, one array per field.
 struct Slab {
@@ -60,8 +60,8 @@ template <class Real>
 void bin(Slab& s, const ParticlesOf<Real>& p, const std::vector<int>& last, int k,
          const sweep::Grid& g) {
   // EXERCISE 1: a counting sort of the particles that take part in slab k (last[i] >= k) by the
-  // cell of their midpoint positions p + slab_mid(k) v (cell = cell_of(y) * g.side +
-  // cell_of(x)): count per cell into s.start[cell + 1], prefix sums, then scatter each particle's
+  // cell of their midpoint positions p + slab_mid(k) v (sweep::cell_of(x, y, g)): count per
+  // cell into s.start[cell + 1], prefix sums, then scatter each particle's
   // id, midpoint position and velocity to its cell's next place. On return, cell c must hold
   // entries [s.start[c], s.start[c + 1]).
   (void)s, (void)p, (void)last, (void)k, (void)g;
@@ -161,18 +161,19 @@ inline void test_range(Slab& s, int a, int from, int to, const sweep::Grid& g) {
   }
 }
 
-/// Slab k's search, cell by cell: each entry against the later entries of its cell and cell
-/// (+1, 0), then cells (-1, +1), (0, +1), (+1, +1), two runs of entries in row-major order; a fast
-/// entry (sweep::search_of()) against every cell within its reach, one run per row.
+/// Slab k's search, entry by entry (sweep::search_of()): a slow entry against the later entries of
+/// its row up to the last column within its reach, then the columns within reach of the row
+/// above, two runs of entries in row-major order; a fast entry against every entry within its
+/// reach, one run per row.
 template <Isa kIsa>
 inline void search_cells(Slab& s, const std::vector<sweep::Search>& reach, const sweep::Grid& g) {
   s.hits.clear();
-  // EXERCISE 1: for every cell (cx, cy) and every entry a in it: if it is not fast
-  // (reach[s.id[a]].fast), test_range<kIsa>() over the later entries of its cell and cell
-  // (cx + 1, cy), which follow it in row-major order, then over cells (cx - 1 .. cx + 1, cy + 1),
-  // one run of entries (clamp the columns to the grid). Why is half of the 3 x 3 neighbourhood
-  // enough? (handout 06) A fast entry: every row and column within reach[s.id[a]].d of its
-  // midpoint position (sweep::cells_within()), one run per row.
+  // EXERCISE 1: for every entry a, row by row (row r holds entries [s.start[r * g.columns],
+  // s.start[(r + 1) * g.columns])): its search q = reach[s.id[a]] and the columns x0 .. x1 within
+  // q.d of its midpoint x (sweep::columns_within()). If it is not fast, test_range<kIsa>() over
+  // the later entries of its row up to column x1, then over columns x0 .. x1 of the next row: two
+  // runs of entries in row-major order. Why are the later entries enough? (handout 06) A fast
+  // entry: every row within q.d (sweep::rows_within()), columns x0 .. x1 of each.
   (void)reach, (void)g;
   PLAB_EXERCISE(1, "the broad phase: each slab's particles binned, neighbouring cells tested");
 }

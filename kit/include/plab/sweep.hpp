@@ -4,14 +4,16 @@
 ///
 /// The step is split into \f$K\f$ equal time slabs. In slab \f$k\f$, with midpoint \f$t_m\f$ and
 /// half-width \f$h = 1/(2K)\f$, each particle is binned by its position \f$p + t_m v\f$ into a dense
-/// grid of square cells of side \f$c \ge 2r + 2 h v_{cut} + m\f$. If MODEL.md's pair time
+/// grid of rows of height \f$c \ge 2r + 2 h v_{cut} + 2m\f$, each split into narrow columns. If
+/// MODEL.md's pair time
 /// \f$t < 1\f$, the centres are (within rounding) \f$2r\f$ apart at \f$t\f$, which lies in some slab,
 /// \f$|t - t_m| \le h\f$; so their relative position \f$d\f$ at \f$t_m\f$ and relative velocity
 /// \f$w\f$ satisfy \f$\min_{|s| \le h} |d + s w| \le 2r + m\f$ (close_in_slab()), and their midpoint
 /// positions are at most \f$2r + m + h(|v_a| + |v_b|)\f$ apart. For two particles no faster than
-/// \f$v_{cut}\f$ that puts them in the same or adjacent cells. A faster particle ("fast") searches
-/// the cells within its own reach instead (search_of()), which covers every partner no faster
-/// than itself (a partner faster still searches for it). So the cell size follows the bulk of
+/// \f$v_{cut}\f$ that puts them in the same or adjacent rows, and within the reach of the one that
+/// comes first in cell order, which searches the entries after it (search_of()). A faster
+/// particle ("fast") searches every entry within its own reach instead, which covers every
+/// partner no faster than itself (a partner faster still searches for it). So the cell size follows the bulk of
 /// the speeds, not the single fastest particle of a hot gas.
 ///
 /// Two more things no pair needs: time after a particle's wall time (MODEL.md's key puts the wall
@@ -30,30 +32,52 @@
 
 namespace plab::sweep {
 
-/// The space-time grid of one step.
+/// The space-time grid of one step: rows of height `cell`, each split into `columns_per_cell`
+/// narrow columns, so that a particle's neighbours in a row are one run of entries as narrow as
+/// its reach.
 struct Grid {
   int slabs = 1;           //!< time slabs K
   double half = 0.5;       //!< half a slab, h = 1 / (2K)
-  double cell = 1;         //!< side of a square cell (length units)
+  double cell = 1;         //!< row height (length units): at least the reach of a slow particle
   double inv_cell = 1;     //!< 1 / cell
-  int side = 1;            //!< cells per side: the grid covers [0, side * cell)^2, row-major
+  double inv_column = 1;   //!< 1 / column width
+  int rows = 1;            //!< rows: the grid covers [0, rows * cell) in y
+  int columns = 1;         //!< columns: [0, columns * column width) in x; cells are row-major
   double reach = 0;        //!< 2r + margin: the distance that makes a candidate
   double margin = 0;       //!< the rounding margin m
-  double v_cut = 0;        //!< particles no faster than this find each other in adjacent cells
+  double v_cut = 0;        //!< particles no faster than this are "slow" (see search_of())
   double v_cut2 = 0;       //!< v_cut^2 (a particle is fast when its squared speed exceeds it)
   int active = 0;          //!< particles that take part (see last_slab())
-  /// Number of cells, side^2.
-  [[nodiscard]] PLAB_HD int cells() const { return side * side; }
+  /// Number of cells, rows x columns.
+  [[nodiscard]] PLAB_HD int cells() const { return rows * columns; }
 };
+
+/// Columns per row height (the narrower, the fewer entries a run holds beyond a slow particle's
+/// reach, and the more cells to count).
+constexpr int kColumnsPerCell = 4;
 
 /// Midpoint time of slab `k`.
 PLAB_HD inline double slab_mid(int k, const Grid& g) { return (k + 0.5) / g.slabs; }
 
-/// The cell column (or row) of coordinate `v`, clamped to the grid (0 for not-a-number).
-PLAB_HD inline int cell_of(double v, const Grid& g) {
-  const double c = floor(v * g.inv_cell);
+/// The index of coordinate `v` in units of `1 / inv` (floor), clamped to [0, count - 1]
+/// (0 for not-a-number). Clamping never separates two neighbours.
+PLAB_HD inline int clamped_index(double v, double inv, int count) {
+  const double c = floor(v * inv);
   if (!(c > 0)) return 0;
-  return c >= g.side ? g.side - 1 : static_cast<int>(c);
+  return c >= count ? count - 1 : static_cast<int>(c);
+}
+
+/// The row of coordinate `y`.
+PLAB_HD inline int row_of(double y, const Grid& g) { return clamped_index(y, g.inv_cell, g.rows); }
+
+/// The column of coordinate `x`.
+PLAB_HD inline int column_of(double x, const Grid& g) {
+  return clamped_index(x, g.inv_column, g.columns);
+}
+
+/// The cell (row-major) of the point (x, y).
+PLAB_HD inline int cell_of(double x, double y, const Grid& g) {
+  return row_of(y, g) * g.columns + column_of(x, g);
 }
 
 /// When a particle's path stops mattering for pairs: its wall time `tw` if that is in the step
@@ -69,35 +93,44 @@ PLAB_HD inline int last_slab(double end, const Grid& g) {
   return k >= g.slabs - 1 ? g.slabs - 1 : static_cast<int>(k);
 }
 
-/// What a particle searches for partners in each slab. One no faster than v_cut searches half of
-/// the 3 x 3 cells around its own (the later entries of its cell and cell (+1, 0), then cells
-/// (-1 .. +1, +1)): two such particles that meet are at most \f$2r + m + 2h v_{cut} \le c\f$ apart
-/// at the slab's midpoint, so one of the two finds the other. A fast one searches every entry
-/// whose midpoint position lies within `d` of its own along both axes.
+/// What a particle searches for partners in each slab: the entries whose midpoint positions lie
+/// within `d` of its own along both axes. A slow one (no faster than v_cut) only those after it
+/// in cell order, in its own row and the row above: the rest of its cell and the columns of its
+/// row up to `x + d`, then the columns from `x - d` to `x + d` of the next row, two runs of
+/// entries. A fast one all of them, one run per row.
 struct Search {
-  double d;   //!< how far a fast particle searches, along each axis
-  bool fast;  //!< faster than v_cut
+  double d;   //!< how far, along each axis
+  bool fast;  //!< faster than v_cut: searches every entry within `d`, before or after it
 };
 
 /// The search of a particle of velocity (vx, vy). Two particles that meet in a slab are at most
-/// \f$2r + m + h(|v_a| + |v_b|)\f$ apart at its midpoint, so a fast particle covers every partner
-/// no faster than itself with \f$d = 2r + 2m + 2h|v|\f$ (a partner faster still searches for it).
+/// \f$2r + m + h(|v_a| + |v_b|)\f$ apart at its midpoint. A slow particle's
+/// \f$d = 2r + 2m + h(|v| + v_{cut})\f$ covers every slow partner, whichever of the two comes first
+/// in cell order, and is at most a row's height, so the partner is in its row or the next. A fast
+/// one's \f$d = 2r + 2m + 2h|v|\f$ covers every partner no faster than itself (a partner faster
+/// still searches for it).
 PLAB_HD inline Search search_of(double vx, double vy, const Grid& g) {
   const double v2 = vx * vx + vy * vy;
-  return {(g.reach + g.margin + 2 * g.half * sqrt(v2)) * (1 + 1e-9), v2 > g.v_cut2};
+  const bool fast = v2 > g.v_cut2;
+  const double v = sqrt(v2);
+  return {(g.reach + g.margin + g.half * (fast ? 2 * v : v + g.v_cut)) * (1 + 1e-9), fast};
 }
 
-/// The cells [lo, hi] along one axis whose coordinates lie within `d` of `v` (every cell when
-/// either end is not a number).
-PLAB_HD inline void cells_within(double v, double d, const Grid& g, int& lo, int& hi) {
-  const double from = v - d, to = v + d;
-  if (!(from == from) || !(to == to)) {
-    lo = 0;
-    hi = g.side - 1;
-    return;
-  }
-  lo = cell_of(from, g);
-  hi = cell_of(to, g);
+/// The columns [lo, hi] whose x lies within `d` of `x` (every column when either end is not a
+/// number).
+PLAB_HD inline void columns_within(double x, double d, const Grid& g, int& lo, int& hi) {
+  const double from = x - d, to = x + d;
+  const bool known = (from == from) && (to == to);
+  lo = known ? column_of(from, g) : 0;
+  hi = known ? column_of(to, g) : g.columns - 1;
+}
+
+/// The rows [lo, hi] whose y lies within `d` of `y` (every row when either end is not a number).
+PLAB_HD inline void rows_within(double y, double d, const Grid& g, int& lo, int& hi) {
+  const double from = y - d, to = y + d;
+  const bool known = (from == from) && (to == to);
+  lo = known ? row_of(from, g) : 0;
+  hi = known ? row_of(to, g) : g.rows - 1;
 }
 
 /// Whether two particles, `d` apart (relative position at the slab's midpoint) with relative
@@ -121,15 +154,16 @@ PLAB_HD inline bool close_in_slab(double dx, double dy, double wx, double wy, co
 /// Chooses the grid for `active` particles, most no faster than `v_cut`, the fastest `vmax`, in a
 /// box of side `extent`: \f$K = \lceil \alpha \sqrt N \, v_{cut} / L \rceil\f$ slabs (between 1
 /// and 256), which balances the per-slab pass over the particles (cost \f$\propto K N\f$) against
-/// the pairs in neighbouring cells (\f$\propto N^2 v_{cut}^2 / (K L^2)\f$); cells of side
-/// \f$2r + v_{cut}/K + m\f$, no more of them than about \f$2N\f$.
+/// the pairs in neighbouring cells (\f$\propto N^2 v_{cut}^2 / (K L^2)\f$);
+/// rows of height \f$2r + 2m + v_{cut}/K\f$, each split into kColumnsPerCell columns, no more
+/// cells than about \f$4N\f$.
 inline Grid choose_for(const Box& box, int active, double v_cut, double vmax, double extent,
                        double alpha = 1.0) {
   Grid g;
   g.active = active;
   if (!std::isfinite(vmax) || !std::isfinite(extent) || !std::isfinite(v_cut)) {
     g.reach = g.margin = g.cell = HUGE_VAL;  // no geometry to trust: one cell, all pairs
-    g.inv_cell = 0;
+    g.inv_cell = g.inv_column = 0;
     return g;
   }
   g.margin = 1e-6 * (extent + vmax + box.r);
@@ -140,11 +174,14 @@ inline Grid choose_for(const Box& box, int active, double v_cut, double vmax, do
   g.half = 0.5 / g.slabs;
   g.v_cut = v_cut;
   g.v_cut2 = v_cut * v_cut;
-  const double wanted = g.reach + 2 * g.half * v_cut * (1 + 1e-9) + g.margin;
-  const int most = std::max(1, static_cast<int>(std::sqrt(2.0 * std::max(active, 1))));
-  g.side = std::clamp(static_cast<int>(std::min(std::ceil(extent / wanted), 1e9)), 1, most);
-  g.cell = std::max(wanted, extent / g.side);
+  // A row is at least a slow particle's reach (search_of()), so slow partners are one row apart.
+  const double wanted = (g.reach + 2 * g.margin + 2 * g.half * v_cut) * (1 + 1e-9);
+  const int most = std::max(1, static_cast<int>(std::sqrt(4.0 * std::max(active, 1) / kColumnsPerCell)));
+  g.rows = std::clamp(static_cast<int>(std::min(std::ceil(extent / wanted), 1e9)), 1, most);
+  g.cell = std::max(wanted, extent / g.rows);
   g.inv_cell = 1 / g.cell;
+  g.columns = g.rows * kColumnsPerCell;
+  g.inv_column = kColumnsPerCell / g.cell;
   return g;
 }
 
