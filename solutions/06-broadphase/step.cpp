@@ -11,9 +11,9 @@
 //            then test each against the same and the next cells (half of the 3 x 3
 //            neighbourhood; a fast particle: every cell within its search radius) with
 //            sweep::close_in_slab();
-//         2. narrow phase: MODEL.md's pair time for each pair that passed, kept when it beats
-//            both wall times;
-//         3. MODEL.md's greedy selection over the sparse candidates, then apply.
+//         2. narrow phase: MODEL.md's pair time for each pair that passed;
+//         3. MODEL.md's greedy selection over the sparse candidates (a pair at or after either
+//            wall time is never accepted), then apply.
 //         Memory O(N + candidates + cells): no N x N anything.
 //  READ   handouts/06-broadphase.md     TEST   ./plab test --impl student --stage 06
 // =================================================================================================
@@ -279,10 +279,10 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
     for (int k = 0; k < g.slabs; ++k) {
       bin(s, p, last, k, g);
       search(s, reach, g);
-      for (const auto& [a, b] : s.hits) {  // the narrow phase: kept when before both walls
-        const int i = std::min(s.id[a], s.id[b]), j = std::max(s.id[a], s.id[b]);
-        const model::Event e = pair_candidate(box, p, i, j);
-        if (model::in_step(e.t) && !(wall[i] <= e.t) && !(wall[j] <= e.t)) s.found.push_back(e);
+      for (const auto& [a, b] : s.hits) {  // the narrow phase (the plan drops pairs after walls)
+        const model::Event e =
+            pair_candidate(box, p, std::min(s.id[a], s.id[b]), std::max(s.id[a], s.id[b]));
+        if (model::in_step(e.t)) s.found.push_back(e);
       }
     }
   }

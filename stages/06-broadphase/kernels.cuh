@@ -127,7 +127,7 @@ __device__ inline void test_entries(const ParticlesView& p, const Box& box, cons
     const int lo = i < j ? i : j, hi = i < j ? j : i;
     const double t = model::pair_time(p.x[lo], p.y[lo], p.vx[lo], p.vy[lo], p.x[hi], p.y[hi],
                                       p.vx[hi], p.vy[hi], box.r);
-    if (model::in_step(t) && !(a.wall[lo] <= t) && !(a.wall[hi] <= t)) {
+    if (model::in_step(t) && model::before_walls(t, a.wall[lo], a.wall[hi])) {
       add_slot(a, p.n, lo, hi, t);
       add_slot(a, p.n, hi, lo, t);
     }

@@ -11,9 +11,9 @@
 //            then test each against the same and the next cells (half of the 3 x 3
 //            neighbourhood; a fast particle: every cell within its search radius) with
 //            sweep::close_in_slab();
-//         2. narrow phase: MODEL.md's pair time for each pair that passed, kept when it beats
-//            both wall times;
-//         3. MODEL.md's greedy selection over the sparse candidates, then apply.
+//         2. narrow phase: MODEL.md's pair time for each pair that passed;
+//         3. MODEL.md's greedy selection over the sparse candidates (a pair at or after either
+//            wall time is never accepted), then apply.
 //         Memory O(N + candidates + cells): no N x N anything.
 //  READ   handouts/06-broadphase.md     TEST   ./plab test --impl student --stage 06
 // =================================================================================================
@@ -255,8 +255,8 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
       search(s, reach, g);
       // EXERCISE 2: the narrow phase. For each entry pair (a, b) in s.hits: the particles
       // i < j, MODEL.md's pair time (pair_candidate(box, p, i, j)); keep it in s.found if it is
-      // in the step and comes before both wall times (wall[i], wall[j]): why may the others be
-      // dropped? (handout 06)
+      // in the step. (The plan then drops every pair at or after either wall time: why may it?
+      // handout 06)
       PLAB_EXERCISE(2, "the narrow phase: pair times of the pairs that passed");
     }
   }

@@ -140,6 +140,14 @@ PLAB_HD inline Real contact_time(Real dx, Real dy, Real dvx, Real dvy, Real r) {
 template <class Real>
 PLAB_HD inline bool in_step(Real t) { return t < 1; }
 
+/// Whether a pair event at time `t` can be accepted at all against its particles' wall times:
+/// one at or after either wall time loses to that wall (it comes first in MODEL.md's key) and is
+/// never accepted. A not-a-number wall time is no candidate and beats nothing.
+template <class Real>
+PLAB_HD inline bool before_walls(Real t, Real wall_i, Real wall_j) {
+  return !(wall_i <= t) && !(wall_j <= t);
+}
+
 /// A particle without an event moves a whole step: \f$ x \leftarrow x + v_x,\ y \leftarrow y + v_y \f$.
 template <class Real>
 PLAB_HD inline void free_move(Real& x, Real& y, Real vx, Real vy) {

@@ -93,26 +93,24 @@ inline Plan greedy_plan(std::vector<model::Event>& events, std::size_t n) {
 /// Reorders `pairs` and keeps only the pairs it did not drop.
 inline Plan sparse_greedy_plan(std::vector<model::Event>& pairs, const std::vector<double>& wall) {
   const auto dominated = [&](const model::Event& e) {
-    return wall[e.lo] <= e.t || wall[e.hi] <= e.t;  // a not-a-number wall is no candidate
+    return !model::before_walls(e.t, wall[e.lo], wall[e.hi]);
   };
   pairs.erase(std::remove_if(pairs.begin(), pairs.end(), dominated), pairs.end());
-  Plan plan;
-  plan.reset(wall.size());
   // A pair whose particles are in no other pair (found once or more) meets nothing earlier: it is
-  // accepted without sorting. `plan.partner` holds each particle's only partner so far, or kWall
-  // once it has two (as a mark; the plan proper is written after).
+  // accepted without sorting. `only[i]`: particle i's one partner, or kMany.
+  constexpr int kNone = -1, kMany = -2;
+  std::vector<int> only(wall.size(), kNone);
   for (const model::Event& e : pairs)
     for (const auto& [i, o] : {std::pair{e.lo, e.hi}, std::pair{e.hi, e.lo}})
-      plan.partner[i] = (plan.partner[i] == Plan::kFree || plan.partner[i] == o) ? o : Plan::kWall;
-  const auto alone = [&](const model::Event& e) {
-    return plan.partner[e.lo] == e.hi && plan.partner[e.hi] == e.lo;
-  };
+      only[i] = (only[i] == kNone || only[i] == o) ? o : kMany;
+  const auto alone = [&](const model::Event& e) { return only[e.lo] == e.hi && only[e.hi] == e.lo; };
   std::vector<model::Event> isolated;
   for (const model::Event& e : pairs)
     if (alone(e)) isolated.push_back(e);
   pairs.erase(std::remove_if(pairs.begin(), pairs.end(), alone), pairs.end());
   std::sort(pairs.begin(), pairs.end(),
             [](const model::Event& a, const model::Event& b) { return model::key_less(a, b); });
+  Plan plan;
   plan.reset(wall.size());
   for (const model::Event& e : isolated)  // the earliest, should one pair come with two times
     if (!plan.taken(e.lo) || model::key_less(e, model::pair_event_key(plan.time[e.lo], e.lo, e.hi)))

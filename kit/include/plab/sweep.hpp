@@ -5,16 +5,15 @@
 /// The step is split into \f$K\f$ equal time slabs. In slab \f$k\f$, with midpoint \f$t_m\f$ and
 /// half-width \f$h = 1/(2K)\f$, each particle is binned by its position \f$p + t_m v\f$ into a dense
 /// grid of rows of height \f$c \ge 2r + 2 h v_{cut} + 2m\f$, each split into narrow columns. If
-/// MODEL.md's pair time
-/// \f$t < 1\f$, the centres are (within rounding) \f$2r\f$ apart at \f$t\f$, which lies in some slab,
+/// MODEL.md's pair time \f$t < 1\f$, the centres are (within rounding) \f$2r\f$ apart at \f$t\f$, which lies in some slab,
 /// \f$|t - t_m| \le h\f$; so their relative position \f$d\f$ at \f$t_m\f$ and relative velocity
 /// \f$w\f$ satisfy \f$\min_{|s| \le h} |d + s w| \le 2r + m\f$ (close_in_slab()), and their midpoint
 /// positions are at most \f$2r + m + h(|v_a| + |v_b|)\f$ apart. For two particles no faster than
 /// \f$v_{cut}\f$ that puts them in the same or adjacent rows, and within the reach of the one that
 /// comes first in cell order, which searches the entries after it (search_of()). A faster
 /// particle ("fast") searches every entry within its own reach instead, which covers every
-/// partner no faster than itself (a partner faster still searches for it). So the cell size follows the bulk of
-/// the speeds, not the single fastest particle of a hot gas.
+/// partner no faster than itself (a partner faster still searches for it). So the cell size
+/// follows the bulk of the speeds, not the single fastest particle of a hot gas.
 ///
 /// Two more things no pair needs: time after a particle's wall time (MODEL.md's key puts the wall
 /// first, so a later pair event of that particle is never accepted: path_end(), last_slab()),
@@ -32,7 +31,7 @@
 
 namespace plab::sweep {
 
-/// The space-time grid of one step: rows of height `cell`, each split into `columns_per_cell`
+/// The space-time grid of one step: rows of height `cell`, each split into kColumnsPerCell
 /// narrow columns, so that a particle's neighbours in a row are one run of entries as narrow as
 /// its reach.
 struct Grid {
@@ -47,7 +46,6 @@ struct Grid {
   double margin = 0;       //!< the rounding margin m
   double v_cut = 0;        //!< particles no faster than this are "slow" (see search_of())
   double v_cut2 = 0;       //!< v_cut^2 (a particle is fast when its squared speed exceeds it)
-  int active = 0;          //!< particles that take part (see last_slab())
   /// Number of cells, rows x columns.
   [[nodiscard]] PLAB_HD int cells() const { return rows * columns; }
 };
@@ -160,7 +158,6 @@ PLAB_HD inline bool close_in_slab(double dx, double dy, double wx, double wy, co
 inline Grid choose_for(const Box& box, int active, double v_cut, double vmax, double extent,
                        double alpha = 1.0) {
   Grid g;
-  g.active = active;
   if (!std::isfinite(vmax) || !std::isfinite(extent) || !std::isfinite(v_cut)) {
     g.reach = g.margin = g.cell = HUGE_VAL;  // no geometry to trust: one cell, all pairs
     g.inv_cell = g.inv_column = 0;
