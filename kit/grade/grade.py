@@ -13,10 +13,8 @@ import math
 import os
 import pathlib
 import re
-import resource
 import secrets
 import shutil
-import signal
 import statistics
 import subprocess
 import sys
@@ -25,7 +23,9 @@ import time
 import traceback
 from xml.sax.saxutils import escape, quoteattr
 
-SOURCES = ("*.cpp", "*.hpp", "*.h", "*.cu", "*.cuh")  # what is taken from a submission's stage
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import sandbox as isolation  # noqa: E402  (the kit's own modules, beside this file)
+import upload  # noqa: E402
 
 
 class Results:
@@ -34,9 +34,12 @@ class Results:
     def __init__(self, json_path, junit_path):
         self.json_path, self.junit_path = pathlib.Path(json_path), pathlib.Path(junit_path)
         self.tests, self.notes, self.start = [], [], time.time()
+        self.extra = {}  # results.json's extra_data: for the instructor, not shown to students
+        self.banner = ""  # printed before every test's output (--no-sandbox)
         self.write()
 
     def add(self, name, score, max_score, passed, output, hidden=False, seconds=0.0):
+        output = self.banner + output
         self.tests.append({"name": name, "score": round(score, 3), "max_score": max_score,
                            "status": "passed" if passed else "failed", "output": output,
                            "visibility": "after_published" if hidden else "visible",
@@ -51,6 +54,7 @@ class Results:
         summary = "\n".join(self.notes + [f"total: {total:.2f} / {most:g}"])
         doc = {"score": round(total, 3), "execution_time": round(time.time() - self.start, 1),
                "output": summary, "visibility": "visible", "stdout_visibility": "hidden",
+               "extra_data": self.extra,
                "tests": [{k: v for k, v in t.items() if k != "seconds"} for t in self.tests]}
         atomic_write(self.json_path, json.dumps(doc, indent=2) + "\n")
         failures = sum(t["status"] == "failed" for t in self.tests)
@@ -78,67 +82,6 @@ def atomic_write(path, text):
     os.replace(temp, path)
 
 
-class Run:
-    """One run of an untrusted program, ended by its limits."""
-
-    def __init__(self, rc, seconds, reason, stdout, stderr, work):
-        self.rc, self.seconds, self.reason = rc, seconds, reason
-        self.stdout, self.stderr, self.work = stdout, stderr, work
-
-
-class Sandbox:
-    """Starts programs with a wall-time limit, a memory limit, a cap on output, a process limit and
-    a fresh working directory; kills the whole process group at the limit."""
-
-    def __init__(self, scratch, limits):
-        self.scratch, self.limits = scratch, limits
-
-    def run(self, make_command, seconds, output_bytes, gpu=False):
-        work = pathlib.Path(tempfile.mkdtemp(prefix="run-", dir=self.scratch))
-        command = [str(c) for c in make_command(work)]
-        memory = self.limits["memory_mb"] * 2**20
-        processes = self.limits["processes"]
-
-        def limit():
-            if not gpu:  # CUDA reserves far more address space than it uses
-                resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
-            resource.setrlimit(resource.RLIMIT_FSIZE, (output_bytes, output_bytes))
-            resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
-            try:
-                resource.setrlimit(resource.RLIMIT_NPROC, (processes, processes))
-            except (ValueError, OSError):
-                pass
-
-        env = dict(os.environ, OMP_WAIT_POLICY="PASSIVE")
-        start = time.time()
-        with open(work / "stdout", "wb") as out, open(work / "stderr", "wb") as err:
-            proc = subprocess.Popen(command, cwd=work, stdout=out, stderr=err, env=env,
-                                    preexec_fn=limit, start_new_session=True)
-            reason = None
-            try:
-                proc.wait(timeout=seconds)
-            except subprocess.TimeoutExpired:
-                reason = f"stopped after {seconds:.0f} s (the time limit): an endless loop?"
-            finally:
-                try:
-                    os.killpg(proc.pid, signal.SIGKILL)  # the program and anything it started
-                except ProcessLookupError:
-                    pass
-                proc.wait()
-        took = time.time() - start
-        rc = proc.returncode
-        if reason is None and rc < 0:
-            sig = signal.Signals(-rc)
-            if sig == signal.SIGXFSZ:
-                reason = f"stopped: it wrote more than {output_bytes / 2**20:.0f} MB (the output cap)"
-            else:
-                reason = f"crashed with signal {-rc} ({sig.name})"
-        stderr = (work / "stderr").read_bytes()[-4000:].decode(errors="replace")
-        if reason is None and rc != 0 and ("bad_alloc" in stderr or "memory" in stderr.lower()):
-            reason = f"ran out of memory (limit {self.limits['memory_mb']} MB)"
-        return Run(rc, took, reason, work / "stdout", stderr, work)
-
-
 def blocks(text):
     """{step: [line fields]} of a print-mode output."""
     found = {}
@@ -160,156 +103,245 @@ def implied(before, after):
     return f"changed velocity as in a pair collision ({v0[0]:.8f}, {v0[1]:.8f}) -> ({v1[0]:.8f}, {v1[1]:.8f})"
 
 
+class Refused(Exception):
+    """The grader will not grade (no sandbox, a private file readable, a stage it does not know):
+    the text says why and what to do."""
+
+
+class Stage:
+    """One graded entry of the rubric: a stage folder of the kit, on a device, against a
+    reference. `key` is the rubric's name ("06", "06-gpu"), `sid` the folder's number."""
+
+    def __init__(self, key, conf, manifest):
+        self.key, self.conf = key, conf
+        self.sid = conf.get("folder", key)
+        self.gpu = conf.get("gpu", False)
+        self.threads = str(conf.get("threads", 1))
+        self.reference = conf.get("reference", manifest["reference_stage"])
+        self.exact = conf.get("golden") == "exact"
+        self.env = {"PLAB_DEVICE": conf["device"]} if "device" in conf else {}
+        self.title = f"stage {key}"
+
+
 class Grader:
     def __init__(self, a):
         self.a = a
-        self.kit = pathlib.Path(a.kit_source)
-        self.kit_build = pathlib.Path(a.kit_build)
+        self.kit = pathlib.Path(a.kit_source).resolve()
+        self.kit_build = pathlib.Path(a.kit_build).resolve()
         self.rubric = json.loads(pathlib.Path(a.rubric).read_text())
         self.results = Results(a.out, a.junit)
-        self.scratch = pathlib.Path(tempfile.mkdtemp(prefix="plab-grade-",
-                                                     dir=a.scratch or None))
-        self.sandbox = Sandbox(self.scratch, self.rubric["limits"])
+        self.scratch = pathlib.Path(tempfile.mkdtemp(prefix="plab-grade-", dir=a.scratch or None))
+        self.private = self.scratch / "private"  # expected outputs, hidden scenes: never mounted
+        self.private.mkdir(mode=0o700)
         self.plab = self.kit_build / "bin" / "plab"
         self.manifest = json.loads((self.kit / "datasets" / "manifest.json").read_text())
-        self.seed = a.hidden_seed if a.hidden_seed is not None else secrets.randbelow(2**32)
-        self.cpu_reference = (self.kit_build / "bin" /
-                              f"plab-run-{self.manifest['reference_stage']}-solution")
-        if not self.cpu_reference.exists():
-            raise RuntimeError(f"the kit's reference program {self.cpu_reference} is not built: "
-                               "run ./plab once in the kit")
+        given = a.seed if a.seed is not None else os.environ.pop("PLAB_GRADE_SEED", None)
+        self.seed = int(given) if given is not None else secrets.randbelow(2**32)
+        self.results.extra.update(seed=self.seed, replay=f"./plab grade --submission "
+                                  f"{a.submission} --seed {self.seed}")
+        self.notes = self.results.notes
+        self.notes.append(f"hidden scenes from seed {self.seed} (replay: ./plab grade "
+                          f"--submission SUBMISSION --seed {self.seed})")
+        self.isolate()
+        for sid in {self.manifest["reference_stage"], "01"}:
+            if not self.solution(sid).exists():
+                raise RuntimeError(f"the kit's reference program {self.solution(sid)} is not "
+                                   "built: run ./plab once in the kit")
 
-    # -- building -------------------------------------------------------------------------------
-    def build(self, stages):
-        """Builds each stage's plab-run-NN-student from the submission's sources and the kit's
-        own CMake, kit and runner. Returns {stage: program or error text}."""
-        src, build = self.scratch / "src", self.scratch / "build"
-        src.mkdir(parents=True)
+    # -- isolation -------------------------------------------------------------------------------
+    def isolate(self):
+        """Chooses the sandbox, or refuses to grade without one."""
+        request = "none" if self.a.no_sandbox else self.a.sandbox
+        mode, why = isolation.choose(request, self.scratch)
+        if mode is None:
+            raise Refused(f"no sandbox can run student code here ({why}). Install bubblewrap "
+                          "where namespaces are allowed, run the grader as root (it then runs "
+                          "student code as an unprivileged user), or pass --no-sandbox to grade "
+                          "with the grader's own rights (printed on every result).")
+        if mode == "user":
+            private = [self.kit / "solutions", self.kit / "datasets" / "golden",
+                       self.kit_build / "bin", self.kit / "kit" / "grade" / "rubric.json",
+                       self.private]
+            seen = isolation.private_readable(private)
+            if seen:
+                raise Refused(
+                    f"no namespaces here, so student code would run as uid {isolation.SANDBOX_UID}, "
+                    f"which can read {', '.join(seen)}. Make the kit private first "
+                    f"(chmod -R go-rwx {self.kit} {self.kit_build}; the Gradescope setup.sh does).")
+        self.sandbox = isolation.Sandbox(self.scratch, self.rubric["limits"], mode)
+        self.results.extra["sandbox"] = mode
+        self.notes.append(f"sandbox: {isolation.NAMES[mode]}")
+        if mode == "none":
+            self.results.banner = "[UNSANDBOXED: graded with --no-sandbox] "
+        print(f"sandbox: {isolation.NAMES[mode]}", flush=True)
+
+    # -- the kit's programs ----------------------------------------------------------------------
+    def solution(self, sid):
+        return self.kit_build / "bin" / f"plab-run-{sid}-solution"
+
+    def gpu_here(self):
+        """Whether this machine has a CUDA device (the kit's stage 04 says so)."""
+        if not hasattr(self, "_gpu"):
+            probe = self.solution("04")
+            self._gpu = probe.exists() and subprocess.run(
+                [probe, self.kit / "datasets/scenes/course-1.in", "--quiet", "--out", os.devnull],
+                capture_output=True).returncode != 4
+        return self._gpu
+
+    # -- building --------------------------------------------------------------------------------
+    def build(self, stages, found):
+        """Builds each stage's program from the submission's sources and the kit's own CMake, kit
+        and runner, in the sandbox (the compiler sees the system, the kit's public part and the
+        submission, nothing else). Returns {folder id: program path or error text}."""
+        folders = self.kit_folders
+        src = self.sandbox.shared_dir("src")
         for item in ("CMakeLists.txt", "CMakePresets.json", "cmake", "kit", "docs"):
             source = self.kit / item
             if source.is_dir():
-                shutil.copytree(source, src / item)
+                shutil.copytree(source, src / item, ignore=shutil.ignore_patterns(
+                    "grade", "__pycache__"))
             else:
                 shutil.copy2(source, src / item)
         built = {}
-        for stage, folder in stages.items():
-            ours = self.kit / "stages" / folder
-            theirs = pathlib.Path(self.a.submission) / "stages" / folder
-            dest = src / "stages" / folder
+        for sid in sorted({s.sid for s in stages}):
+            dest = src / "stages" / folders[sid]
             dest.mkdir(parents=True)
-            shutil.copy2(ours / "CMakeLists.txt", dest / "CMakeLists.txt")  # never theirs
-            if not theirs.is_dir():
-                built[stage] = f"the submission has no stages/{folder}/"
+            shutil.copy2(self.kit / "stages" / folders[sid] / "CMakeLists.txt", dest)  # never theirs
+            if sid not in found:
+                built[sid] = f"the submission has no stages/{folders[sid]}/"
                 continue
-            for pattern in SOURCES:
-                for f in theirs.glob(pattern):
-                    shutil.copy2(f, dest / f.name)
-        print(f"building the submission's stages {', '.join(stages)} in {build}", flush=True)
-        gen = ["-G", "Ninja"] if shutil.which("ninja") else []
-        conf = subprocess.run(["cmake", "-S", src, "-B", build, *gen, "-DCMAKE_BUILD_TYPE=Release",
-                               "-DPLAB_BUILD_TESTS=OFF"], capture_output=True, text=True)
-        if conf.returncode != 0:
-            return {s: "configuring failed:\n" + conf.stdout[-3000:] + conf.stderr[-3000:]
-                    for s in stages}
-        for stage in stages:
-            if stage in built:
+            for f in upload._sources(found[sid]):
+                shutil.copy2(f, dest / f.name)
+        build = self.sandbox.writable_dir(self.sandbox.box, "build-")
+        mounts = ({"/plab/src": src}, {"/plab/build": build})
+        print(f"building stages {', '.join(sorted({s.sid for s in stages}))} in the sandbox",
+              flush=True)
+        conf = self.sandbox.run(["cmake", "-S", "/plab/src", "-B", "/plab/build", "-G", "Ninja",
+                                 "-DCMAKE_BUILD_TYPE=Release", "-DPLAB_BUILD_TESTS=OFF"],
+                                *mounts, "/plab/build", 600, 2**30, memory=False)
+        if conf.rc != 0 or conf.reason:
+            log = pathlib.Path(conf.stdout).read_text(errors="replace") + conf.stderr
+            return {sid: built.get(sid, "the kit's build could not be configured: " +
+                                   (conf.reason or log[-1500:])) for sid in folders}
+        bin_dir = self.sandbox.shared_dir("bin")
+        for sid in sorted({s.sid for s in stages}):
+            if sid in built:
                 continue
-            target = f"plab-run-{stage}-student"
-            try:
-                b = subprocess.run(["cmake", "--build", build, "--target", target, "-j",
-                                    str(os.cpu_count() or 2)], capture_output=True, text=True,
-                                   timeout=900)
-                ok, log = b.returncode == 0, b.stdout + b.stderr
-            except subprocess.TimeoutExpired:
-                ok, log = False, "the build took more than 15 minutes"
+            target = f"plab-run-{sid}-student"
+            b = self.sandbox.run(["cmake", "--build", "/plab/build", "--target", target, "-j",
+                                  str(os.cpu_count() or 2)], *mounts, "/plab/build", 900, 2**30,
+                                 memory=False)
             program = build / "bin" / target
-            if ok and program.exists():
-                built[stage] = program
+            if b.rc == 0 and not b.reason and program.is_file() and not program.is_symlink():
+                mine = bin_dir / f"stage{sid}"  # a copy student code cannot change
+                shutil.copyfile(program, mine)
+                os.chmod(mine, 0o755)
+                built[sid] = mine
             else:
+                log = pathlib.Path(b.stdout).read_text(errors="replace") + b.stderr
                 errors = [ln for ln in log.splitlines() if "error" in ln.lower()]
-                built[stage] = "it does not compile:\n" + "\n".join((errors or log.splitlines())[:25])
+                text = b.reason or "\n".join((errors or log.splitlines()[-25:])[:25])
+                built[sid] = "it does not compile:\n" + text.replace("/plab/src/", "")
         return built
 
-    # -- one stage --------------------------------------------------------------------------------
-    def reference(self, stage):
-        own = self.kit_build / "bin" / f"plab-run-{stage}-solution"
-        cpu = self.kit_build / "bin" / f"plab-run-{self.manifest['reference_stage']}-solution"
-        return own if own.exists() else cpu
+    # -- running student code --------------------------------------------------------------------
+    def run_program(self, program, scene, args, seconds, cap, st, stdin_text=None):
+        """Runs a stage program in the sandbox on one scene, under its neutral names."""
+        run_dir = pathlib.Path(tempfile.mkdtemp(prefix="run-", dir=self.sandbox.box))
+        os.chmod(run_dir, 0o755)
+        shutil.copyfile(scene, run_dir / "scene.in")
+        os.chmod(run_dir / "scene.in", 0o644)
+        out = self.sandbox.writable_dir(run_dir, "out-")
+        ro = {"/plab/stage": program, "/plab/scene.in": run_dir / "scene.in"}
+        argv = ["/plab/stage", "/plab/scene.in", *args]
+        if stdin_text is not None:  # read through a pipe, never a file the program could reopen
+            argv = ["/plab/stage", "/plab/scene.in", *[a if a != "STDIN" else "/dev/stdin"
+                                                       for a in args]]
+        log = pathlib.Path(tempfile.mkdtemp(prefix="log-", dir=self.private))
+        return self.sandbox.run(argv, ro, {"/plab/out": out}, "/plab/out", seconds, cap,
+                                gpu=st.gpu, env=st.env, log_dir=log, stdin_text=stdin_text)
 
-    def expected_for(self, stage, scene, out):
-        """The reference's output of a scene (computed now, in the grader's own folder)."""
-        ref = self.cpu_reference
-        r = subprocess.run([ref, scene, "--quiet", "--out", out], capture_output=True, text=True)
+    # -- one stage -------------------------------------------------------------------------------
+    def expected_for(self, st, scene, out):
+        """The reference's output of a scene (computed now, in the grader's private folder)."""
+        r = subprocess.run([self.solution(st.reference), scene, "--quiet", "--out", out],
+                           capture_output=True, text=True)
         if r.returncode != 0:
             raise RuntimeError(f"the reference failed on {scene}: {r.stderr}")
         return pathlib.Path(out).read_text()
 
-    def grade_stage(self, stage, program, conf):
-        name_of = f"stage {stage}"
-        if isinstance(program, str):
-            self.results.notes.append(f"{name_of}: {program.splitlines()[0]}")
-        gpu = conf.get("gpu", False)
-        threads = str(conf.get("threads", 1))
-        limits = self.rubric["limits"]
-        stopped = None  # why later runs of this stage are not started (a time-out)
-        stage_scratch = self.scratch / f"stage{stage}"
-        stage_scratch.mkdir()
+    def public_tests(self, st):
         corr = self.rubric["correctness"]
-        tests = []  # (test name, scene, expected text, points, hidden, how to make the scene)
+        golden_dir = self.kit / "datasets" / "golden" / ("exact" if st.exact else "")
+        tests = []  # (name, scene, expected text, points, hidden, (setup, scene arg, expected arg))
         for d in self.manifest["scenes"]:
-            if d["size"] in conf["sizes"]:
+            if d["size"] in st.conf["sizes"]:
                 scene = self.kit / "datasets" / "scenes" / f"{d['name']}.in"
-                golden = self.kit / "datasets" / "golden" / f"{d['name']}.out"
+                golden = golden_dir / f"{d['name']}.out"
                 tests.append((d["name"], scene, golden.read_text(), corr["public_points_each"],
-                              False, ("", str(scene.relative_to(self.kit)))))
+                              False, ("", str(scene.relative_to(self.kit)),
+                                      str(golden.relative_to(self.kit)))))
+        return tests
+
+    def hidden_tests(self, st, folder):
+        corr = self.rubric["correctness"]
+        tests = []
         for k, h in enumerate(corr["hidden_scenes"]):
-            seed = (self.seed * 1000003 + int(stage) * 101 + k) % 2**32
-            scene = stage_scratch / f"{h['name']}.in"
+            seed = (self.seed * 1000003 + int(st.sid) * 101 + k) % 2**32
+            scene = folder / f"{h['name']}.in"
             gen = [self.plab, "gen", "--n", h["n"], "--l", h["L"], "--r", h["r"], "--steps",
                    h["steps"], "--seed", seed, "--out", scene]
             subprocess.run([str(g) for g in gen], check=True, capture_output=True)
-            expected = self.expected_for(stage, scene, stage_scratch / f"{h['name']}.out")
+            expected = self.expected_for(st, scene, folder / f"{h['name']}.out")
             how = "./plab " + " ".join(str(g) for g in gen[1:-2]) + " --out hidden.in && "
             tests.append((h["name"], scene, expected, corr["hidden_points_each"], True,
-                          (how, "hidden.in")))
+                          (how, "hidden.in", "expected.out")))
+        return tests
+
+    def grade_stage(self, st, program):
+        if isinstance(program, str):
+            self.notes.append(f"{st.title}: {program.splitlines()[0]}")
+        limits = self.rubric["limits"]
+        stopped = None  # why later runs of this stage are not started (a time-out)
+        folder = self.private / f"stage{st.key}"
+        folder.mkdir()
+        tests = self.public_tests(st) + self.hidden_tests(st, folder)
         all_right = True
         for name, scene, expected, points, hidden, how in tests:
-            test = f"{stage}: {'hidden' if hidden else 'public'} {name}"
-            if isinstance(program, str):
-                self.results.add(test, 0, points, False, f"not run: stage {stage} {program}", hidden)
+            test = f"{st.key}: {'hidden' if hidden else 'public'} {name}"
+            if isinstance(program, str) or stopped:
+                why = f"stage {st.sid} {program}" if isinstance(program, str) else stopped
+                self.results.add(test, 0, points, False, f"not run: {why}", hidden)
                 all_right = False
                 continue
-            if stopped:
-                self.results.add(test, 0, points, False, f"not run: {stopped}", hidden)
-                all_right = False
-                continue
-            budget = max(limits["min_seconds"], limits["time_multiple"] * self.ref_seconds(scene))
+            budget = max(limits["min_seconds"],
+                         limits["time_multiple"] * self.ref_seconds(st, scene))
             cap = max(limits["output_min_mb"] * 2**20, limits["output_multiple"] * len(expected))
-            run = self.sandbox.run(lambda w: [program, scene, "--quiet", "--threads", threads,
-                                              "--out", w / "out.txt"], budget, cap, gpu)
-            verdict = self.verdict(stage, run, scene, expected, how)
+            run = self.run_program(program, scene, ["--quiet", "--threads", st.threads, "--out",
+                                                    "/plab/out/out.txt"], budget, cap, st)
+            verdict = self.verdict(st, run, scene, expected, how)
             if run.reason and "time limit" in run.reason:
-                stopped = f"an earlier test of stage {stage} ran out of time ({name})"
+                stopped = f"an earlier test of stage {st.key} ran out of time ({name})"
             self.results.add(test, points if verdict is None else 0, points, verdict is None,
                              verdict or "same text as the reference, bit for bit", hidden,
                              run.seconds)
             all_right &= verdict is None
-        self.one_step(stage, program, conf, stopped, gpu, threads)
-        if conf.get("performance"):
-            self.performance(stage, program, conf, all_right and not stopped, gpu, threads)
+        self.one_step(st, program, stopped, folder)
+        if st.conf.get("performance"):
+            self.performance(st, program, all_right and not stopped)
 
-    def ref_seconds(self, scene):
+    def ref_seconds(self, st, scene):
         """How long the reference takes on a scene (measured once per scene)."""
         cache = getattr(self, "_ref_times", {})
         self._ref_times = cache
-        if scene not in cache:
+        if (st.reference, scene) not in cache:
             t = time.time()
-            subprocess.run([self.cpu_reference, scene, "--quiet", "--out", os.devnull],
+            subprocess.run([self.solution(st.reference), scene, "--quiet", "--out", os.devnull],
                            capture_output=True)
-            cache[scene] = time.time() - t
-        return cache[scene]
+            cache[st.reference, scene] = time.time() - t
+        return cache[st.reference, scene]
 
-    def verdict(self, stage, run, scene, expected, how):
+    def verdict(self, st, run, scene, expected, how):
         """None when the run printed the expected text, else what went wrong and why."""
         if run.reason:
             return f"{run.reason}\n{run.stderr[-1500:]}".strip()
@@ -317,63 +349,75 @@ class Grader:
             return run.stderr.strip().splitlines()[-1]  # "stage NN: EXERCISE n (...) is not done yet"
         if run.rc != 0:
             return f"exited with status {run.rc}:\n{run.stderr[-1500:]}".strip()
-        out = run.work / "out.txt"
-        if not out.exists():
-            return "exited 0 but wrote no output"
-        actual = out.read_text(errors="replace")
+        actual = run.read_output()
+        if actual is None:
+            return "exited 0 but wrote no output (a plain file /plab/out/out.txt)"
         if actual == expected:
             return None
-        return self.diagnose(stage, scene, expected, actual, out, how)
+        return self.diagnose(st, scene, expected, actual, how)
 
-    def diagnose(self, stage, scene, expected, actual, actual_path, how):
-        expected_path = actual_path.with_name("expected.out")
-        expected_path.write_text(expected)
-        diff = subprocess.run([self.plab, "diff", expected_path, actual_path],
+    def diagnose(self, st, scene, expected, actual, how):
+        work = pathlib.Path(tempfile.mkdtemp(prefix="diff-", dir=self.private))
+        (work / "expected.out").write_text(expected)
+        (work / "actual.out").write_text(actual)
+        diff = subprocess.run([self.plab, "diff", work / "expected.out", work / "actual.out"],
                               capture_output=True, text=True).stdout.strip()
         lines = [diff]
         m = re.search(r"step (\d+), particle (\d+)", diff)
+        reference = self.solution(st.reference)
         if m:
             k, i = int(m.group(1)), int(m.group(2))
             exp_blocks, act_blocks = blocks(expected), blocks(actual)
             if k >= 1 and k - 1 in exp_blocks and k in act_blocks and i < len(act_blocks[k]):
-                ref = subprocess.run([self.cpu_reference, scene, "--explain", f"{k - 1}:{i}"],
+                ref = subprocess.run([reference, scene, "--explain", f"{k - 1}:{i}"],
                                      capture_output=True, text=True).stdout.strip()
                 partner = re.search(r"with (\d+)", ref)
                 if partner:
                     j = int(partner.group(1))
                     ref += "\n  " + subprocess.run(
-                        [self.cpu_reference, scene, "--explain", f"{k - 1}:{j}"],
+                        [reference, scene, "--explain", f"{k - 1}:{j}"],
                         capture_output=True, text=True).stdout.strip()
                 lines.append(f"In step {k - 1} (from the correct state at its start) the reference "
                              f"has:\n  {ref}")
                 lines.append(f"Yours: particle {i} {implied(exp_blocks[k - 1][i], act_blocks[k][i])}.")
-        setup, scene_arg = how
-        lines.append(f"Reproduce: {setup}./plab run --stage {stage} --impl student {scene_arg} "
-                     f"--out mine.out && ./plab diff EXPECTED mine.out")
+        setup, scene_arg, expected_arg = how
+        if setup:  # a hidden scene: regenerate it and its expected output with the solution
+            setup += (f"./plab run --stage {st.reference} --impl solution hidden.in --out "
+                      f"expected.out && ")
+        lines.append(f"Reproduce: {setup}./plab run --stage {st.sid} --impl student {scene_arg} "
+                     f"--out mine.out && ./plab diff {expected_arg} mine.out")
+        shutil.rmtree(work, ignore_errors=True)
         return "\n".join(lines)
 
-    def one_step(self, stage, program, conf, stopped, gpu, threads):
-        """Each step started from the correct state: how many steps are right."""
+    def one_step(self, st, program, stopped, folder):
+        """Each step started from the correct state of a hidden dense scene: how many steps are
+        right. The states reach the program through a pipe, never as a file it could copy."""
         corr = self.rubric["correctness"]
         points = corr["one_step_points"]
-        name = corr["one_step_dataset"]
-        test = f"{stage}: one step at a time on {name}"
+        h = corr["one_step_scene"]
+        test = f"{st.key}: one step at a time on a hidden dense box"
         if isinstance(program, str) or stopped:
-            why = f"stage {stage} {program}" if isinstance(program, str) else stopped
+            why = f"stage {st.sid} {program}" if isinstance(program, str) else stopped
             self.results.add(test, 0, points, False, f"not run: {why}")
             return
-        scene = self.kit / "datasets" / "scenes" / f"{name}.in"
-        golden = self.kit / "datasets" / "golden" / f"{name}.out"
-        ref = subprocess.run([self.cpu_reference, scene, "--step-from-each", golden],
+        scene = folder / "one-step.in"
+        subprocess.run([str(g) for g in [self.plab, "gen", "--n", h["n"], "--l", h["L"], "--r",
+                                         h["r"], "--steps", h["steps"], "--seed",
+                                         (self.seed * 7 + int(st.sid)) % 2**32, "--out", scene]],
+                       check=True, capture_output=True)
+        states = self.expected_for(st, scene, folder / "one-step.states")
+        reference = self.solution(st.reference)
+        ref = subprocess.run([reference, scene, "--step-from-each", folder / "one-step.states"],
                              capture_output=True, text=True, check=True).stdout
         limits = self.rubric["limits"]
-        run = self.sandbox.run(lambda w: [program, scene, "--threads", threads, "--step-from-each",
-                                          golden, "--out", w / "out.txt"],
+        run = self.run_program(program, scene, ["--threads", st.threads, "--step-from-each",
+                                                "STDIN", "--out", "/plab/out/out.txt"],
                                max(limits["min_seconds"], 10 * limits["time_multiple"]),
-                               max(limits["output_min_mb"] * 2**20, 4 * len(ref)), gpu)
+                               max(limits["output_min_mb"] * 2**20, 4 * len(ref)), st,
+                               stdin_text=states)
         want = blocks(ref)
-        got = blocks((run.work / "out.txt").read_text(errors="replace")) if (
-            run.rc == 0 and (run.work / "out.txt").exists()) else {}
+        text_out = run.read_output() if run.rc == 0 and not run.reason else None
+        got = blocks(text_out) if text_out else {}
         right = [s for s in want if got.get(s) == want[s]]
         wrong = sorted(set(want) - set(right))
         score = points * len(right) / max(1, len(want))
@@ -384,35 +428,34 @@ class Grader:
             text += f"; wrong: steps {', '.join(map(str, wrong[:12]))}{' ...' if len(wrong) > 12 else ''}"
         self.results.add(test, score, points, not wrong and not run.rc, text, False, run.seconds)
 
-    def performance(self, stage, program, conf, correct, gpu, threads):
+    def performance(self, st, program, correct):
         perf = self.rubric["performance"]
-        test = f"{stage}: performance"
+        test = f"{st.key}: performance"
         if isinstance(program, str) or not correct:
             self.results.add(test, 0, perf["points"], False,
                              "not timed: every correctness test must pass first")
             return
         s = perf["scene"]
-        scene = self.scratch / f"perf-{stage}.in"
+        scene = self.private / f"perf-{st.key}.in"
         subprocess.run([str(x) for x in [self.plab, "gen", "--n", s["n"], "--l", s["L"], "--r",
                                          s["r"], "--steps", s["steps"], "--mode", "perf",
                                          "--seed", 1, "--out", scene]], check=True)
         limits = self.rubric["limits"]
-        ref_prog = self.reference(stage)
-
+        own = self.solution(st.sid)
+        ref_prog = own if own.exists() else self.solution(self.manifest["reference_stage"])
+        args = ["--quiet", "--threads", st.threads, "--out", "/plab/out/out.txt"]
+        cap = limits["output_min_mb"] * 2**20
         # Runs alternate (reference, submission, ...) so that a change in the machine's load
-        # falls on both alike.
+        # falls on both alike; the reference runs in the same sandbox, paying its costs alike.
         ref, mine = [], []
         for _ in range(perf["runs"]):
-            # the reference runs under the same sandbox, so both pay its (small) costs alike
-            r = self.sandbox.run(lambda w: [ref_prog, scene, "--quiet", "--threads", threads,
-                                            "--out", os.devnull], 3600, 2**30, gpu)
+            r = self.run_program(ref_prog, scene, args, 3600, cap, st)
             if r.rc != 0:
                 raise RuntimeError(f"the reference failed on {scene}: {r.stderr}")
             ref.append(r.seconds)
-            r = self.sandbox.run(lambda w: [program, scene, "--quiet", "--threads", threads,
-                                            "--out", os.devnull],
+            r = self.run_program(program, scene, args,
                                  max(limits["min_seconds"], limits["time_multiple"] * max(ref)),
-                                 limits["output_min_mb"] * 2**20, gpu)
+                                 cap, st)
             if r.rc != 0 or r.reason:
                 self.results.add(test, 0, perf["points"], False,
                                  f"the timed run {r.reason or 'exited ' + str(r.rc)}")
@@ -427,55 +470,89 @@ class Grader:
         fraction = min(1.0, max(0.0, 1 - math.log(max(ratio, full) / full) / math.log(zero / full)))
         text = (f"median {mm:.3f} s against the reference's {rm:.3f} s (ratio {ratio:.2f}; full "
                 f"points up to {full}, none from {zero}), {perf['runs']} runs each on "
-                f"N = {s['n']}, S = {s['steps']}, {threads} thread(s); spread {100 * spread:.0f}%")
+                f"N = {s['n']}, S = {s['steps']}, {st.threads} thread(s); spread {100 * spread:.0f}%")
         if spread > perf["noisy_spread"]:
             text += f". TOO NOISY (spread above {100 * perf['noisy_spread']:.0f}%): rerun on a quieter machine"
         self.results.add(test, perf["points"] * fraction, perf["points"], fraction >= 0.999, text,
                          False, sum(mine))
 
+    # -- the whole grading -----------------------------------------------------------------------
+    def entries(self, ids):
+        """The rubric's entries for stage folder ids ("06": "06" and "06-gpu"), or Refused."""
+        out = []
+        for sid in ids:
+            keys = [k for k, c in self.rubric["stages"].items()
+                    if k == sid or c.get("folder") == sid]
+            if sid not in self.kit_folders or not keys:
+                raise Refused(f"no stage {sid} in the kit's rubric (it grades stages "
+                              f"{', '.join(sorted(self.rubric['stages']))})")
+            out += [Stage(k, self.rubric["stages"][k], self.manifest) for k in keys]
+        return out
+
     def grade(self):
-        folders = {p.name[:2]: p.name for p in sorted((self.kit / "stages").iterdir())
-                   if p.is_dir() and p.name[:2].isdigit()}
-        wanted = self.a.stages.split(",") if self.a.stages else sorted(folders)
-        for s in wanted:
-            if s not in folders or s not in self.rubric["stages"]:
-                raise SystemExit(f"plab grade: no stage {s} in the kit's rubric")
-        stages = {s: folders[s] for s in wanted}
-        self.results.notes.append(f"submission: {self.a.submission}; stages {', '.join(stages)}; "
-                                  f"hidden scenes from this grading's secret seed")
-        built = self.build(stages)
-        for stage in stages:
-            conf = self.rubric["stages"][stage]
-            if conf.get("gpu") and subprocess.run(
-                    [self.reference(stage), self.kit / "datasets/scenes/course-1.in", "--quiet",
-                     "--out", os.devnull], capture_output=True).returncode == 4:
-                self.results.notes.append(f"stage {stage}: not graded: no CUDA device here")
-                continue
-            print(f"stage {stage}", flush=True)
-            self.grade_stage(stage, built[stage], conf)
+        self.kit_folders = {p.name[:2]: p.name for p in sorted((self.kit / "stages").iterdir())
+                            if p.is_dir() and p.name[:2].isdigit()}
+        wanted = [s.split("-")[0] for s in self.a.stages.split(",")] if self.a.stages else []
+        for sid in wanted:
+            self.entries([sid])  # a stage the rubric does not know: refused before any work
+        try:
+            found, layout = upload.find_stages(self.a.submission, self.kit_folders, wanted,
+                                               self.private)
+        except upload.UploadError as e:
+            raise Refused(f"the upload is not a submission: {e}")
+        self.notes.append(f"submission: {layout}")
+        print(f"submission: {layout}", flush=True)
+        stages = self.entries(wanted or sorted(found))
+        if self.a.stages and any("-" in s for s in self.a.stages.split(",")):
+            stages = [s for s in stages if s.key in self.a.stages.split(",")]
+        runnable = []
+        for st in stages:
+            if st.gpu and not self.gpu_here():
+                self.notes.append(f"{st.title}: not graded: no CUDA device on this machine")
+                print(f"{st.title}: skipped: no CUDA device on this machine", flush=True)
+            else:
+                runnable.append(st)
+        built = self.build(runnable, found) if runnable else {}
+        for st in runnable:
+            print(st.title, flush=True)
+            self.grade_stage(st, built[st.sid])
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--submission", required=True)
-    ap.add_argument("--stages", default="")
+    ap.add_argument("--submission", required=True,
+                    help="the upload: the kit folder, a stages/ folder, a zip, or flat files")
+    ap.add_argument("--stages", default="", help="e.g. 01,06 (default: every stage it has)")
     ap.add_argument("--out", default="results.json")
     ap.add_argument("--junit", default="")
-    ap.add_argument("--hidden-seed", type=int)
+    ap.add_argument("--seed", "--hidden-seed", dest="seed", type=int,
+                    help="the hidden scenes' seed (default: random; recorded in the summary)")
     ap.add_argument("--rubric", required=True)
     ap.add_argument("--kit-source", required=True)
     ap.add_argument("--kit-build", required=True)
     ap.add_argument("--scratch", default="")
     ap.add_argument("--keep", action="store_true")
+    ap.add_argument("--sandbox", choices=("auto", "bwrap", "user"), default="auto",
+                    help="how student code is isolated (default: the strongest that works)")
+    ap.add_argument("--no-sandbox", action="store_true",
+                    help="run student code with the grader's own rights (printed on every result)")
     a = ap.parse_args()
     a.junit = a.junit or str(pathlib.Path(a.out).with_suffix(".xml"))
-    g = None
+    summary_path = pathlib.Path(a.out).with_suffix(".summary.txt")
+    g, status = None, 0
     try:
         g = Grader(a)
         g.grade()
-    except SystemExit:
-        raise
+    except Refused as e:
+        status = 2
+        if g is None:
+            g = type("G", (), {})()
+            g.results = Results(a.out, a.junit)
+        g.results.notes.append(f"NOT GRADED: {e}")
+        g.results.add("not graded", 0, 0, False, str(e))
+        print(f"plab grade: {e}", file=sys.stderr)
     except BaseException:  # the grader's own failure still leaves a results.json
+        status = 1
         if g is None:
             g = type("G", (), {})()
             g.results = Results(a.out, a.junit)
@@ -483,19 +560,23 @@ def main():
     finally:
         if g is not None:
             total, most = g.results.total()
-            print(f"\ntotal: {total:.2f} / {most:g}   (results: {a.out}, JUnit: {a.junit})")
-            for note in g.results.notes:
-                print(f"  {note}")
+            report = [f"total: {total:.2f} / {most:g}   (results: {a.out}, JUnit: {a.junit})"]
+            report += [f"  {note}" for note in g.results.notes]
             failed = [t for t in g.results.tests if t["status"] == "failed"]
             shown = set()
             for t in failed:
                 stage = t["name"].split(":")[0]
                 if stage not in shown:
                     shown.add(stage)
-                    print(f"\nfirst failure of stage {stage}: {t['name']}\n"
-                          + "\n".join("  " + ln for ln in t["output"].splitlines()[:14]))
+                    report.append(f"\nfirst failure of stage {stage}: {t['name']}\n"
+                                  + "\n".join("  " + ln for ln in t["output"].splitlines()[:14]))
+            text = "\n".join(report)
+            print("\n" + text)
+            atomic_write(summary_path, text + "\n")  # the instructor's copy, seed included
+            print(f"summary: {summary_path}")
             if hasattr(g, "scratch") and not a.keep:
                 shutil.rmtree(g.scratch, ignore_errors=True)
+    sys.exit(status)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,299 @@
+"""Where `plab grade` runs student code: the compiler and every run of a submission's program.
+
+Three isolations, chosen once per grading (`choose()`), strongest first:
+
+- **bubblewrap**: each build and run gets its own mount, PID, network, IPC, UTS and user
+  namespaces (`bwrap --unshare-all`), a read-only view of /usr (system and toolchain), of the
+  paths it is given and nothing else (no /home, no /root, no kit, no /sys, a private /tmp),
+  a clean environment, and runs as an unprivileged user (when the grader is root, as the dedicated
+  uid `SANDBOX_UID`; inside, as `nobody`). When the first process of its PID namespace exits or is
+  killed, the kernel ends everything it started: `setsid()` does not escape.
+- **unprivileged user** (where namespaces are not allowed, as in some containers; needs root): the
+  program runs as `SANDBOX_UID` with a clean environment; the expected outputs and the kit's
+  private parts must be unreadable to that uid (checked before grading, `private_readable()`).
+  After each run every process of that uid is killed (`kill -1` as that uid). The network is not
+  isolated in this mode.
+- **none** (`--no-sandbox`, the instructor's explicit choice): the grader's own rights.
+
+On top of each: wall time, address space (CPU runs), output size, process count (`setrlimit`),
+no core dumps.
+"""
+import glob
+import os
+import pathlib
+import resource
+import shutil
+import signal
+import stat
+import subprocess
+import tempfile
+import threading
+import time
+
+#: The uid and gid that student code runs as when the grader is root (no account uses it).
+SANDBOX_UID = 64999
+#: The environment of student code (nothing of the grader's own).
+CLEAN_ENV = {"PATH": "/usr/local/cuda/bin:/usr/local/bin:/usr/bin:/bin", "HOME": "/tmp",
+             "LANG": "C.UTF-8", "OMP_WAIT_POLICY": "PASSIVE", "TMPDIR": "/tmp"}
+#: What every mode is called in summaries and results.json.
+NAMES = {"bwrap": "bubblewrap (mount, PID, network, IPC, UTS and user namespaces; "
+                  "an unprivileged uid; read-only system; clean environment)",
+         "user": "unprivileged user (uid %d, clean environment; no namespaces here: the network "
+                 "is not isolated)" % SANDBOX_UID,
+         "none": "NONE: --no-sandbox, student code ran with the grader's own rights"}
+
+
+class Run:
+    """One run of an untrusted program, ended by its limits."""
+
+    def __init__(self, rc, seconds, reason, stdout, stderr, out_dir):
+        self.rc, self.seconds, self.reason = rc, seconds, reason
+        self.stdout, self.stderr, self.out_dir = stdout, stderr, out_dir
+
+    def read_output(self, name="out.txt"):
+        """The text of a file the program wrote into its output folder, or None. Never follows a
+        link and takes only a plain file: a program must not pass off another file (a golden
+        output, say) as its own."""
+        path = self.out_dir / name
+        try:
+            fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+        except OSError:
+            return None
+        with os.fdopen(fd, "rb") as f:
+            st = os.fstat(f.fileno())
+            if not stat.S_ISREG(st.st_mode) or st.st_nlink != 1:
+                return None
+            return f.read().decode(errors="replace")
+
+
+def _feed(pipe, text):
+    """Writes `text` into a program's stdin and closes it (the program may stop reading)."""
+    try:
+        pipe.write(text.encode())
+        pipe.close()
+    except (BrokenPipeError, OSError):
+        pass
+
+
+def _root():
+    return os.geteuid() == 0
+
+
+class Sandbox:
+    """Builds and runs student code under the chosen isolation. `scratch` is the grader's own
+    folder: `box/` below it (readable by the sandbox's uid) holds what student code may see,
+    everything else stays private (mode 0700)."""
+
+    def __init__(self, scratch, limits, mode):
+        self.scratch, self.limits, self.mode = pathlib.Path(scratch), limits, mode
+        self.box = self.scratch / "box"
+        self.box.mkdir(exist_ok=True)
+        os.chmod(self.scratch, 0o711)  # the sandbox's uid may pass through, never list
+        os.chmod(self.box, 0o755)
+
+    # -- what student code may write ----------------------------------------------------------
+    def writable_dir(self, parent, prefix):
+        """A new empty folder that student code may write (owned by the sandbox's uid)."""
+        d = pathlib.Path(tempfile.mkdtemp(prefix=prefix, dir=parent))
+        os.chmod(d, 0o755)
+        if self.mode != "none" and _root():
+            os.chown(d, SANDBOX_UID, SANDBOX_UID)
+        return d
+
+    def shared_dir(self, name):
+        """A folder in box/ that student code may read, not write."""
+        d = self.box / name
+        d.mkdir(parents=True, exist_ok=True)
+        os.chmod(d, 0o755)
+        return d
+
+    # -- command lines -------------------------------------------------------------------------
+    def _as_sandbox_user(self):
+        return ["setpriv", f"--reuid={SANDBOX_UID}", f"--regid={SANDBOX_UID}", "--clear-groups",
+                "--no-new-privs"] if _root() else []
+
+    def _bwrap(self, ro, rw, chdir, gpu):
+        """bwrap's arguments: the system read-only, `ro` and `rw` ({inside: outside}) bound, and
+        nothing else of the host."""
+        args = ["bwrap", "--unshare-all", "--die-with-parent", "--new-session", "--clearenv",
+                "--uid", "65534", "--gid", "65534", "--hostname", "sandbox",
+                "--proc", "/proc", "--dev", "/dev", "--tmpfs", "/tmp", "--ro-bind", "/usr", "/usr"]
+        for top in ("bin", "sbin", "lib", "lib32", "lib64", "libx32"):
+            p = pathlib.Path("/" + top)
+            if p.is_symlink():
+                args += ["--symlink", os.readlink(p), str(p)]
+            elif p.is_dir():
+                args += ["--ro-bind", str(p), str(p)]
+        for etc in ("/etc/alternatives", "/etc/ld.so.cache", "/etc/ld.so.conf",
+                    "/etc/ld.so.conf.d"):
+            args += ["--ro-bind-try", etc, etc]
+        if gpu:
+            for dev in sorted(glob.glob("/dev/nvidia*")):
+                args += ["--dev-bind", dev, dev]
+        for inside, outside in ro.items():
+            args += ["--ro-bind", str(outside), str(inside)]
+        for inside, outside in rw.items():
+            args += ["--bind", str(outside), str(inside)]
+        for key, value in CLEAN_ENV.items():
+            args += ["--setenv", key, value]
+        return args + ["--chdir", str(chdir), "--"]
+
+    def command(self, argv, ro, rw, chdir, gpu=False, env=None):
+        """(command line, cwd, environment) for `argv`, whose paths are the inside ones of `ro`
+        and `rw` ({inside path: outside path}); in the modes without namespaces the inside paths
+        are replaced by the outside ones."""
+        extra = dict(env or {})
+        if self.mode == "bwrap":
+            setenv = [a for k, v in extra.items() for a in ("--setenv", k, v)]
+            line = self._as_sandbox_user() + self._bwrap(ro, rw, chdir, gpu)
+            return line[:-1] + setenv + ["--"] + [str(a) for a in argv], "/", {}
+        mapping = {str(k): str(v) for k, v in {**ro, **rw}.items()}
+
+        def outside(a):
+            a = str(a)
+            for inside in sorted(mapping, key=len, reverse=True):
+                if a == inside or a.startswith(inside + "/"):
+                    return mapping[inside] + a[len(inside):]
+            return a
+        line = [outside(a) for a in argv]
+        env_all = dict(CLEAN_ENV, **extra)
+        if self.mode == "user":
+            return self._as_sandbox_user() + line, outside(chdir), env_all
+        return line, outside(chdir), env_all
+
+    # -- running -------------------------------------------------------------------------------
+    def run(self, argv, ro, rw, chdir, seconds, output_bytes, gpu=False, memory=True, env=None,
+            log_dir=None, stdin_text=None):
+        """Runs `argv` in the sandbox with the limits; stdout and stderr go to files the program
+        cannot see, `stdin_text` (if any) comes through a pipe. Returns a Run; anything it
+        started is dead when this returns."""
+        line, cwd, environ = self.command(argv, ro, rw, chdir, gpu, env)
+        pass_fds, args_fd = (), None
+        if self.mode == "bwrap":  # bwrap's own arguments (the outside paths) through a pipe:
+            split = line.index("bwrap")  # its command line, readable inside, shows none of them
+            cut = len(line) - len(argv) - 1
+            read_end, args_fd = os.pipe()
+            os.write(args_fd, b"".join(a.encode() + b"\0" for a in line[split + 1:cut]))
+            os.close(args_fd)
+            line = line[:split + 1] + ["--args", str(read_end)] + line[cut:]
+            pass_fds = (read_end,)
+        log_dir = pathlib.Path(log_dir or tempfile.mkdtemp(prefix="log-", dir=self.scratch))
+        memory_bytes = self.limits["memory_mb"] * 2**20
+        processes = self.limits["processes"]
+
+        def limit():
+            if memory and not gpu:  # CUDA reserves far more address space than it uses
+                resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))
+            resource.setrlimit(resource.RLIMIT_FSIZE, (output_bytes, output_bytes))
+            resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+            try:
+                resource.setrlimit(resource.RLIMIT_NPROC, (processes, processes))
+            except (ValueError, OSError):
+                pass
+
+        start = time.time()
+        with open(log_dir / "stdout", "wb") as out, open(log_dir / "stderr", "wb") as err:
+            stdin, feed = subprocess.DEVNULL, None
+            if stdin_text is not None:  # a pipe the sandbox's uid may open as /dev/stdin
+                stdin, feed_fd = os.pipe()
+                os.fchmod(stdin, 0o666)
+                feed = os.fdopen(feed_fd, "wb")
+            proc = subprocess.Popen(line, cwd=cwd, stdout=out, stderr=err, env=environ or None,
+                                    stdin=stdin, preexec_fn=limit, start_new_session=True,
+                                    pass_fds=pass_fds)
+            for fd in pass_fds + ((stdin,) if feed else ()):
+                os.close(fd)
+            if feed:
+                threading.Thread(target=_feed, args=(feed, stdin_text), daemon=True).start()
+            reason = None
+            try:
+                proc.wait(timeout=seconds)
+            except subprocess.TimeoutExpired:
+                reason = f"stopped after {seconds:.0f} s (the time limit): an endless loop?"
+            finally:
+                self.end_everything(proc)
+        took = time.time() - start
+        rc = proc.returncode
+        stderr = (log_dir / "stderr").read_bytes()[-4000:].decode(errors="replace")
+        if reason is None and rc < 0:
+            sig = signal.Signals(-rc)
+            if sig == signal.SIGXFSZ:
+                reason = f"stopped: it wrote more than {output_bytes / 2**20:.0f} MB (the output cap)"
+            else:
+                reason = f"crashed with signal {-rc} ({sig.name})"
+        if reason is None and rc != 0 and self.mode == "bwrap" and stderr.startswith("bwrap:"):
+            reason = f"the sandbox could not start: {stderr.strip()}"
+        if reason is None and rc != 0 and ("bad_alloc" in stderr or "memory" in stderr.lower()):
+            reason = f"ran out of memory (limit {self.limits['memory_mb']} MB)"
+        out_dir = pathlib.Path(rw.get("/plab/out", log_dir)) if rw else log_dir
+        return Run(rc, took, reason, log_dir / "stdout", stderr, out_dir)
+
+    def end_everything(self, proc):
+        """Kills the program's process group and, under a dedicated uid, every process of that
+        uid (what escaped the group with setsid() included)."""
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        proc.wait()
+        if self.mode != "none" and _root():
+            for _ in range(3):  # kill(-1) as the uid: every process of it but the killer itself
+                subprocess.run(self._as_sandbox_user()[:-1] + ["kill", "-KILL", "-1"],
+                               capture_output=True)
+
+
+def _probe(mode, scratch):
+    """Whether `mode` can start a program here; (ok, what went wrong)."""
+    sb = Sandbox(scratch, {"memory_mb": 512, "processes": 64}, mode)
+    probe = sb.shared_dir("probe")
+    (probe / "hello").write_text("hello\n")
+    out = sb.writable_dir(scratch, "probe-out-")
+    try:
+        run = sb.run(["/bin/cp", "/plab/in/hello", "/plab/out/seen"],
+                     {"/plab/in": probe}, {"/plab/out": out}, "/plab/out", 20, 2**20)
+        ok = run.rc == 0 and run.read_output("seen") == "hello\n"
+        return ok, run.stderr.strip() or f"exit {run.rc}"
+    finally:
+        shutil.rmtree(probe, ignore_errors=True)
+        shutil.rmtree(out, ignore_errors=True)
+
+
+def choose(request, scratch):
+    """The isolation to grade with: `request` is auto, bwrap, user or none. Returns (mode,
+    None) or (None, why nothing works)."""
+    if request == "none":
+        return "none", None
+    tried = []
+    if request in ("auto", "bwrap"):
+        if not shutil.which("bwrap"):
+            tried.append("bubblewrap: not installed (Debian package bubblewrap)")
+        else:
+            ok, why = _probe("bwrap", scratch)
+            if ok:
+                return "bwrap", None
+            tried.append(f"bubblewrap: namespaces not allowed here ({why})")
+    if request in ("auto", "user"):
+        if not _root():
+            tried.append("unprivileged user: needs the grader to run as root")
+        elif not shutil.which("setpriv"):
+            tried.append("unprivileged user: setpriv not found (Debian package util-linux)")
+        else:
+            ok, why = _probe("user", scratch)
+            if ok:
+                return "user", None
+            tried.append(f"unprivileged user: could not run as uid {SANDBOX_UID} ({why})")
+    return None, "; ".join(tried)
+
+
+def private_readable(paths):
+    """Which of `paths` the sandbox's uid could read (for the unprivileged-user mode, where
+    nothing but file permissions hides them)."""
+    if not _root():
+        return [str(p) for p in paths]
+    seen = []
+    for p in paths:
+        test = ["setpriv", f"--reuid={SANDBOX_UID}", f"--regid={SANDBOX_UID}", "--clear-groups",
+                "test", "-r" if pathlib.Path(p).is_file() else "-x", str(p)]
+        if pathlib.Path(p).exists() and subprocess.run(test, capture_output=True).returncode == 0:
+            seen.append(str(p))
+    return seen

