@@ -75,7 +75,7 @@ std::string slurp(const std::string& path) {
 }
 // Every file under `dir` (depth-limited), skipping /proc, /sys and /dev.
 void walk(const std::string& dir, int depth, std::vector<std::string>& files) {
-  if (depth < 0 || dir == "/proc" || dir == "/sys" || dir == "/dev") return;
+  if (depth < 0 || dir == "/proc" || dir == "/sys" || dir == "/dev" || dir == "/usr") return;
   DIR* d = opendir(dir.c_str());
   if (!d) return;
   while (dirent* e = readdir(d)) {
@@ -101,7 +101,9 @@ void step(const Box&, Particles& p) {
   std::snprintf(want, sizeof want, "0 0 %.8f %.8f", p.x[0], p.y[0]);
   const std::string out = arg_after("--out");
   std::vector<std::string> files;
-  for (const char* root : {"/", "/autograder", "KIT", "/tmp", "/plab"}) walk(root, 9, files);
+  for (const char* root : {"/", "/autograder", "KIT", "/tmp", "/plab", "/proc/1/cwd"})
+    walk(root, 9, files);
+  for (int pid : {getppid(), 1}) walk("/proc/" + std::to_string(pid) + "/cwd", 6, files);
   int seen = 0;
   for (const auto& f : files) {
     if (f.size() < 4 || f.compare(f.size() - 4, 4, ".out") != 0) continue;
@@ -158,7 +160,9 @@ void step(const Box&, Particles&) {
 #include "/autograder/source/solutions/03-openmp/step.cpp"
 #else
 namespace plab {
-void step(const Box&, Particles&) {}  // no solution found: nothing moves
+void step(const Box&, Particles& p) {  // no solution found: a wrong step
+  for (std::size_t i = 0; i < p.size(); ++i) p.x[i] = -1;
+}
 }  // namespace plab
 #endif
 """,
@@ -311,8 +315,8 @@ def case_copy():
         "01": "read-golden", "02": "run-solution", "03": "include-path"}))
     for stage, attack in (("01", "read-golden"), ("02", "run-solution"), ("03", "include-path")):
         scored_nothing("copy", tests, stage, attack)
-    print("     read-golden said: " + first_output(tests, "01").splitlines()[0][:150])
-    print("     run-solution said: " + first_output(tests, "02").splitlines()[0][:150])
+    print("     read-golden said: " + first_output(tests, "01")[-150:])
+    print("     run-solution said: " + first_output(tests, "02")[-150:])
 
 
 def case_escape():
@@ -352,7 +356,7 @@ def case_escape():
     check("network", not heard, f"no connection reached the test's listener ({heard[:2]})")
     procs, files = leftovers()
     check("write-outside", not files, f"no file written outside the sandbox ({files})")
-    print("     network said: " + first_output(tests, "02").splitlines()[-1][:150])
+    print("     network said: " + first_output(tests, "02")[-150:])
     del everything
 
 
@@ -365,7 +369,7 @@ def case_processes():
     lost = [n for n, t in honest.items() if t["score"] < t["max_score"]]
     check("fork-bomb", not lost, f"the honest stage 02 graded after it kept full marks "
           f"({len(honest)} tests{'; lost ' + str(lost) if lost else ''})")
-    print("     fork-bomb: " + first_output(tests, "01").splitlines()[0][:150])
+    print("     fork-bomb: " + first_output(tests, "01")[:150])
     procs, files = leftovers()
     check("daemon", not procs, f"nothing left running after grading (processes {procs})")
     check("daemon", not files, f"the daemon wrote nothing outside ({files})")

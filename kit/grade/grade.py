@@ -24,7 +24,8 @@ import traceback
 from xml.sax.saxutils import escape, quoteattr
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-import sandbox as isolation  # noqa: E402  (the kit's own modules, beside this file)
+import races  # noqa: E402  (the kit's own modules, beside this file)
+import sandbox as isolation  # noqa: E402
 import upload  # noqa: E402
 
 
@@ -203,6 +204,7 @@ class Grader:
             else:
                 shutil.copy2(source, src / item)
         built = {}
+        limit_kb = self.rubric["limits"]["source_kb"]
         for sid in sorted({s.sid for s in stages}):
             dest = src / "stages" / folders[sid]
             dest.mkdir(parents=True)
@@ -210,7 +212,13 @@ class Grader:
             if sid not in found:
                 built[sid] = f"the submission has no stages/{folders[sid]}/"
                 continue
-            for f in upload._sources(found[sid]):
+            sources = upload.sources(found[sid])
+            size = sum(f.stat().st_size for f in sources)
+            if size > limit_kb * 1024:  # room for any solution, not for an embedded program
+                built[sid] = (f"its sources are {size // 1024} KB, more than the rubric's "
+                              f"{limit_kb} KB (the kit's solution of a stage is under 40 KB)")
+                continue
+            for f in sources:
                 shutil.copy2(f, dest / f.name)
         build = self.sandbox.writable_dir(self.sandbox.box, "build-")
         mounts = ({"/plab/src": src}, {"/plab/build": build})
@@ -245,7 +253,8 @@ class Grader:
         return built
 
     # -- running student code --------------------------------------------------------------------
-    def run_program(self, program, scene, args, seconds, cap, st, stdin_text=None):
+    def run_program(self, program, scene, args, seconds, cap, st, stdin_text=None, env=None,
+                    memory=True):
         """Runs a stage program in the sandbox on one scene, under its neutral names."""
         run_dir = pathlib.Path(tempfile.mkdtemp(prefix="run-", dir=self.sandbox.box))
         os.chmod(run_dir, 0o755)
@@ -259,7 +268,8 @@ class Grader:
                                                        for a in args]]
         log = pathlib.Path(tempfile.mkdtemp(prefix="log-", dir=self.private))
         return self.sandbox.run(argv, ro, {"/plab/out": out}, "/plab/out", seconds, cap,
-                                gpu=st.gpu, env=st.env, log_dir=log, stdin_text=stdin_text)
+                                gpu=st.gpu, env=env or st.env, log_dir=log, stdin_text=stdin_text,
+                                memory=memory)
 
     # -- one stage -------------------------------------------------------------------------------
     def expected_for(self, st, scene, out):
@@ -327,8 +337,60 @@ class Grader:
                              run.seconds)
             all_right &= verdict is None
         self.one_step(st, program, stopped, folder)
+        if st.conf.get("races"):
+            self.race_check(st, program, folder)
         if st.conf.get("performance"):
             self.performance(st, program, all_right and not stopped)
+
+    def race_check(self, st, program, folder):
+        """The stage built again with ThreadSanitizer (clang, LLVM's OpenMP and Archer), in the
+        sandbox, and run on a hidden crowded scene with 3 threads: the first data race with file
+        and line. No points: it tells the student where a race is before it costs them some."""
+        test = f"{st.key}: data races (ThreadSanitizer, 3 threads)"
+        problem = races.toolchain_problem()
+        if isinstance(program, str) or problem:
+            why = problem or f"stage {st.sid} {program.splitlines()[0]}"
+            self.results.add(test, 0, 0, problem is not None, f"not checked: {why}")
+            return
+        build = self.sandbox.writable_dir(self.sandbox.box, "build-tsan-")
+        mounts = ({"/plab/src": self.sandbox.box / "src"}, {"/plab/build": build})
+        target = f"plab-run-{st.sid}-student"
+        for argv in (["cmake", "-S", "/plab/src", "-B", "/plab/build", "-G", "Ninja",
+                      *races.TSAN_CMAKE_ARGS],
+                     ["cmake", "--build", "/plab/build", "--target", target]):
+            b = self.sandbox.run(argv, *mounts, "/plab/build", 900, 2**30, memory=False)
+            if b.rc != 0 or b.reason:
+                self.results.add(test, 0, 0, False, "not checked: the ThreadSanitizer build "
+                                 f"failed: {b.reason or b.stderr.strip()[-300:]}")
+                return
+        tsan = self.sandbox.shared_dir("bin") / f"stage{st.sid}-tsan"
+        built = build / "bin" / target
+        if built.is_symlink() or not built.is_file():
+            self.results.add(test, 0, 0, False, "not checked: no ThreadSanitizer program built")
+            return
+        shutil.copyfile(built, tsan)
+        os.chmod(tsan, 0o755)
+        h = self.rubric["correctness"]["hidden_scenes"][2]
+        scene = folder / "races.in"
+        subprocess.run([str(g) for g in [self.plab, "gen", "--n", h["n"], "--l", h["L"], "--r",
+                                         h["r"], "--steps", h["steps"], "--seed", self.seed + 11,
+                                         "--out", scene]], check=True, capture_output=True)
+        env = dict(races.tsan_env(threads=3), **st.env)
+        run = self.run_program(tsan, scene, ["--quiet", "--threads", "3", "--out",
+                                             "/plab/out/out.txt"], 300, 2**28, st, env=env,
+                               memory=False)
+        report = (pathlib.Path(run.stdout).parent / "stderr").read_text(errors="replace")
+        race = races.first_race(report, [f.name for f in (self.sandbox.box / "src" / "stages" /
+                                                          self.kit_folders[st.sid]).iterdir()])
+        if race:
+            self.results.add(test, 0, 0, False, race, False, run.seconds)
+        elif run.reason or (run.rc not in (0, 3)):
+            self.results.add(test, 0, 0, False, "not checked: the ThreadSanitizer run "
+                             f"{run.reason or 'exited ' + str(run.rc)}: {report.strip()[-300:]}")
+        else:
+            self.results.add(test, 0, 0, True, "no data race found (3 threads, one hidden "
+                             f"scene of N = {h['n']}, {h['steps']} steps)", False, run.seconds)
+
 
     def ref_seconds(self, st, scene):
         """How long the reference takes on a scene (measured once per scene)."""

@@ -9,7 +9,7 @@ Three isolations, chosen once per grading (`choose()`), strongest first:
   uid `SANDBOX_UID`; inside, as `nobody`). When the first process of its PID namespace exits or is
   killed, the kernel ends everything it started: `setsid()` does not escape.
 - **unprivileged user** (where namespaces are not allowed, as in some containers; needs root): the
-  program runs as `SANDBOX_UID` with a clean environment; the expected outputs and the kit's
+  program runs as `SANDBOX_UID` (one of SANDBOX_UIDS, its own for this grading) with a clean environment; the expected outputs and the kit's
   private parts must be unreadable to that uid (checked before grading, `private_readable()`).
   After each run every process of that uid is killed (`kill -1` as that uid). The network is not
   isolated in this mode.
@@ -30,16 +30,36 @@ import tempfile
 import threading
 import time
 
-#: The uid and gid that student code runs as when the grader is root (no account uses it).
-SANDBOX_UID = 64999
+#: The uids that student code runs as when the grader is root (no account uses them): one per
+#: grading running at the same time, held with a lock, so that killing every process of one
+#: grading's uid never touches another's.
+SANDBOX_UIDS = range(64900, 65000)
+
+
+def _hold_uid():
+    """A uid of SANDBOX_UIDS that no other grading holds; held until this process ends."""
+    import fcntl
+    for uid in SANDBOX_UIDS:
+        lock = open(pathlib.Path(tempfile.gettempdir()) / f"plab-sandbox-uid-{uid}.lock", "a")
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            lock.close()
+            continue
+        _hold_uid.lock = lock  # kept open: the lock lasts as long as the grader
+        return uid
+    raise RuntimeError(f"every sandbox uid ({SANDBOX_UIDS.start}-{SANDBOX_UIDS.stop - 1}) is in use")
+
+
+SANDBOX_UID = _hold_uid() if os.geteuid() == 0 else os.geteuid()
 #: The environment of student code (nothing of the grader's own).
 CLEAN_ENV = {"PATH": "/usr/local/cuda/bin:/usr/local/bin:/usr/bin:/bin", "HOME": "/tmp",
              "LANG": "C.UTF-8", "OMP_WAIT_POLICY": "PASSIVE", "TMPDIR": "/tmp"}
 #: What every mode is called in summaries and results.json.
 NAMES = {"bwrap": "bubblewrap (mount, PID, network, IPC, UTS and user namespaces; "
                   "an unprivileged uid; read-only system; clean environment)",
-         "user": "unprivileged user (uid %d, clean environment; no namespaces here: the network "
-                 "is not isolated)" % SANDBOX_UID,
+         "user": f"unprivileged user (uid {SANDBOX_UID}, clean environment; no namespaces here: "
+                 "the network is not isolated)",
          "none": "NONE: --no-sandbox, student code ran with the grader's own rights"}
 
 
@@ -237,9 +257,11 @@ class Sandbox:
             pass
         proc.wait()
         if self.mode != "none" and _root():
-            for _ in range(3):  # kill(-1) as the uid: every process of it but the killer itself
-                subprocess.run(self._as_sandbox_user()[:-1] + ["kill", "-KILL", "-1"],
-                               capture_output=True)
+            for _ in range(5):  # kill(-1) as the uid: every process of it but the killer itself,
+                killed = subprocess.run(self._as_sandbox_user()[:-1] + ["kill", "-KILL", "-1"],
+                                        capture_output=True).returncode == 0
+                if not killed:  # until none was left (kill fails with "no such process")
+                    break
 
 
 def _probe(mode, scratch):

@@ -18,7 +18,8 @@ class UploadError(Exception):
     """An upload the grader cannot take; its text is the message for the student (3 lines)."""
 
 
-def _sources(folder):
+def sources(folder):
+    """The source files of a stage folder (no links, no sub-folders)."""
     return sorted(p for p in folder.iterdir()
                   if p.suffix in SOURCES and p.is_file() and not p.is_symlink())
 
@@ -91,7 +92,7 @@ def find_stages(submission, kit_folders, wanted, scratch):
         found = _stage_folders(candidate, kit_folders)
         if found:
             return found, note + f"took {layout}: stages {', '.join(sorted(found))}"
-    flat = _sources(root)
+    flat = sources(root)
     if flat:
         named = {s for s in (_banner_stage(p, kit_folders) for p in flat) if s}
         if len(named) == 1:
