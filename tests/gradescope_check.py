@@ -10,7 +10,8 @@ machine, as in grader_selftest.py).
 The fake /autograder never touches the real one: everything runs in a bubblewrap sandbox (as root)
 whose root is a tmpfs holding binds of the real / 's top-level folders, except the kit's own
 top-level folder (hidden, so that only the zip's copy of the kit can be used), a scratch /tmp and
-the scratch /autograder; no network (setup.sh must not need apt-get). /proc and /dev are the real
+the scratch /autograder; no network (setup.sh must not need apt-get). Without a GPU (as on
+Gradescope) setup.sh is told to leave the CUDA stages out (PLAB_CMAKE_ARGS=-DPLAB_ENABLE_CUDA=OFF). /proc and /dev are the real
 ones, bound, so the grader's own sandbox (bwrap as an unprivileged uid) works inside as outside.
 The scratch is removed whatever the outcome.
 
@@ -80,6 +81,8 @@ def sandbox(scratch):
     args += ["--bind", "/proc", "/proc", "--dev-bind", "/dev", "/dev",
              "--bind", scratch / "tmp", "/tmp", "--bind", scratch / "autograder", "/autograder",
              "--setenv", "TMPDIR", "/tmp", "--chdir", "/autograder"]
+    if not shutil.which("nvidia-smi"):  # no GPU (as on Gradescope): no CUDA stages to build
+        args += ["--setenv", "PLAB_CMAKE_ARGS", "-DPLAB_ENABLE_CUDA=OFF"]
     return args, hide
 
 

@@ -32,8 +32,10 @@ fi
 
 # Configure (build/, CMake preset release; the CUDA stages only where nvcc is found) without the
 # test suite, which grading does not use (half the build time), then build with ./plab.
+# PLAB_CMAKE_ARGS, when set, adds CMake arguments (e.g. -DPLAB_ENABLE_CUDA=OFF).
 if [ ! -f build/CMakeCache.txt ]; then
-  cmake --preset release -DPLAB_BUILD_TESTS=OFF >/dev/null
+  # shellcheck disable=SC2086  # PLAB_CMAKE_ARGS is a list of words
+  cmake --preset release -DPLAB_BUILD_TESTS=OFF ${PLAB_CMAKE_ARGS:-} >/dev/null
 fi
 ./plab --help >/dev/null
 echo "setup.sh: the kit is built in $source_dir/build"
