@@ -10,6 +10,7 @@ void add_run(CLI::App& app);     //!< `plab run`: simulate a scene with one stag
 void add_render(CLI::App& app);  //!< `plab render`: animate a run, or two outputs side by side
 void add_grade(CLI::App& app);   //!< `plab grade`: the autograder
 void add_release(CLI::App& app);  //!< `plab release`: the student version of the kit
+void add_gradescope(CLI::App& app);  //!< `plab gradescope`: the autograder zip (cli/gradescope.cpp)
 void add_accuracy(CLI::App& app); //!< `plab accuracy`: run time against error (stages 06, 07)
 void add_stress(CLI::App& app);   //!< `plab stress`: hostile scenes, invariants, pair-time ulps
 void add_gen(CLI::App& app);     //!< `plab gen`: write a reproducible random scene

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   plab::cli::add_render(app);
   plab::cli::add_grade(app);
   plab::cli::add_release(app);
+  plab::cli::add_gradescope(app);
   plab::cli::add_accuracy(app);
   plab::cli::add_stress(app);
   try {
