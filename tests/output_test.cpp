@@ -1,6 +1,8 @@
 /// \file output_test.cpp
 /// \brief Output format: `%.8f` bit for bit (without printf), `-0.00000000` written as `0.00000000`.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -8,6 +10,7 @@
 
 #include "plab/generate.hpp"
 #include "plab/io.hpp"
+#include "plab/runtime.hpp"
 
 namespace {
 
@@ -84,3 +87,17 @@ TEST(Digest, SeesEveryField) {
 }
 
 }  // namespace
+
+// Output to a device (`--out /dev/null`) is written in place: renaming a finished file onto the
+// path, as for a plain file, would replace the device itself when the kit runs as root.
+TEST(OutputFile, DeviceIsWrittenInPlace) {
+  {
+    plab::OutputFile f("/dev/null");
+    std::fputs("0 0 1.00000000 1.00000000 0.00000000 0.00000000\n", f.get());
+    f.commit();
+  }
+  struct stat st {};
+  ASSERT_EQ(::stat("/dev/null", &st), 0);
+  EXPECT_TRUE(S_ISCHR(st.st_mode)) << "/dev/null is no longer a character device";
+  EXPECT_NE(::access("/dev/null.partial", F_OK), 0) << "a /dev/null.partial was left behind";
+}

@@ -166,7 +166,9 @@ class Sandbox:
         if self.mode == "bwrap":
             setenv = [a for k, v in extra.items() for a in ("--setenv", k, v)]
             line = self._as_sandbox_user() + self._bwrap(ro, rw, chdir, gpu)
-            return line[:-1] + setenv + ["--"] + [str(a) for a in argv], "/", {}
+            # bwrap itself (the namespace's first process, whose environment student code can
+            # read) starts with the clean environment too, never the grader's
+            return line[:-1] + setenv + ["--"] + [str(a) for a in argv], "/", dict(CLEAN_ENV)
         mapping = {str(k): str(v) for k, v in {**ro, **rw}.items()}
 
         def outside(a):
@@ -218,7 +220,7 @@ class Sandbox:
                 stdin, feed_fd = os.pipe()
                 os.fchmod(stdin, 0o666)
                 feed = os.fdopen(feed_fd, "wb")
-            proc = subprocess.Popen(line, cwd=cwd, stdout=out, stderr=err, env=environ or None,
+            proc = subprocess.Popen(line, cwd=cwd, stdout=out, stderr=err, env=environ,
                                     stdin=stdin, preexec_fn=limit, start_new_session=True,
                                     pass_fds=pass_fds)
             for fd in pass_fds + ((stdin,) if feed else ()):

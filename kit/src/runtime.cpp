@@ -2,6 +2,7 @@
 /// \brief Output files renamed into place, thread control, terminal detection.
 #include "plab/runtime.hpp"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -20,6 +21,14 @@ OutputFile::OutputFile(const std::string& path, bool optional) : path_(path) {
     file_ = optional ? nullptr : stdout;
     return;
   }
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    // A device or a pipe (/dev/null, /dev/stdout): written in place. Renaming a file onto it
+    // would replace the device itself when run as root.
+    file_ = std::fopen(path.c_str(), "wb");
+    if (!file_) throw InputError(path + ": cannot open for writing (" + std::strerror(errno) + ")");
+    return;
+  }
   temp_ = path + ".partial";
   file_ = std::fopen(temp_.c_str(), "wb");
   if (!file_) throw InputError(path + ": cannot create the file (" + std::strerror(errno) + ")");
@@ -29,6 +38,8 @@ OutputFile::~OutputFile() {
   if (!temp_.empty() && file_) {
     std::fclose(file_);
     std::remove(temp_.c_str());
+  } else if (file_ && file_ != stdout) {
+    std::fclose(file_);  // a device written in place
   }
 }
 
