@@ -109,7 +109,9 @@ int main(int argc, char** argv) {
     for (auto [form, err, missed] : {std::tuple{"MODEL.md", &model_err, model_missed},
                                      std::tuple{"robust", &robust_err, robust_missed}}) {
       std::sort(err->begin(), err->end());
-      const auto at = [&](double q) { return err->empty() ? 0.0 : (*err)[static_cast<std::size_t>(q * (err->size() - 1))]; };
+      // A plain variable: clang before 16 cannot capture a structured binding in a lambda.
+      const std::vector<double>& sorted = *err;
+      const auto at = [&](double q) { return sorted.empty() ? 0.0 : sorted[static_cast<std::size_t>(q * (sorted.size() - 1))]; };
       const long long over = std::count_if(err->begin(), err->end(), [](double e) { return e > 16; });
       std::printf("%-13s %-10s %9.3g %9.3g %9.3g %11lld %9lld\n", kind.c_str(), form, at(0.5),
                   at(0.99), err->empty() ? 0.0 : err->back(), missed, over);

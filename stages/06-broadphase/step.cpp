@@ -69,6 +69,8 @@ void bin(Slab& s, const ParticlesOf<Real>& p, const std::vector<int>& last, int 
 }
 
 /// Bit u of the result: whether entry `a` and entry `b0 + u` pass close_in_slab(), u < kLanes.
+// [[maybe_unused]]: called by the exercise's code (clang warns while the stub does not).
+[[maybe_unused]]
 inline unsigned close_lanes(const Slab& s, int a, int b0, const sweep::Grid& g) {
   unsigned lanes = 0;
 #pragma omp simd reduction(| : lanes)
@@ -82,6 +84,7 @@ inline unsigned close_lanes(const Slab& s, int a, int b0, const sweep::Grid& g) 
 #if PLAB_AVX2
 /// close_lanes() with AVX2, four lanes a register: the operations of close_in_slab() in the
 /// same order (no FMA), so every lane gives the bits of the scalar test.
+[[maybe_unused]]
 __attribute__((target("avx2"))) inline unsigned close_lanes_avx2(const Slab& s, int a, int b0,
                                                                  const sweep::Grid& g) {
   const __m256d xa = _mm256_set1_pd(s.x[a]), ya = _mm256_set1_pd(s.y[a]);
@@ -115,6 +118,7 @@ __attribute__((target("avx2"))) inline unsigned close_lanes_avx2(const Slab& s, 
 }
 
 /// close_lanes() with AVX-512, all eight lanes in one register: the same operations again.
+[[maybe_unused]]
 __attribute__((target("avx512f"))) inline unsigned close_lanes_avx512(const Slab& s, int a, int b0,
                                                                      const sweep::Grid& g) {
   const __m512d dx = _mm512_sub_pd(_mm512_set1_pd(s.x[a]), _mm512_loadu_pd(&s.x[b0]));

@@ -1,0 +1,61 @@
+#!/usr/bin/env python3
+"""Unit test of kit/grade/races.py's first_race() on a real TSan report (tests/tsan/).
+
+mutant03-report.txt: the stderr of stage 03's solution with `found[0]` in place of
+`found[omp_get_thread_num()]` (tests/tsan_mutant_check.py's mutant), clang 14, libomp + Archer,
+three threads, on dense-box.in. Usage: races_test.py [SOURCE_DIR]
+"""
+import pathlib
+import sys
+import unittest
+
+SOURCE_DIR = pathlib.Path(sys.argv.pop(1) if len(sys.argv) > 1 else
+                          pathlib.Path(__file__).resolve().parent.parent)
+sys.path.insert(0, str(SOURCE_DIR / "kit" / "grade"))
+import races  # noqa: E402
+
+REPORT = (SOURCE_DIR / "tests" / "tsan" / "mutant03-report.txt").read_text()
+
+
+class FirstRace(unittest.TestCase):
+    def test_student_file_preferred_over_library_headers(self):
+        self.assertEqual(races.first_race(REPORT, ["step.cpp"]),
+                         "data race at step.cpp:38 (read) against step.cpp:38 (write) in thread T1")
+
+    def test_path_suffix_names_match(self):
+        self.assertEqual(races.first_race(REPORT, ["kit/src/driver.cpp"]),
+                         "data race at step.cpp:38 (read) against driver.cpp:108 (write) in thread T1")
+        # A suffix matches whole path components only: "ver.cpp" is not driver.cpp.
+        self.assertEqual(races.first_race(REPORT, ["ver.cpp"]),
+                         "data race at step.cpp:38 (read) against step.cpp:38 (write) in thread T1")
+
+    def test_without_student_files_the_first_frame_outside_system_headers(self):
+        # The top frames are in /usr/.../vector.tcc; the first of the program's own is step.cpp.
+        self.assertEqual(races.first_race(REPORT, []),
+                         "data race at step.cpp:38 (read) against step.cpp:38 (write) in thread T1")
+
+    def test_kit_file_named(self):
+        # Only the previous access's stack reaches the kit's driver.cpp.
+        self.assertEqual(races.first_race(REPORT, ["driver.cpp"]),
+                         "data race at step.cpp:38 (read) against driver.cpp:108 (write) in thread T1")
+
+    def test_no_race(self):
+        self.assertIsNone(races.first_race("", ["step.cpp"]))
+        self.assertIsNone(races.first_race("[  PASSED  ] 29 tests.\n", ["step.cpp"]))
+
+    def test_main_thread_named(self):
+        text = REPORT.replace("by thread T1:", "by main thread:", 1)
+        self.assertTrue(races.first_race(text, ["step.cpp"]).endswith("in the main thread"))
+
+
+class Environment(unittest.TestCase):
+    def test_env_stops_at_first_race_with_the_exit_code(self):
+        env = races.tsan_env()
+        self.assertIn("halt_on_error=1", env["TSAN_OPTIONS"])
+        self.assertIn(f"exitcode={races.TSAN_EXIT_CODE}", env["TSAN_OPTIONS"])
+        self.assertGreaterEqual(int(env["OMP_NUM_THREADS"]), 2)
+        self.assertIn("-DPLAB_SANITIZE=thread", races.TSAN_CMAKE_ARGS)
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
