@@ -25,6 +25,9 @@ import time
 import traceback
 from xml.sax.saxutils import escape, quoteattr
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import hidden as hidden_module  # noqa: E402  (kit/grade/hidden.py: the hidden scenes)
+
 SOURCES = ("*.cpp", "*.hpp", "*.h", "*.cu", "*.cuh")  # what is taken from a submission's stage
 
 
@@ -262,15 +265,12 @@ class Grader:
                 golden = self.kit / "datasets" / "golden" / f"{d['name']}.out"
                 tests.append((d["name"], scene, golden.read_text(), corr["public_points_each"],
                               False, ("", str(scene.relative_to(self.kit)))))
-        for k, h in enumerate(corr["hidden_scenes"]):
-            seed = (self.seed * 1000003 + int(stage) * 101 + k) % 2**32
-            scene = stage_scratch / f"{h['name']}.in"
-            gen = [self.plab, "gen", "--n", h["n"], "--l", h["L"], "--r", h["r"], "--steps",
-                   h["steps"], "--seed", seed, "--out", scene]
-            subprocess.run([str(g) for g in gen], check=True, capture_output=True)
-            expected = self.expected_for(stage, scene, stage_scratch / f"{h['name']}.out")
-            how = "./plab " + " ".join(str(g) for g in gen[1:-2]) + " --out hidden.in && "
-            tests.append((h["name"], scene, expected, corr["hidden_points_each"], True,
+        for name, scene in hidden_module.hidden_scenes(self.seed, stage, self.rubric, self.plab,
+                                                       stage_scratch):
+            expected = self.expected_for(stage, scene, stage_scratch / f"{name}.out")
+            how = (f"python3 kit/grade/hidden.py --seed {self.seed} --stage {stage} --only {name} "
+                   "--out hidden.in && ")
+            tests.append((name, scene, expected, corr["hidden_points_each"], True,
                           (how, "hidden.in")))
         all_right = True
         for name, scene, expected, points, hidden, how in tests:
