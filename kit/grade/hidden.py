@@ -22,6 +22,7 @@ never made here: the grader computes them with the reference at grading time.
 """
 import argparse
 import json
+import math
 import pathlib
 import random
 import subprocess
@@ -406,9 +407,9 @@ def draw(rng, family):
         if rng.random() < 0.5:  # floor and ceiling swapped
             for p in parts:
                 p[1], p[3] = L - p[1], -p[3]
-    for p in parts:
-        for k in (0, 1):
-            assert r <= p[k] <= L - r or family == "hidden-overlap", (family, p, L, r)
+    outside = [p for p in parts if not all(r <= c <= L - r for c in p[:2])]
+    if outside:  # the scene format wants every centre inside [r, L - r]: draw again
+        raise ValueError(f"a centre outside [r, L - r]: {[float(c) for c in outside[0]]}")
     perm = list(range(len(parts)))
     rng.shuffle(perm)  # perm[old] = new index
     new_parts = [None] * len(parts)
@@ -444,6 +445,48 @@ def scene_text(L, r, steps, parts):
     lines += [f"{i} {num(p[0])} {num(p[1])} {num(p[2] + 0)} {num(p[3] + 0)}"
               for i, p in enumerate(parts)]
     return "\n".join(lines) + "\n"
+
+
+def model_pair_time(pi, pj, r):
+    """MODEL.md's pair time, the same double operations in the same order as model::pair_time()
+    (Python floats are IEEE doubles, never fused)."""
+    dx, dy, dvx, dvy = pi[0] - pj[0], pi[1] - pj[1], pi[2] - pj[2], pi[3] - pj[3]
+    c = (dx * dx + dy * dy) - (4 * r) * r
+    b = 2 * (dx * dvx + dy * dvy)
+    a = dvx * dvx + dvy * dvy
+    disc = b * b - (4 * a) * c
+    if a == 0 or disc < 0:
+        return math.inf
+    t1 = (-math.sqrt(disc) - b) / (2 * a)
+    if t1 > 0:
+        return t1
+    return 0.0 if (math.sqrt(disc) - b) / (2 * a) > 0 else math.inf
+
+
+def model_wall_time(p, L, r):
+    """MODEL.md's wall time min(t_x, t_y), as model::wall_time()."""
+    def axis(pos, v):
+        if v == 0:
+            return math.inf
+        return (pos - r) / (0 - v) if v < 0 else ((L - pos) - r) / v
+    tx, ty = axis(p[0], p[2]), axis(p[1], p[3])
+    return ty if ty < tx else tx
+
+
+def exact_in_doubles(L, r, parts, checks):
+    """Every designed event inside a step (0 < t < 1; its particles moved freely until then, by
+    design) computed in doubles from the designed state: it must be t exactly, not t rounded."""
+    bad = []
+    for step, i, kind, j, t in checks:
+        if kind not in ("wall", "pair") or not 0 < t < 1:
+            continue
+        at = [[float(p[0] + step * p[2]), float(p[1] + step * p[3]), float(p[2]), float(p[3])]
+              for p in parts]
+        got = (model_wall_time(at[i], float(L), float(r)) if kind == "wall" else
+               model_pair_time(at[min(i, j)], at[max(i, j)], float(r)))
+        if got != float(t):
+            bad.append(f"step {step} particle {i}: {kind} at {got!r} in doubles, designed {t}")
+    return bad
 
 
 def explain_lines(reference, scene, step, ids):
@@ -492,9 +535,13 @@ def make_family(seed, stage, k, family, reference, path):
     problems = []
     for attempt in range(ATTEMPTS):
         rng = random.Random(f"plab-hidden/{family_seed(seed, stage, k)}/{family}/{attempt}")
-        L, r, steps, parts, checks = draw(rng, family)
+        try:
+            L, r, steps, parts, checks = draw(rng, family)
+        except ValueError as e:
+            problems = [str(e)]
+            continue
         path.write_text(scene_text(L, r, steps, parts))
-        problems = verify(reference, path, checks)
+        problems = exact_in_doubles(L, r, parts, checks) + verify(reference, path, checks)
         if family == "hidden-dense":
             problems += dense_check(reference, path)
         if not problems:
@@ -553,7 +600,7 @@ def main():
     ap.add_argument("--only", help="one scene name (e.g. hidden-ties); default: every one")
     ap.add_argument("--out", help="with --only: write the scene here (default NAME.in)")
     ap.add_argument("--dir", default=".", help="without --only: folder for NAME.in files")
-    ap.add_argument("--rubric", default=str(HERE / "rubric.json"))
+    ap.add_argument("--rubric", default=str(HERE / "rubric.json"), help="the grading rubric")
     ap.add_argument("--plab", default=str(KIT / "build" / "bin" / "plab"),
                     help="the kit's plab program (its folder holds the reference)")
     a = ap.parse_args()
