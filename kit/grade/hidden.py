@@ -294,7 +294,7 @@ FAMILIES = {
     "hidden-cradle": fam_cradle,
 }
 # 2D families (not lanes): exact corner hits, dense lattices
-TWO_D = ("hidden-corners", "hidden-dense")
+TWO_D = ("hidden-corners", "hidden-lattice")
 
 
 def corners(rng):
@@ -397,7 +397,7 @@ def draw(rng, family):
     """One scene of a family: (L, r, steps, particles, checks), symmetrised and shuffled."""
     if family == "hidden-corners":
         L, r, parts, checks = corners(rng)
-    elif family == "hidden-dense":
+    elif family == "hidden-lattice":
         L, r, parts, checks = dense(rng)
     else:
         L, r, parts, checks = lanes_scene(rng, family)
@@ -542,7 +542,7 @@ def make_family(seed, stage, k, family, reference, path):
             continue
         path.write_text(scene_text(L, r, steps, parts))
         problems = exact_in_doubles(L, r, parts, checks) + verify(reference, path, checks)
-        if family == "hidden-dense":
+        if family == "hidden-lattice":
             problems += dense_check(reference, path)
         if not problems:
             return path
@@ -580,6 +580,9 @@ def hidden_scenes(seed, stage, rubric, plab, out_dir, only=None):
                "--seed", family_seed(seed, stage, k), "--out", scene]
         subprocess.run([str(g) for g in gen], check=True, capture_output=True)
         scenes.append((h["name"], scene))
+    clash = set(family_names(rubric)) & {h["name"] for h in corr["hidden_scenes"]}
+    if clash:  # one file per name in out_dir, one name per test
+        raise ValueError(f"rubric: hidden families and hidden scenes share names {sorted(clash)}")
     reference = reference_program(plab)
     base = len(corr["hidden_scenes"])
     for k, family in enumerate(family_names(rubric)):
