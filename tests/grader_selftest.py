@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Self-tests of `plab grade` (CTest label grader): the solutions get full marks, the untouched
 starting points get no correctness points and each test names the exercise, five mutated solutions
-are each caught at the right first divergence, and submissions that crash, loop forever or print
+are each caught at the right first divergence, every mutated stage (those five and six slips that
+only exact edge cases show) loses points on the hidden scenes too, and submissions that crash, loop forever or print
 without end are stopped, scored zero with the reason, and still get a results.json.
 
   grader_selftest.py PLAB_PROGRAM KIT_SOURCE_DIR SCRATCH_DIR [CASE ...]
