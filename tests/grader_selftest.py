@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Self-tests of `plab grade` (CTest label grader): the solutions get full marks, the untouched
 starting points get no correctness points and each test names the exercise, five mutated solutions
-are each caught at the right first divergence, and submissions that crash, loop forever or print
+are each caught at the right first divergence, every mutated stage (those five and six slips that
+only exact edge cases show) loses points on the hidden scenes too, and submissions that crash, loop forever or print
 without end are stopped, scored zero with the reason, and still get a results.json.
 
   grader_selftest.py PLAB_PROGRAM KIT_SOURCE_DIR SCRATCH_DIR [CASE ...]
@@ -55,10 +56,28 @@ def failed(tests, prefix):
     return {n: t for n, t in tests.items() if n.startswith(prefix) and t["status"] == "failed"}
 
 
+def points_lost(tests, stage, hidden):
+    """Points lost by one stage on the hidden (after_published) or the public tests."""
+    want = "after_published" if hidden else "visible"
+    return sum(t["max_score"] - t["score"] for n, t in tests.items()
+               if n.startswith(f"{stage}:") and t["visibility"] == want)
+
+
+def check_hidden(name, tests, stages):
+    """Each mutated stage loses points on the hidden scenes too, not only on the public ones."""
+    for stage in stages:
+        pub, hid = points_lost(tests, stage, False), points_lost(tests, stage, True)
+        print(f"  mutant {name} (stage {stage}): public points lost {pub:g}, hidden {hid:g}")
+        check(name, hid > 0, f"stage {stage} loses {hid:g} hidden points (public: {pub:g})")
+
+
 def case_solutions():
     tests, _ = grade("solutions", submission("solutions"))
     lost = {n: t for n, t in tests.items() if t["score"] < t["max_score"]}
     noisy = all("TOO NOISY" in t["output"] for n, t in lost.items() if "performance" in n)
+    for stage in STAGES:
+        check("solutions", points_lost(tests, stage, True) == 0,
+              f"stage {stage}: full marks on the hidden scenes")
     check("solutions", not lost or (noisy and all("performance" in n for n in lost)),
           f"full marks on {len(tests)} tests" if not lost else f"lost points: {list(lost)}")
 
@@ -100,6 +119,7 @@ def case_mutants_a():
     t = tests["03: public course-1"]
     check("off-by-one", t["status"] == "failed" and "step 1, particle 1" in t["output"],
           "03: course-1 fails at step 1 on particle 1, the last one")
+    check_hidden("tie rule / stop at a wall / off-by-one", tests, ["02", "01", "03"])
     print(out[out.find("first failure of stage 02"):][:1500])
 
 
@@ -116,9 +136,38 @@ def case_mutants_b():
     t = tests["02: public event-at-step-end"]
     check("t <= 1", t["status"] == "failed" and "first difference" in t["output"],
           "02: event-at-step-end fails with a first difference")
+    check_hidden("t <= 1 / data race", tests, ["02", "03"])
     bad = failed(tests, "03:")
     check("data race", bool(bad), f"stage 03 with 2 threads fails {len(bad)} tests, e.g. "
           f"{next(iter(bad), '')}: {next(iter(bad.values()), {}).get('output', '')[:80]!r}")
+
+
+def case_mutants_hidden():
+    """Slips that the random hidden scenes alone never catch (they never put an event exactly at
+    t = 1 or 0, never tie two events): the family scenes of kit/grade/hidden.py must."""
+    for name, mutations in [
+        ("mutants-c", [
+            # the window closed at t = 1 in the naive loop
+            ("01", "if (!model::in_step(best.t)) break;", "if (best.t > 1) break;"),
+            # the heap ordered by time only: ties (wall before pair, lowest index) by heap luck
+            ("02", "return model::key_less(b, a);", "return a.t > b.t;"),
+            # a round's choice by time only: a pair beats its particle's own wall on equal times
+            ("03", "if (model::key_less(e, b)) b = e;", "if (e.t <= b.t) b = e;"),
+        ]),
+        ("mutants-d", [
+            # the last of equal times wins (<= for <): the highest index, a pair over a wall
+            ("01", "if (model::key_less(e, best)) best = e;",
+             "if (e.t <= best.t) best = e;"),
+            # an event at t = 0 (touching or overlapping at the step start) is not pushed
+            ("02", "if (model::in_step(e.t)) heap.push(e);",
+             "if (e.t > 0 && model::in_step(e.t)) heap.push(e);"),
+            # a wall event exactly at the step start (t = 0) is not a candidate
+            ("03", "model::Event b = model::in_step(wall[i]) ?",
+             "model::Event b = (wall[i] > 0 && model::in_step(wall[i])) ?"),
+        ]),
+    ]:
+        tests, _ = grade(name, submission(name, mutations=mutations))
+        check_hidden(name, tests, [m[0] for m in mutations])
 
 
 def case_hostile():
@@ -147,7 +196,8 @@ def case_hostile():
 
 
 CASES = {"solutions": case_solutions, "starting-points": case_starting_points,
-         "mutants-a": case_mutants_a, "mutants-b": case_mutants_b, "hostile": case_hostile}
+         "mutants-a": case_mutants_a, "mutants-b": case_mutants_b, "mutants-hidden": case_mutants_hidden,
+         "hostile": case_hostile}
 scratch.mkdir(parents=True, exist_ok=True)
 for name, case in CASES.items():
     if not only or name in only:

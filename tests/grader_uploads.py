@@ -71,7 +71,7 @@ def case_flat_and_replay():
     lost = [n for n, t in hidden(tests).items() if "same text" not in t]
     check("mutant", len(lost) > 0, f"the wrong comparison loses {len(lost)} hidden tests")
     repro = next((t for t in hidden(tests).values() if "Reproduce:" in t), "")
-    check("reproduce", "EXPECTED" not in repro and "./plab gen" in repro and "./plab diff" in repro,
+    check("reproduce", "EXPECTED" not in repro and "hidden.py --seed" in repro and "./plab diff" in repro,
           "a hidden failure's Reproduce line is real commands: "
           + repro[repro.find("Reproduce:"):][:200])
 

@@ -24,7 +24,8 @@ import traceback
 from xml.sax.saxutils import escape, quoteattr
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-import races  # noqa: E402  (the kit's own modules, beside this file)
+import hidden as hidden_module  # noqa: E402  (the kit's own modules, beside this file)
+import races  # noqa: E402
 import sandbox as isolation  # noqa: E402
 import upload  # noqa: E402
 
@@ -294,17 +295,16 @@ class Grader:
         return tests
 
     def hidden_tests(self, st, folder):
+        """The hidden scenes of this grading's seed (kit/grade/hidden.py: the rubric's random
+        scenes and the public edge cases' families drawn afresh), with the reference's output."""
         corr = self.rubric["correctness"]
         tests = []
-        for k, h in enumerate(corr["hidden_scenes"]):
-            seed = (self.seed * 1000003 + int(st.sid) * 101 + k) % 2**32
-            scene = folder / f"{h['name']}.in"
-            gen = [self.plab, "gen", "--n", h["n"], "--l", h["L"], "--r", h["r"], "--steps",
-                   h["steps"], "--seed", seed, "--out", scene]
-            subprocess.run([str(g) for g in gen], check=True, capture_output=True)
-            expected = self.expected_for(st, scene, folder / f"{h['name']}.out")
-            how = "./plab " + " ".join(str(g) for g in gen[1:-2]) + " --out hidden.in && "
-            tests.append((h["name"], scene, expected, corr["hidden_points_each"], True,
+        for name, scene in hidden_module.hidden_scenes(self.seed, st.sid, self.rubric, self.plab,
+                                                       folder):
+            expected = self.expected_for(st, scene, folder / f"{name}.out")
+            how = (f"python3 kit/grade/hidden.py --seed {self.seed} --stage {st.sid} --only {name} "
+                   "--out hidden.in && ")
+            tests.append((name, scene, expected, corr["hidden_points_each"], True,
                           (how, "hidden.in", "expected.out")))
         return tests
 
