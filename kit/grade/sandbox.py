@@ -237,12 +237,15 @@ class Sandbox:
         took = time.time() - start
         rc = proc.returncode
         stderr = (log_dir / "stderr").read_bytes()[-4000:].decode(errors="replace")
-        if reason is None and rc < 0:
-            sig = signal.Signals(-rc)
+        signum = -rc if rc < 0 else None
+        if self.mode == "bwrap" and 128 < rc < 128 + signal.NSIG:  # bwrap passes a signal on
+            signum = rc - 128  # as 128 + its number, as a shell does
+        if reason is None and signum:
+            sig = signal.Signals(signum)
             if sig == signal.SIGXFSZ:
                 reason = f"stopped: it wrote more than {output_bytes / 2**20:.0f} MB (the output cap)"
             else:
-                reason = f"crashed with signal {-rc} ({sig.name})"
+                reason = f"crashed with signal {signum} ({sig.name})"
         if reason is None and rc != 0 and self.mode == "bwrap" and stderr.startswith("bwrap:"):
             reason = f"the sandbox could not start: {stderr.strip()}"
         if reason is None and rc != 0 and ("bad_alloc" in stderr or "memory" in stderr.lower()):
