@@ -60,17 +60,14 @@ double seconds_since(Clock::rep then) {
   _exit(1);
 }
 
-/// "printed step 12 of 50" or "in step 1": where the watched work is.
+/// "stage 03, scene course-2: finished 12 of 50 steps": where the watched work is.
 std::string position() {
   Watched& w = state();
   std::lock_guard lock(w.mutex);
   const long long done = w.done.load();
   std::string at = w.what + ": ";
-  if (w.steps > 0)
-    at += done == 0 ? "no step finished of " + std::to_string(w.steps)
-                    : "finished step " + std::to_string(done) + " of " + std::to_string(w.steps);
-  else
-    at += "finished " + std::to_string(done) + " steps";
+  at += "finished " + std::to_string(done);
+  at += w.steps > 0 ? " of " + std::to_string(w.steps) + " steps" : " steps";
   return at;
 }
 

@@ -97,7 +97,8 @@ std::vector<Case> gtest_cases(const std::string& output) {
   bool open = false;
   for (const std::string& line : lines_of(output)) {
     if (line.rfind("[ RUN      ] ", 0) == 0) {
-      cases.push_back({line.substr(line.rfind('/') + 1), "stopped", ""});
+      const auto slash = line.rfind('/');
+      cases.push_back({line.substr(slash == std::string::npos ? 13 : slash + 1), "stopped", ""});
       open = true;
     } else if (open && line.rfind("[       OK ] ", 0) == 0) {
       cases.back().status = "passed";
@@ -145,12 +146,14 @@ std::optional<Dataset> scene_of(const Manifest& m, const std::string& case_name)
 
 /// One line per case: a scene's name and "passed" or its first difference; skips grouped.
 void print_cases(const std::vector<Case>& cases, const Manifest& m) {
-  std::map<std::string, int> skipped;
+  std::map<std::string, std::pair<int, std::string>> skipped;
   for (const Case& c : cases) {
     const auto d = scene_of(m, c.name);
     const std::string name = d ? d->name : c.name;
     if (c.status == "skipped") {
-      ++skipped[first_line(c.message)];
+      // One line for skips that differ only in their numbers (N = 300, N = 1000, ...).
+      auto& [n, example] = skipped[std::regex_replace(first_line(c.message), std::regex("[0-9]+"), "#")];
+      if (n++ == 0) example = first_line(c.message);
       continue;
     }
     std::string what = c.status;
@@ -161,7 +164,27 @@ void print_cases(const std::vector<Case>& cases, const Manifest& m) {
       what = "failed: " + first_line(c.message);
     std::printf("    %-22s %s\n", name.c_str(), what.c_str());
   }
-  for (const auto& [why, n] : skipped) std::printf("    %d skipped: %s\n", n, why.c_str());
+  for (const auto& [key, skip] : skipped)
+    std::printf("    %d skipped%s: %s\n", skip.first, skip.first > 1 ? ", e.g." : "",
+                skip.second.c_str());
+}
+
+/// One line for a test that is not per scene: how many cases failed, and the first one.
+void print_summary(const std::string& head, const std::vector<Case>& cases) {
+  int failed = 0;
+  const Case* first = nullptr;
+  for (const Case& c : cases)
+    if (c.status == "failed" && failed++ == 0) first = &c;
+  std::string what;
+  if (first) {
+    const auto f = find_difference(first->message);
+    what = ": " + std::to_string(failed) + " of " + std::to_string(cases.size()) +
+           " cases failed, first " + first->name + ": " +
+           (f ? "step " + f->step + (f->particle.empty() ? "" : ", particle " + f->particle) +
+                    ", " + f->field
+              : first_line(first->message));
+  }
+  std::printf("%s%s\n", head.c_str(), what.c_str());
 }
 
 /// The test's own explanation when it stopped it (watchdog, build check), or nothing.
@@ -192,8 +215,8 @@ void explain_golden(const FirstFailure& f, const Dataset& d, const Manifest& m, 
     const Captured c = capture_program({stage_program(f.id, f.impl), m.scene_path(d), "--explain",
                                         explain});
     if (c.status == 0)
-      std::printf("  what should happen in the step to %s (the kit's oracle): %s\n",
-                  diff.step.c_str(), first_line(c.text).c_str());
+      std::printf("  what should happen from step %lld to %s (the kit's oracle): %s\n",
+                  step > 0 ? step - 1 : 0, diff.step.c_str(), first_line(c.text).c_str());
   }
   std::printf("  reproduce it:\n    %s --out mine.out\n    ./plab diff %s mine.out\n", run.c_str(),
               golden.c_str());
@@ -242,6 +265,11 @@ void explain_first(const FirstFailure& f, const Manifest& m) {
     explain_generated(f, *diff);
 }
 
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
 /// Starts ctest with its output into `log`; returns its process id.
 pid_t start_ctest(const std::vector<std::string>& args, const std::string& log) {
   std::fflush(nullptr);
@@ -270,8 +298,8 @@ int follow(pid_t pid, const std::string& log) {
     in.clear();
     for (std::size_t nl; (nl = pending.find('\n')) != std::string::npos; pending.erase(0, nl + 1))
       if (const auto r = parse_result_line(pending.substr(0, nl)))
-        std::printf("  %-8s %s (%.1f s)\n", r->status == "Passed" ? "passed" : r->status.c_str(),
-                    r->name.c_str(), r->seconds);
+        std::printf("  %-8s %s (%.1f s)\n", lower(r->status).c_str(), r->name.c_str(),
+                    r->seconds);
     std::fflush(stdout);
     if (!done) std::this_thread::sleep_for(std::chrono::milliseconds(200));
   }
@@ -301,10 +329,15 @@ void print_failures(const std::vector<TestResult>& tests) {
       continue;
     }
     const std::string stopped = stop_message(t.output);
-    std::printf("%s: %s%s\n", t.name.c_str(), t.status == "Failed" ? "FAILED" : t.status.c_str(),
-                stopped.empty() ? "" : (": " + stopped).c_str());
+    const std::string head = t.name + ": " + (t.status == "Failed" ? "FAILED" : t.status) +
+                             (stopped.empty() ? "" : ": " + stopped);
     const std::vector<Case> cases = gtest_cases(t.output);
-    print_cases(cases, m);
+    if (t.name.find(".Golden") != std::string::npos && stopped.empty()) {
+      std::printf("%s\n", head.c_str());
+      print_cases(cases, m);
+    } else {
+      print_summary(head, cases);
+    }
     std::smatch s;
     if (first || !std::regex_match(t.name, s, stage_test)) continue;
     for (const Case& c : cases)
@@ -320,6 +353,7 @@ void print_failures(const std::vector<TestResult>& tests) {
 
 int run_tests_reported(const TestRun& run) {
   fs::create_directories(fs::path(run.log_path).parent_path());
+  fs::remove(run.log_path);  // follow() must not read the last run's log
   const int rc = follow(start_ctest(run.ctest_args, run.log_path), run.log_path);
   std::ifstream in(run.log_path);
   std::ostringstream text;
