@@ -317,12 +317,27 @@ void print_counts(const std::vector<TestResult>& tests, const std::string& log) 
     std::printf("  skipped %s: %s\n", name.c_str(), why.c_str());
 }
 
+/// For a test the watchdog stopped on a scene, the command that runs that scene under a limit.
+void print_stalled_run(const std::string& stopped, const std::string& test, const Manifest& m) {
+  static const std::regex scene_stopped(R"(^stage (\d\d), scene ([\w.-]+): )"),
+      impl(R"(^stage\d\d\.(\w+)\.)");
+  std::smatch where, which;
+  if (!std::regex_search(stopped, where, scene_stopped) || !std::regex_search(test, which, impl))
+    return;
+  for (const Dataset& d : m.datasets)
+    if (d.name == where[2].str())
+      std::printf("  see it: ./plab run --stage %s --impl %s %s --timeout 30\n",
+                  where[1].str().c_str(), which[1].str().c_str(),
+                  shown_path(m.scene_path(d)).c_str());
+}
+
 /// A line per test that did not pass, its cases for a stage's test, the first failure's page.
 void print_failures(const std::vector<TestResult>& tests) {
   const Manifest m = load_manifest(source_dir() + "/datasets");
   std::optional<FirstFailure> first;
   static const std::regex stage_test(R"(stage(\d\d)\.(student|solution)\.(\w+).*)");
   for (const TestResult& t : tests) {
+    std::smatch s;
     if (t.status == "Passed" || t.status == "Skipped") continue;
     if (t.status == "Not Run") {
       std::printf("%s: not run (the check it needs failed)\n", t.name.c_str());
@@ -338,7 +353,7 @@ void print_failures(const std::vector<TestResult>& tests) {
     } else {
       print_summary(head, cases);
     }
-    std::smatch s;
+    print_stalled_run(stopped, t.name, m);
     if (first || !std::regex_match(t.name, s, stage_test)) continue;
     for (const Case& c : cases)
       if (c.status == "failed") {
