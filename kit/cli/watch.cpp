@@ -92,6 +92,7 @@ class Progress {
 int report_end(int status, const RunWatch& w, const Steps& s) {
   if (!WIFSIGNALED(status)) return WEXITSTATUS(status);
   const int sig = WTERMSIG(status);
+  if (sig == SIGPIPE) return 128 + sig;  // its reader stopped reading (`| head`): not a crash
   const char* abbrev = sigabbrev_np(sig);
   std::fprintf(stderr, "plab run: %s crashed: SIG%s (%s) %s\n", w.label.c_str(),
                abbrev ? abbrev : "?", strsignal(sig), where(s).c_str());
