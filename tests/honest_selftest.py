@@ -50,15 +50,24 @@ def make_copy():
                 shutil.rmtree(d)
     subprocess.run(["cmake", "--preset", "release", "-DPLAB_ENABLE_CUDA=OFF"], cwd=COPY,
                    check=True, stdout=subprocess.DEVNULL)
+    rc, out = plab("--help", timeout=1500)  # the first build: the kit and stage 01
+    if rc != 0:
+        raise RuntimeError("the scratch copy did not build:\n" + out)
 
 
 def plab(*args, timeout=600, env=None):
-    """Runs ./plab in the copy (it builds first, as for a student); returns (status, text)."""
+    """Runs ./plab in the copy (it builds first, as for a student); returns (status, text).
+    At the timeout its whole process group (the build, ctest, the tests) is ended."""
     e = dict(os.environ, **(env or {}))
-    p = subprocess.run(["./plab", *args], cwd=COPY, stdout=subprocess.PIPE,
-                       stderr=subprocess.STDOUT, text=True, timeout=timeout, env=e,
-                       start_new_session=True)
-    return p.returncode, p.stdout
+    p = subprocess.Popen(["./plab", *args], cwd=COPY, stdout=subprocess.PIPE,
+                         stderr=subprocess.STDOUT, text=True, env=e, start_new_session=True)
+    try:
+        out, _ = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        out, _ = p.communicate()
+        return 124, out + f"\n(ended by the self-test after {timeout} s)"
+    return p.returncode, out
 
 
 def leftovers():
