@@ -354,7 +354,11 @@ void print_failures(const std::vector<TestResult>& tests) {
       print_summary(head, cases);
     }
     print_stalled_run(stopped, t.name, m);
-    if (first || !std::regex_match(t.name, s, stage_test)) continue;
+    // The page goes to the first failing scene of a golden test, else to the first failing case.
+    const bool golden = t.name.find(".Golden") != std::string::npos;
+    if ((first && (!golden || first->test.find(".Golden") != std::string::npos)) ||
+        !std::regex_match(t.name, s, stage_test))
+      continue;
     for (const Case& c : cases)
       if (c.status == "failed") {
         first = FirstFailure{s[1], s[2], t.name, c};
