@@ -20,6 +20,7 @@
 #include "plab/io.hpp"
 #include "plab/runtime.hpp"
 #include "plab/stage.hpp"
+#include "honesty.hpp"
 #if PLAB_GPU_STAGE
 #include "plab/cuda/check.hpp"
 /// CUDA stages: every test skips, with the runtime's reason, where no GPU can be used.
@@ -47,12 +48,15 @@ struct Result {
   std::string digests;
 };
 
-Result run_here(const plab::Scene& scene) {
+/// Runs this stage on `scene` under the watchdog, which names `what` if it stops making progress.
+Result run_here(const plab::Scene& scene, const std::string& what) {
   char* buf = nullptr;
   std::size_t len = 0;
   std::FILE* mem = open_memstream(&buf, &len);
   plab::OutputWriter out(nullptr);
-  plab::simulate(scene, plab::make_stepper, out, {mem, nullptr, false});
+  plab::test::watch(what, scene.steps);
+  plab::simulate(scene, plab::test::watched(plab::make_stepper), out, {mem, nullptr, false});
+  plab::test::unwatch();
   std::fclose(mem);
   Result r{out.text(), std::string(buf, len)};
   std::free(buf);
@@ -88,9 +92,13 @@ void check_golden(const plab::Dataset& d) {
   if (std::string(PLAB_STAGE_ID) == "01" && d.size != "small")
     GTEST_SKIP() << "stage 01 is O(N^3) per step: small scenes only";
   const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
-  const Result r = run_here(plab::load_scene(m.scene_path(d), plab::kDefaultSeed));
-  expect_same(plab::read_file(m.golden_path(d)), r.output, m.golden_path(d));
-  expect_same(plab::read_file(m.digest_path(d)), r.digests, m.digest_path(d));
+  const Result r = run_here(plab::load_scene(m.scene_path(d), plab::kDefaultSeed),
+                            "stage " PLAB_STAGE_ID ", scene " + d.name);
+  // The digests only locate what the output shows already: checked when the output is equal.
+  if (plab::first_difference(plab::read_file(m.golden_path(d)), r.output))
+    expect_same(plab::read_file(m.golden_path(d)), r.output, m.golden_path(d));
+  else
+    expect_same(plab::read_file(m.digest_path(d)), r.digests, m.digest_path(d));
 }
 
 class Golden : public testing::TestWithParam<plab::Dataset> {};
@@ -110,9 +118,36 @@ GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(LongGolden);
 /// Fresh random scenes: this stage must print what another stage's solution prints.
 class AgainstOtherStage : public testing::TestWithParam<plab::GenParams> {};
 
+/// Checks this CPU stage's output against `expected`: first with 1 thread, then with 1, 2 and 3
+/// threads (an odd count catches chunking bugs) under each OpenMP schedule. One report at most:
+/// a difference with 1 thread is the stage's logic, named without threads or schedule (a serial
+/// stage never shows them); one that appears only with more threads or another schedule names them.
+void expect_same_on_cpu(const std::string& expected, const plab::Scene& scene,
+                        const std::string& what, const std::string& how_made) {
+  plab::set_schedule("static");
+  plab::set_threads(1);
+  const std::string serial = run_here(scene, what).output;
+  if (plab::first_difference(expected, serial)) {
+    expect_same(expected, serial, "stage " PLAB_OTHER_ID " on " + how_made);
+    return;
+  }
+  for (const char* schedule : {"static", "dynamic,1", "guided"}) {
+    plab::set_schedule(schedule);
+    for (int threads : {1, 2, 3}) {
+      plab::set_threads(threads);
+      const std::string output = run_here(scene, what).output;
+      if (!plab::first_difference(expected, output)) continue;
+      expect_same(expected, output,
+                  "stage " PLAB_OTHER_ID " with " + std::to_string(threads) + " threads, schedule " +
+                      schedule + " (with 1 thread it prints the same) on " + how_made);
+      return;
+    }
+  }
+}
+
 /// Writes `scene` to a file, runs the other stage's solution on it, and checks that this stage
-/// prints the same text in each of its variants: 1, 2 and 3 threads (an odd count catches
-/// chunking bugs) under each OpenMP schedule on the CPU; each PLAB_CUDA_OFF switch on the GPU.
+/// prints the same text in each of its variants: threads and schedules on the CPU
+/// (expect_same_on_cpu()), each PLAB_CUDA_OFF switch on the GPU (the first that differs).
 void expect_same_as_other(const plab::Scene& scene, const std::string& how_made) {
   const std::string other = PLAB_OTHER_PROGRAM;
   if (other.empty()) GTEST_SKIP() << "no other stage's solution is built to compare with";
@@ -128,25 +163,22 @@ void expect_same_as_other(const plab::Scene& scene, const std::string& how_made)
     std::fclose(f);
   }
   const std::string command = other + " --quiet --out " + out_file + " " + scene_file;
-  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  plab::test::watch("stage " PLAB_OTHER_ID "'s solution (the reference) on " + how_made, 0);
+  ASSERT_EQ(plab::test::run_watched(command), 0) << command;
   const std::string expected = plab::read_file(out_file);
+  const std::string what = "stage " PLAB_STAGE_ID " on " + how_made;
 #if PLAB_GPU_STAGE
   for (const char* off : {"", "graph", "streams", "branchless", "graph,streams,branchless"}) {
     setenv("PLAB_CUDA_OFF", off, 1);
-    expect_same(expected, run_here(scene).output,
+    const std::string output = run_here(scene, what).output;
+    if (!plab::first_difference(expected, output)) continue;
+    expect_same(expected, output,
                 "stage " PLAB_OTHER_ID " with PLAB_CUDA_OFF=" + std::string(off) + " on " + how_made);
+    break;  // one report: the first variant that differs
   }
   unsetenv("PLAB_CUDA_OFF");
 #else
-  for (const char* schedule : {"static", "dynamic,1", "guided"}) {
-    plab::set_schedule(schedule);
-    for (int threads : {1, 2, 3}) {
-      plab::set_threads(threads);
-      expect_same(expected, run_here(scene).output,
-                  "stage " PLAB_OTHER_ID " with " + std::to_string(threads) + " threads, schedule " +
-                      schedule + " on " + how_made);
-    }
-  }
+  expect_same_on_cpu(expected, scene, what, how_made);
 #endif
   std::filesystem::remove(scene_file);
   std::filesystem::remove(out_file);
@@ -207,14 +239,17 @@ TEST(Invariants, EnergyConservedFiniteCountersGrow) {
   };
   const double e0 = energy();
   long long events = 0;
+  plab::test::watch("stage " PLAB_STAGE_ID ", invariants on 80 generated particles", 100);
   for (int s = 0; s < 100; ++s) {
     stage->step();
+    plab::test::stepped(s + 1);
     stage->read(p);
     for (std::size_t i = 0; i < p.size(); ++i)
       ASSERT_TRUE(std::isfinite(p.x[i]) && std::isfinite(p.y[i]) && std::isfinite(p.vx[i]) &&
                   std::isfinite(p.vy[i]))
           << "particle " << i << " at step " << s;
   }
+  plab::test::unwatch();
   for (std::size_t i = 0; i < p.size(); ++i) events += p.pc[i] + p.wc[i];
   EXPECT_NEAR(energy(), e0, 1e-9 * e0);
   EXPECT_GT(events, 100);

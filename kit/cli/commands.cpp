@@ -22,6 +22,8 @@
 #include "plab/io.hpp"
 #include "plab/runtime.hpp"
 #include "project.hpp"
+#include "test_report.hpp"
+#include "watch.hpp"
 
 namespace plab::cli {
 namespace fs = std::filesystem;
@@ -55,6 +57,8 @@ std::string require_stage(const std::string& id, const std::string& impl) {
     throw std::runtime_error("stage " + id + " (" + impl + ") is not built: its code in " + tree +
                              " did not compile. See the errors with: cmake --build " + build_dir() +
                              " --target plab-run-" + id + "-" + impl);
+  if (const std::string problem = stage_build_problem(id, impl); !problem.empty())
+    throw std::runtime_error(problem);
   return program;
 }
 
@@ -87,8 +91,9 @@ int exit_status() { return g_status; }
 
 void add_run(CLI::App& app) {
   struct Args {
-    std::string stage, impl, scene, out, digest, schedule;
+    std::string stage, impl, scene, out, digest, schedule, explain;
     int threads = 0;
+    double timeout = 0;
     std::uint64_t seed = kDefaultSeed;
     bool quiet = false;
   };
@@ -105,18 +110,56 @@ void add_run(CLI::App& app) {
   c->add_option("--digest", a->digest, "write one state digest per step to this file");
   c->add_option("--seed", a->seed, "seed for scenes without particle lines")->capture_default_str();
   c->add_flag("--quiet", a->quiet, "no timing summary");
+  c->add_option("--timeout", a->timeout,
+                "end the run (and everything it started) after this many seconds, saying at which "
+                "step it was; exit status 124")->check(CLI::PositiveNumber);
+  c->add_option("--explain", a->explain,
+                "K:I[,J...]: instead of the output, the events of particles I, J... in step K (the "
+                "kit's oracle, from this stage's state at the start of step K)");
   c->add_option("scene", a->scene, "scene file")->required()->check(CLI::ExistingFile);
   c->callback([a] {
     const std::string impl = a->impl.empty() ? default_impl() : a->impl;
     check_impl(impl);
-    std::vector<std::string> args{require_stage(two_digits(a->stage), impl), a->scene, "--seed",
+    const std::string id = two_digits(a->stage);
+    std::vector<std::string> args{require_stage(id, impl), a->scene, "--seed",
                                   std::to_string(a->seed)};
     if (a->threads > 0) args.insert(args.end(), {"--threads", std::to_string(a->threads)});
     if (!a->schedule.empty()) args.insert(args.end(), {"--schedule", a->schedule});
     if (!a->out.empty()) args.insert(args.end(), {"--out", a->out});
     if (!a->digest.empty()) args.insert(args.end(), {"--digest", a->digest});
+    if (!a->explain.empty()) args.insert(args.end(), {"--explain", a->explain});
     if (a->quiet) args.emplace_back("--quiet");
-    exec_program(args);
+    const std::string status = temp_path("run.status");
+    args.insert(args.end(), {"--status", status});
+    g_status = run_stage_watched(args, {"stage " + id + " (" + impl + ") on " +
+                                            fs::path(a->scene).filename().string(),
+                                        a->timeout, status});
+    fs::remove(status);
+  });
+}
+
+void add_built(CLI::App& app) {
+  auto id = std::make_shared<std::string>();
+  auto impl = std::make_shared<std::string>();
+  auto targets = std::make_shared<std::vector<std::string>>();
+  auto* c = app.add_subcommand("built", "Check that a stage's programs are built from its current "
+                                        "code; otherwise exit 1 saying that it did not compile, "
+                                        "with the compiler's first error (every stage test needs "
+                                        "this check: a stage is never tested with an old binary).");
+  c->add_option("--stage", *id, "stage number, e.g. 01")->required();
+  c->add_option("--impl", *impl, "solution or student (default as for run)");
+  c->add_option("--target", *targets, "also these build targets (e.g. the stage's test program)");
+  c->callback([id, impl, targets] {
+    const std::string which = impl->empty() ? default_impl() : *impl;
+    check_impl(which);
+    const std::string problem = stage_build_problem(two_digits(*id), which, *targets);
+    if (problem.empty()) {
+      std::printf("stage %s (%s) is built from its current code\n", two_digits(*id).c_str(),
+                  which.c_str());
+      return;
+    }
+    std::printf("%s\n", problem.c_str());
+    g_status = 1;
   });
 }
 
@@ -256,6 +299,7 @@ void add_test(CLI::App& app) {
     check_impl(which);
     std::vector<std::string> args{"ctest", "--test-dir", build_dir(), "--output-on-failure",
                                   "-j", "2"};
+    const std::string log = build_dir() + "/test-logs/plab-test.log";
     if (!stage->empty()) {
       args.insert(args.end(), {"-L", "^stage" + two_digits(*stage) + "$", "-L", "^" + which + "$"});
     } else if (which == "solution") {
@@ -264,7 +308,7 @@ void add_test(CLI::App& app) {
       args.insert(args.end(), {"-L", "^(kit|student)$"});
     }
     if (!*long_too) args.insert(args.end(), {"-LE", "^long$"});
-    g_status = run_program(args);
+    g_status = run_tests_reported({args, log});
   });
 }
 
@@ -286,6 +330,7 @@ void add_demo(CLI::App& app) {
     std::printf("%-16s %6s %5s  %-6s %10s  %s\n", "scene", "N", "S", "stage", "time (s)",
                 "golden");
     int failures = 0;
+    int runs = 0;  // runs that checked something (a CUDA stage without a GPU does not count)
     std::vector<std::string> no_device;  // CUDA stages that found no GPU: not run again
     for (const Dataset& d : m.datasets) {
       if (d.origin != "course" && d.name != "random-1000") continue;
@@ -312,10 +357,16 @@ void add_demo(CLI::App& app) {
           no_device.push_back(s.id);
         }
         failures += (verdict.rfind("identical", 0) == 0 || rc == 4) ? 0 : 1;
+        runs += rc == 4 ? 0 : 1;
         std::printf("%-16s %6lld %5lld  %-6s %10.3f  %s\n", d.name.c_str(), d.particles,
                     scene.steps, s.id.c_str(), t, verdict.c_str());
         std::fflush(stdout);
       }
+    }
+    if (runs == 0) {
+      std::printf("nothing to run: no solution stage is built and usable here (see ./plab test)\n");
+      g_status = 1;
+      return;
     }
     std::printf(failures ? "%d runs differ from the golden files\n"
                          : "every run is identical to its golden file\n",

@@ -7,6 +7,7 @@
 namespace plab::cli {
 
 void add_run(CLI::App& app);     //!< `plab run`: simulate a scene with one stage
+void add_built(CLI::App& app);   //!< `plab built`: is a stage built from its current code?
 void add_render(CLI::App& app);  //!< `plab render`: animate a run, or two outputs side by side
 void add_grade(CLI::App& app);   //!< `plab grade`: the autograder
 void add_release(CLI::App& app);  //!< `plab release`: the student version of the kit

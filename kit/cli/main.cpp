@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
                "outputs, check golden files, run the tests, build the docs."};
   app.require_subcommand(1);
   plab::cli::add_run(app);
+  plab::cli::add_built(app);
   plab::cli::add_gen(app);
   plab::cli::add_diff(app);
   plab::cli::add_golden(app);

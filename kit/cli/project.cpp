@@ -11,6 +11,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 extern char** environ;
 
@@ -68,6 +70,81 @@ int run_program(const std::vector<std::string>& args, const std::string& stdout_
   }
   if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
   return WEXITSTATUS(status);
+}
+
+Captured capture_program(const std::vector<std::string>& args) {
+  const fs::path dir = fs::path(build_dir()) / "tmp";
+  fs::create_directories(dir);
+  const std::string path = (dir / ("capture." + std::to_string(getpid()))).string();
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, path.c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  std::fflush(nullptr);
+  pid_t pid = 0;
+  auto argv = argv_of(args);
+  Captured c;
+  if (posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) {
+    c.status = 127;
+  } else {
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0) {
+    }
+    c.status = WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WEXITSTATUS(status);
+  }
+  posix_spawn_file_actions_destroy(&actions);
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  c.text = text.str();
+  fs::remove(path);
+  return c;
+}
+
+namespace {
+/// Whether a FAILED line of Ninja's log is about stage `id` of `impl`'s targets.
+bool names_stage(const std::string& line, const std::string& id, const std::string& impl) {
+  for (const std::string& t : {"plab_stage_" + id + "_" + impl, "plab-run-" + id + "-" + impl,
+                               "stage" + id + "_" + impl + "_tests"})
+    if (line.find(t) != std::string::npos) return true;
+  return false;
+}
+}  // namespace
+
+std::string first_compiler_error(const std::string& id, const std::string& impl) {
+  std::ifstream log(build_dir() + "/last-build.log");
+  std::string line;
+  bool in_stage = false;
+  while (std::getline(log, line)) {
+    if (line.rfind("FAILED:", 0) == 0) {
+      in_stage = names_stage(line, id, impl);
+      continue;
+    }
+    if (line.rfind("[", 0) == 0 || line.rfind("ninja:", 0) == 0) in_stage = false;
+    if (!in_stage || (line.find("error:") == std::string::npos &&
+                      line.find("undefined reference") == std::string::npos))
+      continue;
+    const std::string root = source_dir() + "/";
+    if (line.rfind(root, 0) == 0) line = line.substr(root.size());
+    return line;
+  }
+  return "";
+}
+
+std::string stage_build_problem(const std::string& id, const std::string& impl,
+                                const std::vector<std::string>& targets) {
+  if (std::string(PLAB_GENERATOR) != "Ninja") return "";
+  std::vector<std::string> args{PLAB_MAKE_PROGRAM, "-C", build_dir(), "-n",
+                                "plab-run-" + id + "-" + impl};
+  args.insert(args.end(), targets.begin(), targets.end());
+  const Captured dry = capture_program(args);
+  if (dry.status == 0 && dry.text.find("no work to do") != std::string::npos) return "";
+  if (const std::string error = first_compiler_error(id, impl); !error.empty())
+    return "stage " + id + " did not compile: " + error;
+  return "stage " + id + " (" + impl + ") is not built from its current code: it did not compile, "
+         "or it changed since the last build (./plab builds it; the compiler's errors: cmake "
+         "--build " + build_dir() + " --target plab-run-" + id + "-" + impl + ")";
 }
 
 void exec_program(const std::vector<std::string>& args) {

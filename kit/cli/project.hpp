@@ -26,6 +26,26 @@ std::string default_impl();
 /// The program that runs stage `id` of `impl` (it may not exist if the stage did not compile).
 std::string stage_program(const std::string& id, const std::string& impl);
 
+/// Why stage `id` of `impl` must not be run or tested now, or nothing when its programs (its
+/// runner and the extra `targets`, e.g. its test program) are built from its current code. A stage
+/// that stopped compiling keeps its last good programs in the build tree: this is what tells them
+/// apart ("stage 01 did not compile: stages/01-naive/step.cpp:12:3: error: ..."). It asks the
+/// build tool for a dry run (Ninja builds only; other generators are not checked).
+std::string stage_build_problem(const std::string& id, const std::string& impl,
+                                const std::vector<std::string>& targets = {});
+
+/// The compiler's first error about stage `id` of `impl` in the last build's log
+/// (`build/last-build.log`, written by `./plab`), as FILE:LINE:COL: error: ..., or nothing.
+std::string first_compiler_error(const std::string& id, const std::string& impl);
+
+/// Runs a program and waits, its stdout and stderr together in the returned text.
+struct Captured {
+  int status = 0;    //!< the exit status, as run_program() gives it
+  std::string text;  //!< what it printed
+};
+/// Runs a program and waits, capturing what it prints (see Captured).
+Captured capture_program(const std::vector<std::string>& args);
+
 /// Runs a program and waits; stdout goes to `stdout_path` when given. Returns the exit status
 /// (128 + signal when killed by a signal, 127 when it could not be started).
 int run_program(const std::vector<std::string>& args, const std::string& stdout_path = "");

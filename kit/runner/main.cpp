@@ -2,6 +2,9 @@
 /// \brief The program built for each stage (`plab-run-NN-IMPL`): reads a scene, runs the stage's
 /// step() with the kit's driver, writes the output. `plab run` starts it.
 #include <CLI/CLI.hpp>
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -18,6 +21,50 @@
 #define PLAB_EXACT_STAGE 0
 #endif
 
+namespace {
+
+/// A stepper that writes "DONE TOTAL" to a status file after each step, in place, so that
+/// `plab run` can say where a run was when it hung or crashed.
+class StatusStepper final : public plab::Stepper {
+ public:
+  StatusStepper(std::unique_ptr<plab::Stepper> inner, int fd, long long total)
+      : inner_(std::move(inner)), fd_(fd), total_(total) {
+    write_status();
+  }
+  void step() override {
+    inner_->step();
+    ++done_;
+    write_status();
+  }
+  void read(plab::Particles& p) override { inner_->read(p); }
+  [[nodiscard]] double own_seconds() const override { return inner_->own_seconds(); }
+  [[nodiscard]] std::string device() const override { return inner_->device(); }
+  [[nodiscard]] std::size_t device_bytes() const override { return inner_->device_bytes(); }
+
+ private:
+  void write_status() {
+    char line[64];
+    const int n = std::snprintf(line, sizeof line, "%20lld %20lld\n", done_, total_);
+    if (pwrite(fd_, line, n, 0) < 0) fd_ = -1;
+  }
+  std::unique_ptr<plab::Stepper> inner_;
+  int fd_;
+  long long total_;
+  long long done_ = 0;
+};
+
+/// `make`, reporting every step in the status file `path` (none when `path` is empty).
+plab::MakeStepper with_status(plab::MakeStepper make, const std::string& path, long long total) {
+  if (path.empty()) return make;
+  const int fd = open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw std::runtime_error("cannot write the status file " + path);
+  return [make, fd, total](const plab::Box& box, plab::Particles& p) -> std::unique_ptr<plab::Stepper> {
+    return std::make_unique<StatusStepper>(make(box, p), fd, total);
+  };
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   std::string scene_path, out_path, digest_path, report_path, events_path, mode, step_from, explain;
   long long steps = -1;
@@ -27,7 +74,7 @@ int main(int argc, char** argv) {
   bool quiet = false;
   int substeps = 1;
   std::string real = "double";
-  std::string audit_path, audit_log_path;
+  std::string audit_path, audit_log_path, status_path;
   CLI::App app{"Runs stage " PLAB_STAGE_ID " (" PLAB_IMPL ") on a scene and writes MODEL.md's output."};
   app.add_option("scene", scene_path, "scene file (MODEL.md's input format)")->required();
   app.add_option("--out", out_path, "write the output here instead of stdout (all or nothing)");
@@ -63,6 +110,9 @@ int main(int argc, char** argv) {
                  "overlaps, energy, counters, energy of each collision in ulps) and write the "
                  "worst of each as JSON to this file (plab stress)");
   app.add_option("--audit-log", audit_log_path, "with --audit: one JSON line per state here");
+  app.add_option("--status", status_path,
+                 "keep `STEPS-DONE STEPS` in this file, rewritten after every step (plab run "
+                 "reads it to say where a hung or crashed run was)");
   app.add_flag("--quiet", quiet, "no timing summary on stderr");
   CLI11_PARSE(app, argc, argv);
 
@@ -104,6 +154,7 @@ int main(int argc, char** argv) {
       throw std::runtime_error("stage " PLAB_STAGE_ID " has no float variant (--real float)");
 #endif
     }
+    make = with_status(make, status_path, scene.steps * substeps);
     plab::OutputFile out(out_path);
     plab::OutputFile digest(digest_path, /*optional=*/true);
     plab::OutputFile events(events_path, /*optional=*/true);
@@ -113,7 +164,8 @@ int main(int argc, char** argv) {
     plab::OutputWriter writer(out.get());
     const plab::RunStats stats =
         plab::simulate(scene, make, writer,
-                       {digest.get(), events.get(), !quiet && plab::stderr_is_terminal(),
+                       {digest.get(), events.get(),
+                        !quiet && status_path.empty() && plab::stderr_is_terminal(),
                         audit_path.empty() ? nullptr : &audit, /*audit_steps=*/!PLAB_EXACT_STAGE,
                         substeps});
     out.commit();

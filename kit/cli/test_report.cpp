@@ -1,0 +1,390 @@
+/// \file cli/test_report.cpp
+/// \brief run_tests_reported(): CTest under `plab test`, its log in a file, a short report.
+#include "test_report.hpp"
+
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <regex>
+#include <sstream>
+#include <thread>
+
+#include "plab/datasets.hpp"
+#include "project.hpp"
+
+namespace plab::cli {
+namespace fs = std::filesystem;
+namespace {
+
+/// One CTest test as its result line and log give it.
+struct TestResult {
+  std::string name;    //!< e.g. stage01.student.Golden
+  std::string status;  //!< Passed, Failed, Skipped, Not Run, Timeout, Exception: ...
+  double seconds = 0;
+  std::string output;  //!< what it printed (failed tests: from --output-on-failure)
+};
+
+/// One GoogleTest case inside a test's output.
+struct Case {
+  std::string name;     //!< the part after the last '/', e.g. course_2
+  std::string status;   //!< passed, failed, skipped, or stopped (no end line)
+  std::string message;  //!< its failure or skip text
+};
+
+/// The first difference as `plab diff` described it inside a failure message.
+struct Found {
+  std::string step, particle, field, expected, actual, lines;
+};
+
+std::optional<TestResult> parse_result_line(const std::string& line) {
+  static const std::regex re(R"(^\s*\d+/\d+ Test\s+#\d+: (\S+) \.*\s*(?:\*\*\*)?(.*?)\s+([0-9.]+) sec\s*$)");
+  std::smatch m;
+  if (!std::regex_match(line, m, re)) return std::nullopt;
+  return TestResult{m[1], m[2], std::stod(m[3]), ""};
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  return lines;
+}
+
+/// The tests of CTest's log, each with the output printed after its result line.
+std::vector<TestResult> parse_log(const std::string& text) {
+  std::vector<TestResult> tests;
+  bool in_output = false;
+  for (const std::string& line : lines_of(text)) {
+    if (auto r = parse_result_line(line)) {
+      tests.push_back(*r);
+      in_output = r->status != "Passed" && r->status != "Skipped";
+      continue;
+    }
+    if (line.find("% tests passed") != std::string::npos) in_output = false;
+    if (in_output) tests.back().output += line + "\n";
+  }
+  return tests;
+}
+
+/// Each skipped test's reason ("plab: no case was checked ...") from CTest's LastTest.log.
+std::map<std::string, std::string> skip_reasons(const std::vector<TestResult>& tests) {
+  std::map<std::string, std::string> reasons;
+  std::ifstream in(build_dir() + "/Testing/Temporary/LastTest.log");
+  std::ostringstream all;
+  all << in.rdbuf();
+  const std::string log = all.str();
+  for (const TestResult& t : tests) {
+    if (t.status != "Skipped") continue;
+    const auto at = log.find(" Test: " + t.name + "\n");
+    const auto said = at == std::string::npos ? at : log.find("plab: no case was checked", at);
+    const auto end = log.find("<end of output>", at == std::string::npos ? 0 : at);
+    if (said == std::string::npos || said > end) continue;
+    std::string reason = log.substr(said, log.find('\n', said) - said);
+    reasons[t.name] = reason.substr(reason.find(": ", 25) + 2);
+  }
+  return reasons;
+}
+
+std::vector<Case> gtest_cases(const std::string& output) {
+  std::vector<Case> cases;
+  bool open = false;
+  for (const std::string& line : lines_of(output)) {
+    if (line.rfind("[ RUN      ] ", 0) == 0) {
+      const auto slash = line.rfind('/');
+      cases.push_back({line.substr(slash == std::string::npos ? 13 : slash + 1), "stopped", ""});
+      open = true;
+    } else if (open && line.rfind("[       OK ] ", 0) == 0) {
+      cases.back().status = "passed";
+      open = false;
+    } else if (open && line.rfind("[  FAILED  ] ", 0) == 0) {
+      cases.back().status = "failed";
+      open = false;
+    } else if (open && line.rfind("[  SKIPPED ] ", 0) == 0) {
+      cases.back().status = "skipped";
+      open = false;
+    } else if (open && !line.empty() && line[0] != '[' && line.find(": Failure") == std::string::npos &&
+               line.find(": Skipped") == std::string::npos) {
+      cases.back().message += line + "\n";
+    }
+  }
+  return cases;
+}
+
+std::optional<Found> find_difference(const std::string& message) {
+  static const std::regex re(
+      R"(first difference at line \d+: step (\S+?),(?: particle (\S+?),)? field (\S+)\n\s*expected: (.*)\n\s*actual:\s*(.*)\n(\d+ lines? differs?))");
+  std::smatch m;
+  if (!std::regex_search(message, m, re)) return std::nullopt;
+  return Found{m[1], m[2], m[3], m[4], m[5], m[6]};
+}
+
+std::string first_line(const std::string& text) { return text.substr(0, text.find('\n')); }
+
+/// A path as the student types it: relative to the working folder when inside it.
+std::string shown_path(const std::string& path) {
+  const fs::path rel = fs::path(path).lexically_relative(fs::current_path());
+  return !rel.empty() && rel.begin()->string() != ".." ? rel.string() : path;
+}
+
+/// The manifest's scene whose test-name form (non-alphanumerics as '_') is `case_name`.
+std::optional<Dataset> scene_of(const Manifest& m, const std::string& case_name) {
+  for (const Dataset& d : m.datasets) {
+    std::string s = d.name;
+    for (char& c : s)
+      if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+    if (s == case_name) return d;
+  }
+  return std::nullopt;
+}
+
+/// One line per case: a scene's name and "passed" or its first difference; skips grouped.
+void print_cases(const std::vector<Case>& cases, const Manifest& m) {
+  std::map<std::string, std::pair<int, std::string>> skipped;
+  for (const Case& c : cases) {
+    const auto d = scene_of(m, c.name);
+    const std::string name = d ? d->name : c.name;
+    if (c.status == "skipped") {
+      // One line for skips that differ only in their numbers (N = 300, N = 1000, ...).
+      auto& [n, example] = skipped[std::regex_replace(first_line(c.message), std::regex("[0-9]+"), "#")];
+      if (n++ == 0) example = first_line(c.message);
+      continue;
+    }
+    std::string what = c.status;
+    if (const auto f = find_difference(c.message))
+      what = "step " + f->step + (f->particle.empty() ? "" : ", particle " + f->particle) + ", " +
+             f->field + ": expected " + f->expected + ", got " + f->actual;
+    else if (c.status == "failed")
+      what = "failed: " + first_line(c.message);
+    std::printf("    %-22s %s\n", name.c_str(), what.c_str());
+  }
+  for (const auto& [key, skip] : skipped)
+    std::printf("    %d skipped%s: %s\n", skip.first, skip.first > 1 ? ", e.g." : "",
+                skip.second.c_str());
+}
+
+/// One line for a test that is not per scene: how many cases failed, and the first one.
+void print_summary(const std::string& head, const std::vector<Case>& cases) {
+  int failed = 0;
+  const Case* first = nullptr;
+  for (const Case& c : cases)
+    if (c.status == "failed" && failed++ == 0) first = &c;
+  std::string what;
+  if (first) {
+    const auto f = find_difference(first->message);
+    what = ": " + std::to_string(failed) + " of " + std::to_string(cases.size()) +
+           " cases failed, first " + first->name + ": " +
+           (f ? "step " + f->step + (f->particle.empty() ? "" : ", particle " + f->particle) +
+                    ", " + f->field
+              : first_line(first->message));
+  }
+  std::printf("%s%s\n", head.c_str(), what.c_str());
+}
+
+/// The test's own explanation when it stopped it (watchdog, build check), or nothing.
+std::string stop_message(const std::string& output) {
+  for (const std::string& line : lines_of(output))
+    if (line.find("an endless loop?") != std::string::npos ||
+        line.find("did not compile") != std::string::npos ||
+        line.find("is not built from its current code") != std::string::npos)
+      return line;
+  return "";
+}
+
+/// Where the first failing case of a stage's test can be seen and drawn.
+struct FirstFailure {
+  std::string id, impl, test;
+  Case c;
+};
+
+/// The reproduce and draw commands (and the event that should have happened) for a golden scene.
+void explain_golden(const FirstFailure& f, const Dataset& d, const Manifest& m, const Found& diff) {
+  const std::string scene = shown_path(m.scene_path(d));
+  const std::string golden = shown_path(m.golden_path(d));
+  const std::string run = "./plab run --stage " + f.id + " --impl " + f.impl + " " + scene;
+  std::printf("  the scene: %s\n", d.tests.c_str());
+  const long long step = std::atoll(diff.step.c_str());
+  const std::string explain = std::to_string(step > 0 ? step - 1 : 0) + ":" + diff.particle;
+  if (!diff.particle.empty()) {
+    const Captured c = capture_program({stage_program(f.id, f.impl), m.scene_path(d), "--explain",
+                                        explain});
+    if (c.status == 0)
+      std::printf("  what should happen from step %lld to %s (the kit's oracle): %s\n",
+                  step > 0 ? step - 1 : 0, diff.step.c_str(), first_line(c.text).c_str());
+  }
+  std::printf("  reproduce it:\n    %s --out mine.out\n    ./plab diff %s mine.out\n", run.c_str(),
+              golden.c_str());
+  if (!diff.particle.empty()) std::printf("    %s --explain %s\n", run.c_str(), explain.c_str());
+  std::printf("  draw it:\n    ./plab render %s --diff %s mine.out --out %s-diff.gif\n",
+              scene.c_str(), golden.c_str(), d.name.c_str());
+}
+
+/// The same for a generated scene of the stage-against-stage test (its `plab gen` line).
+void explain_generated(const FirstFailure& f, const Found& diff) {
+  static const std::regex gen(R"(\(plab gen ([^)]*)\))"), other(R"(differs from stage (\d+))");
+  std::smatch g, o;
+  if (!std::regex_search(f.c.message, g, gen) || !std::regex_search(f.c.message, o, other)) {
+    std::printf("  its scene is built in tests/stage_test.cpp (%s)\n", f.c.name.c_str());
+    return;
+  }
+  const std::string run = "./plab run --stage " + f.id + " --impl " + f.impl + " scene.in";
+  const long long step = std::atoll(diff.step.c_str());
+  std::printf("  reproduce it:\n    ./plab gen %s --out scene.in\n", g[1].str().c_str());
+  std::printf("    ./plab run --stage %s --impl solution scene.in --out expected.out\n",
+              o[1].str().c_str());
+  std::printf("    %s --out mine.out\n    ./plab diff expected.out mine.out\n", run.c_str());
+  if (!diff.particle.empty())
+    std::printf("    %s --explain %lld:%s\n", run.c_str(), step > 0 ? step - 1 : 0,
+                diff.particle.c_str());
+  std::printf("  draw it:\n    ./plab render scene.in --diff expected.out mine.out --out diff.gif\n");
+}
+
+/// The page about the first failing case: what differs, why the scene exists, and how to see it.
+void explain_first(const FirstFailure& f, const Manifest& m) {
+  const auto diff = find_difference(f.c.message);
+  const auto d = scene_of(m, f.c.name);
+  std::printf("first failure: %s, %s\n", f.test.c_str(), d ? ("scene " + d->name).c_str()
+                                                           : f.c.name.c_str());
+  if (!diff) {
+    for (const std::string& line : lines_of(f.c.message)) std::printf("  %s\n", line.c_str());
+    return;
+  }
+  std::printf("  step %s%s, field %s: expected %s, got %s (%s)\n", diff->step.c_str(),
+              diff->particle.empty() ? "" : (", particle " + diff->particle).c_str(),
+              diff->field.c_str(), diff->expected.c_str(), diff->actual.c_str(),
+              diff->lines.c_str());
+  if (d)
+    explain_golden(f, *d, m, *diff);
+  else
+    explain_generated(f, *diff);
+}
+
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+/// Starts ctest with its output into `log`; returns its process id.
+pid_t start_ctest(const std::vector<std::string>& args, const std::string& log) {
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  if (pid != 0) return pid;
+  const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  dup2(fd, STDOUT_FILENO);
+  dup2(fd, STDERR_FILENO);
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  execvp(argv[0], argv.data());
+  _exit(127);
+}
+
+/// Follows the log while ctest runs, printing one line per test as it ends.
+int follow(pid_t pid, const std::string& log) {
+  std::ifstream in;
+  std::string pending;
+  int status = 0;
+  for (bool done = false; !done;) {
+    done = waitpid(pid, &status, WNOHANG) == pid;
+    if (!in.is_open()) in.open(log);
+    char buf[4096];
+    while (in.is_open() && in.read(buf, sizeof buf).gcount() > 0) pending.append(buf, in.gcount());
+    in.clear();
+    for (std::size_t nl; (nl = pending.find('\n')) != std::string::npos; pending.erase(0, nl + 1))
+      if (const auto r = parse_result_line(pending.substr(0, nl)))
+        std::printf("  %-8s %s (%.1f s)\n", lower(r->status).c_str(), r->name.c_str(),
+                    r->seconds);
+    std::fflush(stdout);
+    if (!done) std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+/// "12 passed, 3 skipped, 1 failed" and each skip's reason.
+void print_counts(const std::vector<TestResult>& tests, const std::string& log) {
+  std::map<std::string, int> n;
+  for (const TestResult& t : tests)
+    ++n[t.status == "Passed" || t.status == "Skipped" || t.status == "Not Run" ? t.status : "Failed"];
+  std::printf("plab test: %d passed, %d skipped, %d failed, %d not run (the whole log: %s)\n",
+              n["Passed"], n["Skipped"], n["Failed"], n["Not Run"], shown_path(log).c_str());
+  for (const auto& [name, why] : skip_reasons(tests))
+    std::printf("  skipped %s: %s\n", name.c_str(), why.c_str());
+}
+
+/// For a test the watchdog stopped on a scene, the command that runs that scene under a limit.
+void print_stalled_run(const std::string& stopped, const std::string& test, const Manifest& m) {
+  static const std::regex scene_stopped(R"(^stage (\d\d), scene ([\w.-]+): )"),
+      impl(R"(^stage\d\d\.(\w+)\.)");
+  std::smatch where, which;
+  if (!std::regex_search(stopped, where, scene_stopped) || !std::regex_search(test, which, impl))
+    return;
+  for (const Dataset& d : m.datasets)
+    if (d.name == where[2].str())
+      std::printf("  see it: ./plab run --stage %s --impl %s %s --timeout 30\n",
+                  where[1].str().c_str(), which[1].str().c_str(),
+                  shown_path(m.scene_path(d)).c_str());
+}
+
+/// A line per test that did not pass, its cases for a stage's test, the first failure's page.
+void print_failures(const std::vector<TestResult>& tests) {
+  const Manifest m = load_manifest(source_dir() + "/datasets");
+  std::optional<FirstFailure> first;
+  static const std::regex stage_test(R"(stage(\d\d)\.(student|solution)\.(\w+).*)");
+  for (const TestResult& t : tests) {
+    std::smatch s;
+    if (t.status == "Passed" || t.status == "Skipped") continue;
+    if (t.status == "Not Run") {
+      std::printf("%s: not run (the check it needs failed)\n", t.name.c_str());
+      continue;
+    }
+    const std::string stopped = stop_message(t.output);
+    const std::string head = t.name + ": " + (t.status == "Failed" ? "FAILED" : t.status) +
+                             (stopped.empty() ? "" : ": " + stopped);
+    const std::vector<Case> cases = gtest_cases(t.output);
+    if (t.name.find(".Golden") != std::string::npos && stopped.empty()) {
+      std::printf("%s\n", head.c_str());
+      print_cases(cases, m);
+    } else {
+      print_summary(head, cases);
+    }
+    print_stalled_run(stopped, t.name, m);
+    // The page goes to the first failing scene of a golden test, else to the first failing case.
+    const bool golden = t.name.find(".Golden") != std::string::npos;
+    if ((first && (!golden || first->test.find(".Golden") != std::string::npos)) ||
+        !std::regex_match(t.name, s, stage_test))
+      continue;
+    for (const Case& c : cases)
+      if (c.status == "failed") {
+        first = FirstFailure{s[1], s[2], t.name, c};
+        break;
+      }
+  }
+  if (first) explain_first(*first, m);
+}
+
+}  // namespace
+
+int run_tests_reported(const TestRun& run) {
+  fs::create_directories(fs::path(run.log_path).parent_path());
+  fs::remove(run.log_path);  // follow() must not read the last run's log
+  const int rc = follow(start_ctest(run.ctest_args, run.log_path), run.log_path);
+  std::ifstream in(run.log_path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  const std::vector<TestResult> tests = parse_log(text.str());
+  if (tests.empty()) {
+    std::fputs(text.str().c_str(), stdout);
+    return rc ? rc : 1;
+  }
+  print_failures(tests);
+  print_counts(tests, run.log_path);
+  return rc;
+}
+
+}  // namespace plab::cli

@@ -1,0 +1,146 @@
+/// \file cli/watch.cpp
+/// \brief run_stage_watched(): a stage program under a limit, its whole process group ended.
+#include "watch.hpp"
+
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <thread>
+
+namespace plab::cli {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+volatile sig_atomic_t g_stop_signal = 0;
+
+void on_stop_signal(int sig) { g_stop_signal = sig; }
+
+/// Steps finished and in all, as the program last reported them (its --status file).
+struct Steps {
+  long long done = 0;
+  long long total = 0;
+};
+
+Steps read_steps(const std::string& path) {
+  Steps s;
+  std::ifstream in(path);
+  in >> s.done >> s.total;
+  return s;
+}
+
+std::string where(const Steps& s) {
+  if (s.total <= 0) return "before its first step";
+  return "after step " + std::to_string(s.done) + " of " + std::to_string(s.total);
+}
+
+/// Starts the program in a new process group that dies with this process.
+pid_t start(const std::vector<std::string>& args) {
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  if (pid != 0) {
+    if (pid > 0) setpgid(pid, pid);
+    return pid;
+  }
+  setpgid(0, 0);
+  prctl(PR_SET_PDEATHSIG, SIGKILL);
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  execvp(argv[0], argv.data());
+  std::fprintf(stderr, "error: cannot start %s\n", args[0].c_str());
+  _exit(127);
+}
+
+/// Shows where a long run is: a line kept in place on a terminal after 1 s, otherwise one line
+/// every 10 s once the run has taken that long.
+class Progress {
+ public:
+  explicit Progress(std::string label) : label_(std::move(label)), tty_(isatty(STDERR_FILENO)) {}
+  void show(double t, const Steps& s) {
+    if (s.total <= 0) return;
+    if (tty_ && t >= 1.0 && t - last_ >= 0.25) {
+      std::fprintf(stderr, "\r  step %lld/%lld, %.1f s ", s.done, s.total, t);
+      shown_ = true;
+      last_ = t;
+    } else if (!tty_ && t - last_ >= 10.0) {
+      std::fprintf(stderr, "plab run: %s: step %lld of %lld after %.0f s\n", label_.c_str(),
+                   s.done, s.total, t);
+      last_ = t;
+    }
+  }
+  void clear() {
+    if (shown_) std::fprintf(stderr, "\r%60s\r", "");
+    shown_ = false;
+  }
+
+ private:
+  std::string label_;
+  bool tty_;
+  double last_ = 0;
+  bool shown_ = false;
+};
+
+/// The exit status, with a message when a signal ended the program.
+int report_end(int status, const RunWatch& w, const Steps& s) {
+  if (!WIFSIGNALED(status)) return WEXITSTATUS(status);
+  const int sig = WTERMSIG(status);
+  if (sig == SIGPIPE) return 128 + sig;  // its reader stopped reading (`| head`): not a crash
+  const char* abbrev = sigabbrev_np(sig);
+  std::fprintf(stderr, "plab run: %s crashed: SIG%s (%s) %s\n", w.label.c_str(),
+               abbrev ? abbrev : "?", strsignal(sig), where(s).c_str());
+  return 128 + sig;
+}
+
+}  // namespace
+
+int run_stage_watched(const std::vector<std::string>& args, const RunWatch& w) {
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, on_stop_signal);
+  if (!w.status_path.empty()) std::remove(w.status_path.c_str());
+  const pid_t pid = start(args);
+  if (pid < 0) return 127;
+  const auto t0 = Clock::now();
+  auto last_change = t0;
+  Steps steps;
+  Progress progress(w.label);
+  for (;;) {
+    int status = 0;
+    if (waitpid(pid, &status, WNOHANG) == pid) {
+      kill(-pid, SIGKILL);  // anything the program left behind in its group
+      progress.clear();
+      if (!w.status_path.empty()) steps = read_steps(w.status_path);
+      return report_end(status, w, steps);
+    }
+    const auto now = Clock::now();
+    const double t = std::chrono::duration<double>(now - t0).count();
+    if (!w.status_path.empty()) {
+      const Steps s = read_steps(w.status_path);
+      if (s.done != steps.done) last_change = now;
+      steps = s;
+    }
+    progress.show(t, steps);
+    const bool limit = w.timeout > 0 && t >= w.timeout;
+    if (limit || g_stop_signal) {
+      kill(-pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      progress.clear();
+      const double quiet = std::chrono::duration<double>(now - last_change).count();
+      if (!limit) return 128 + g_stop_signal;
+      std::fprintf(stderr,
+                   "plab run: %s: stopped at the --timeout of %g s, %s (no step finished in the "
+                   "last %.0f s): an endless loop?\n",
+                   w.label.c_str(), w.timeout, where(steps).c_str(), quiet);
+      return 124;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+}
+
+}  // namespace plab::cli

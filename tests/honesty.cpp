@@ -1,0 +1,184 @@
+/// \file honesty.cpp
+/// \brief The watchdog and the "no case was checked" line of honesty.hpp, installed in every
+/// stage test program before GoogleTest starts.
+///
+/// Limits (environment, set by tests/CMakeLists.txt): PLAB_STALL_SECONDS (default 20) is the
+/// longest a step may take; PLAB_TEST_SECONDS is the whole test program's limit, a little under
+/// CTest's TIMEOUT, so that the message comes before CTest kills the program silently.
+#include "honesty.hpp"
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <mutex>
+#include <thread>
+
+namespace plab::test {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+/// What the program is doing now, shared with the watchdog thread.
+struct Watched {
+  std::mutex mutex;
+  std::string what = "the test program, before its first scene";
+  long long steps = 0;
+  std::atomic<long long> done{0};
+  std::atomic<Clock::rep> last{Clock::now().time_since_epoch().count()};
+  std::atomic<pid_t> child{0};
+  std::atomic<bool> armed{false};  //!< something is watched: the stall limit applies
+};
+
+Watched& state() {
+  static Watched w;
+  return w;
+}
+
+double env_seconds(const char* name, double fallback) {
+  const char* v = std::getenv(name);
+  return v && *v ? std::atof(v) : fallback;
+}
+
+double seconds_since(Clock::rep then) {
+  return std::chrono::duration<double>(Clock::now().time_since_epoch() - Clock::duration(then))
+      .count();
+}
+
+/// Ends the test program (and its child, if any) with `why` on both streams (CTest keeps both).
+[[noreturn]] void stop(const std::string& why) {
+  Watched& w = state();
+  if (const pid_t child = w.child.load(); child > 0) kill(child, SIGKILL);
+  std::fprintf(stdout, "\n%s\n", why.c_str());
+  std::fprintf(stderr, "\n%s\n", why.c_str());
+  std::fflush(nullptr);
+  _exit(1);
+}
+
+/// "stage 03, scene course-2: finished 12 of 50 steps": where the watched work is.
+std::string position() {
+  Watched& w = state();
+  std::lock_guard lock(w.mutex);
+  const long long done = w.done.load();
+  std::string at = w.what + ": ";
+  at += "finished " + std::to_string(done);
+  at += w.steps > 0 ? " of " + std::to_string(w.steps) + " steps" : " steps";
+  return at;
+}
+
+/// Checks the limits twice a second for the life of the program.
+void watchdog() {
+  const double stall = env_seconds("PLAB_STALL_SECONDS", 20);
+  const double limit = env_seconds("PLAB_TEST_SECONDS", 0);
+  const auto start = Clock::now().time_since_epoch().count();
+  char buf[64];
+  for (;;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    const double quiet = seconds_since(state().last.load());
+    if (state().armed && quiet >= stall) {
+      std::snprintf(buf, sizeof buf, "%.0f s", quiet);
+      stop(position() + ", then nothing for " + buf + ": an endless loop?");
+    }
+    if (limit > 0 && seconds_since(start) >= limit) {
+      std::snprintf(buf, sizeof buf, "%.0f s", limit);
+      stop(position() + " when the test's limit of " + buf + " ran out: too slow, or an endless loop?");
+    }
+  }
+}
+
+/// Says so when a program ends having checked no case: CTest's SKIP_REGULAR_EXPRESSION matches
+/// "plab: no case was checked" and reports the test as skipped, with the first reason.
+class NoCaseChecked : public testing::EmptyTestEventListener {
+ public:
+  void OnTestPartResult(const testing::TestPartResult& r) override {
+    if (r.skipped() && reason_.empty()) reason_ = r.message();
+  }
+  void OnTestIterationEnd(const testing::UnitTest& u, int) override {
+    if (u.successful_test_count() > 0 || u.failed_test_count() > 0) return;
+    std::string why = reason_.empty() ? "no case is instantiated here" : reason_;
+    while (!why.empty() && (why.back() == '\n' || why.back() == ' ')) why.pop_back();
+    std::printf("plab: no case was checked (%d skipped): %s\n", u.skipped_test_count(),
+                why.c_str());
+    std::fflush(stdout);
+  }
+
+ private:
+  std::string reason_;
+};
+
+/// The stepper of `make`, reporting each finished step to the watchdog.
+class WatchedStepper final : public Stepper {
+ public:
+  explicit WatchedStepper(std::unique_ptr<Stepper> inner) : inner_(std::move(inner)) {}
+  void step() override {
+    inner_->step();
+    stepped(++done_);
+  }
+  void read(Particles& p) override { inner_->read(p); }
+  [[nodiscard]] double own_seconds() const override { return inner_->own_seconds(); }
+  [[nodiscard]] std::string device() const override { return inner_->device(); }
+  [[nodiscard]] std::size_t device_bytes() const override { return inner_->device_bytes(); }
+
+ private:
+  std::unique_ptr<Stepper> inner_;
+  long long done_ = 0;
+};
+
+/// Installs the listener and starts the watchdog before main() runs.
+[[maybe_unused]] const bool installed = [] {
+  testing::UnitTest::GetInstance()->listeners().Append(new NoCaseChecked);
+  std::thread(watchdog).detach();
+  return true;
+}();
+
+}  // namespace
+
+void watch(const std::string& what, long long steps) {
+  Watched& w = state();
+  {
+    std::lock_guard lock(w.mutex);
+    w.what = what;
+    w.steps = steps;
+  }
+  stepped(0);
+  w.armed = true;
+}
+
+void stepped(long long done) {
+  state().done = done;
+  state().last = Clock::now().time_since_epoch().count();
+}
+
+void unwatch() { state().armed = false; }
+
+void set_child(pid_t pid) { state().child = pid; }
+
+MakeStepper watched(MakeStepper make) {
+  return [make](const Box& box, Particles& p) -> std::unique_ptr<Stepper> {
+    return std::make_unique<WatchedStepper>(make(box, p));
+  };
+}
+
+int run_watched(const std::string& command_line) {
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execl("/bin/sh", "sh", "-c", ("exec " + command_line).c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  if (pid < 0) return 127;
+  set_child(pid);
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0) {
+  }
+  set_child(0);
+  unwatch();
+  return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WEXITSTATUS(status);
+}
+
+}  // namespace plab::test

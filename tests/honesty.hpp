@@ -1,0 +1,37 @@
+/// \file honesty.hpp
+/// \brief What keeps a stage's tests honest: a watchdog that ends a test whose stage stops making
+/// progress (naming the scene and the last step), and a line that says so when a test program
+/// checked no case at all (every case skipped), which CTest then reports as skipped.
+#pragma once
+
+#include <sys/types.h>
+
+#include <memory>
+#include <string>
+
+#include "plab/driver.hpp"
+#include "plab/stepper.hpp"
+
+namespace plab::test {
+
+/// Starts watching one piece of work: `what` names it ("stage 03, scene course-2"), `steps` is
+/// how many steps it will take (0 when unknown). Resets the step count and the clock.
+void watch(const std::string& what, long long steps);
+
+/// Records that the watched work finished step `done`.
+void stepped(long long done);
+
+/// Ends the watch: between pieces of work only the whole program's limit applies.
+void unwatch();
+
+/// Records a child process the watchdog must end with the test (0: none any more).
+void set_child(pid_t pid);
+
+/// A maker of steppers whose steppers report each step to the watchdog.
+MakeStepper watched(MakeStepper make);
+
+/// Runs a program (argv[0] found on PATH) and waits, under the watchdog: the child is ended with
+/// the test when a limit runs out. Returns its exit status (128 + signal when killed).
+int run_watched(const std::string& command_line);
+
+}  // namespace plab::test
