@@ -17,6 +17,7 @@ The attacks (each a stage's step.cpp; the hidden seed of these gradings is SEED)
   write-outside   write files into /tmp, the kit, the grader's scratch parent and HOME
   daemon          setsid() and a double fork: a child that keeps writing after the run
   fork-bomb       fork without end (an honest stage 02 is graded after it in the same run)
+and, as a control, read-golden and include-path again with --no-sandbox, where they must win.
 """
 import json
 import os
@@ -268,11 +269,11 @@ def submission(name, attacks, port=0):
     return root
 
 
-def grade(name, root, stages="01,02,03"):
+def grade(name, root, stages="01,02,03", *extra):
     out = scratch / f"{name}.json"
     start = time.time()
     done = subprocess.run([plab, "grade", "--submission", root, "--stages", stages, "--out", out,
-                           "--seed", str(SEED), "--scratch", scratch], capture_output=True,
+                           "--seed", str(SEED), "--scratch", scratch, *extra], capture_output=True,
                           text=True)
     (scratch / f"{name}.log").write_text(done.stdout + done.stderr)
     assert out.exists(), f"{name}: no results.json:\n{done.stdout[-3000:]}{done.stderr}"
@@ -375,7 +376,19 @@ def case_processes():
     check("daemon", not files, f"the daemon wrote nothing outside ({files})")
 
 
-CASES = {"copy": case_copy, "escape": case_escape, "processes": case_processes}
+def case_control():
+    """The same attacks without the sandbox must win: the checks above can fail."""
+    tests, doc, _ = grade("redteam-control", submission("redteam-control", {
+        "01": "read-golden", "03": "include-path"}), "01,03", "--no-sandbox")
+    for stage, attack in (("01", "read-golden"), ("03", "include-path")):
+        got = sum(t["score"] for t in correctness(tests, stage).values())
+        most = sum(t["max_score"] for t in correctness(tests, stage).values())
+        check("control", got > most / 2, f"with --no-sandbox, {attack} (stage {stage}) wins "
+              f"{got} of {most} correctness points")
+
+
+CASES = {"copy": case_copy, "escape": case_escape, "processes": case_processes,
+         "control": case_control}
 scratch.mkdir(parents=True, exist_ok=True)
 try:
     for name, case in CASES.items():
