@@ -89,6 +89,11 @@ def configure(source, build, *extra):
         f"configuring {source.name}", text=True)
 
 
+def is_gpu_stage(folder):
+    """A CUDA stage (plab_add_stage(... GPU ...)): not compiled without a CUDA compiler."""
+    return re.search(r"plab_add_stage\([^)]*\bGPU\b", (folder / "CMakeLists.txt").read_text())
+
+
 def check_starting_points(release, build):
     """Every stage of the release must be its untouched starting point: its program stops with
     its "not done yet" message (exit 3). A CUDA stage is not compiled here (the check builds
@@ -102,7 +107,7 @@ def check_starting_points(release, build):
         program = build / "bin" / f"plab-run-{sid}-student"
         pattern = NOT_DONE.format(id=sid)
         if not program.exists():
-            gpu = re.search(r"plab_add_stage\([^)]*\bGPU\b", (folder / "CMakeLists.txt").read_text())
+            gpu = is_gpu_stage(folder)
             sources = " ".join(p.read_text(errors="replace") for p in folder.iterdir()
                                if p.suffix in (".cpp", ".cu", ".cuh", ".hpp", ".h"))
             if not gpu:
@@ -167,9 +172,13 @@ def build_release(kit, head, work, say):
     build = work / "build-release"
     say("building the release's starting points to check them", flush=True)
     configure(release, build)
-    # Everything that compiles (-k 0): a stage that does not is named by the check below.
+    # The stage programs only (the CUDA stages are not configured here), each that compiles
+    # (-k 0): a stage that does not is named by the check below.
+    programs = [f"plab-run-{d.name[:2]}-student" for d in sorted((release / "stages").glob("[0-9][0-9]-*"))
+                if (d / "CMakeLists.txt").exists() and not is_gpu_stage(d)]
     keep_going = ["--", "-k", "0"] if shutil.which("ninja") else []
-    subprocess.run(["cmake", "--build", str(build), *keep_going], capture_output=True)
+    subprocess.run(["cmake", "--build", str(build), "--target", *programs, *keep_going],
+                   capture_output=True)
     for line in check_starting_points(release, build):
         say(line)
 
