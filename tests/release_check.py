@@ -148,7 +148,8 @@ def release_tests(out, kit):
     r = run("ctest", "--test-dir", build, "-R", against, "--output-on-failure", ok=False)
     check(r.returncode != 0 and "EXERCISE" in r.stdout,
           f"stage 01's stage-against-stage tests do not fail on the starting point:\n{r.stdout[-2000:]}")
-    shutil.copy2(kit / "solutions" / "01-naive" / "step.cpp", out / "stages" / "01-naive" / "step.cpp")
+    # copyfile, not copy2: a new mtime, so that the build sees the change
+    shutil.copyfile(kit / "solutions" / "01-naive" / "step.cpp", out / "stages" / "01-naive" / "step.cpp")
     run("cmake", "--build", build, "-j", "2")
     r = run("ctest", "--test-dir", build, "-R", against, "-V", ok=False)
     passed = re.search(r"\[  PASSED  \] (\d+) test", r.stdout)
@@ -163,7 +164,7 @@ def release_tests(out, kit):
 def failed_part_way(plab, clone, kit, scratch):
     git(clone, "checkout", "-q", "--", "stages")
     git(clone, "clean", "-q", "-fd", "stages")
-    shutil.copy2(kit / "solutions" / "01-naive" / "step.cpp", clone / "stages" / "01-naive" / "step.cpp")
+    shutil.copyfile(kit / "solutions" / "01-naive" / "step.cpp", clone / "stages" / "01-naive" / "step.cpp")
     git(clone, "commit", "-q", "-am", "stage 01 done (not a starting point)")
     out = scratch / "broken"
     r = run(plab, "release", "--kit", clone, "--out", out, ok=False)
