@@ -1,19 +1,36 @@
 #!/usr/bin/env python3
-"""Checks `plab release` (CTest label release): the student copy has no solutions, carries docs
-built from itself, builds on its own, passes the kit's tests and fails each stage's tests on the
-untouched starting points with the "not done yet" message.
+"""Checks `plab release` (CTest label release) on a scratch clone of the kit's HEAD.
 
-  release_check.py PLAB_PROGRAM      (works in a temporary folder outside the kit)
+1. stages/ with an uncommitted change and an untracked file: the release is refused and writes
+   nothing;
+2. the same with --allow-dirty: released from HEAD (the dirty change and the untracked file are
+   not in it, and it says what it included); no solutions/, CI, logs, build or scratch files,
+   only files HEAD holds (plus the docs and the reference program); a README for a student with
+   no instructor-only command or folder; docs built from itself (no solution's line in them);
+   kit/reference/bin/plab-reference, compiled, with its note;
+3. the release builds on its own; its kit tests pass; the tests of stages 01-03 fail on the
+   untouched starting points with "stage NN: EXERCISE n (...) is not done yet", stage 01's
+   stage-against-stage tests too; with a solution's step.cpp copied into stages/01-naive, those
+   tests run against the reference program (not skipped) and pass;
+4. a commit whose stages/01-naive is not the starting point: the release fails part-way and
+   leaves no folder behind (neither the target nor its temporary folder).
+
+The scratch folder is removed whatever the outcome.
+
+  release_check.py PLAB_PROGRAM [--kit DIR] [--keep]
 """
+import argparse
+import os
 import pathlib
+import re
 import shutil
 import subprocess
 import sys
 import tempfile
 
-plab = sys.argv[1]
-scratch = pathlib.Path(tempfile.mkdtemp(prefix="plab-release-check-"))
-out = scratch / "student-kit"
+# Words of the instructor's kit that a student's README must not show.
+INSTRUCTOR_ONLY = (r"solutions/", r"golden --check", r"plab golden", r"plab grade",
+                   r"plab release", r"gradescope", r"\.ci\b", r"--hidden-seed")
 
 
 def run(*cmd, ok=True, **kw):
@@ -24,30 +41,172 @@ def run(*cmd, ok=True, **kw):
     return done
 
 
-run(plab, "release", "--out", out)
-assert not (out / "solutions").exists(), "the release contains solutions/"
-assert not (out / ".ci").exists(), "the release contains the instructor's CI"
-index = out / "docs" / "html" / "index.html"
-assert index.exists(), "no docs in the release"
-html = " ".join(p.read_text(errors="replace") for p in (out / "docs" / "html").glob("*.html"))
-# Lines that only the solutions contain (the instructor's docs show each of them):
-for line in ("mine.push_back", "heap.push"):  # solution-only lines of stages 02, 03 and 06
-    assert line not in html, f"the release's docs show a solution's '{line}'"
-print(f"release written: no solutions/, docs at {index.relative_to(scratch)}")
+def check(condition, message):
+    if not condition:
+        sys.exit(f"release check FAILED: {message}")
 
-build = out / "build"
-run("cmake", "-S", out, "-B", build, "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release")
-run("cmake", "--build", build, "-j", "2")
-print("the release configures and builds on its own")
-kit = run("ctest", "--test-dir", build, "-L", "^kit$", "-E", "render")
-print("its kit tests pass: " + kit.stdout.strip().splitlines()[-1 if "Total" not in kit.stdout else -2]
-      if kit.stdout else "its kit tests pass")
-for stage in ("01", "02", "03"):
-    r = run("ctest", "--test-dir", build, "-L", f"^stage{stage}$", "-LE", "long",
-            "--output-on-failure", ok=False)
-    assert r.returncode != 0, f"stage {stage}'s tests pass on an untouched starting point"
-    said = f"stage {stage}: EXERCISE 1 ("
-    assert said in r.stdout, f"stage {stage}'s failing tests do not say '{said}...':\n{r.stdout[-2000:]}"
-    print(f"stage {stage}: tests fail on the starting point, saying '{said}...) is not done yet'")
-shutil.rmtree(scratch)
-print("release check passed")
+
+def git(repo, *args, ok=True):
+    return run("git", "-C", repo, *args, ok=ok)
+
+
+def refused_when_dirty(plab, clone, scratch):
+    (clone / "stages" / "01-naive" / "step.cpp").write_text(
+        (clone / "stages" / "01-naive" / "step.cpp").read_text() + "\n// a change not committed\n")
+    (clone / "stages" / "02-heap" / "notes.txt").write_text("an untracked scratch file\n")
+    out = scratch / "refused"
+    r = run(plab, "release", "--kit", clone, "--out", out, ok=False)
+    said = r.stdout + r.stderr
+    check(r.returncode != 0, "a release with uncommitted changes in stages/ was not refused")
+    check("stages/01-naive/step.cpp" in said and "stages/02-heap/notes.txt" in said,
+          f"the refusal does not name the uncommitted files:\n{said}")
+    check(not out.exists(), "a refused release left its folder behind")
+    check(not list(scratch.glob(".refused.*")), "a refused release left a temporary folder")
+    print("dirty stages/: refused, naming the changed and the untracked file; nothing written")
+
+
+def released_allow_dirty(plab, clone, scratch):
+    out = scratch / "student-kit"
+    r = run(plab, "release", "--kit", clone, "--out", out, "--allow-dirty")
+    check("stages/01-naive/step.cpp" in r.stdout and "not" in r.stdout,
+          f"--allow-dirty does not say what it left out:\n{r.stdout}")
+    head = git(clone, "rev-parse", "HEAD").stdout.strip()
+    check(head[:12] in r.stdout, "the release does not say which commit it was made from")
+    check("a change not committed" not in (out / "stages/01-naive/step.cpp").read_text(),
+          "--allow-dirty shipped an uncommitted change")
+    check(not (out / "stages/02-heap/notes.txt").exists(), "--allow-dirty shipped an untracked file")
+    print(f"--allow-dirty: released HEAD {head[:12]}, without the uncommitted change and file")
+    return out
+
+
+def ships_only_students_files(clone, out):
+    tracked = set(git(clone, "ls-tree", "-r", "--name-only", "HEAD").stdout.splitlines())
+    shipped = [p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()]
+    for path in shipped:
+        top = path.split("/")[0]
+        check(top not in ("solutions", ".ci", "build") and not top.startswith("build-"),
+              f"the release ships {path}")
+        check(not re.search(r"(\.log|\.partial|\.orig|\.rej|\.swp|~|\.pyc)$", path)
+              and "__pycache__" not in path, f"the release ships a log or scratch file: {path}")
+        check(path in tracked or path == "README.md" or path.startswith(("docs/html/", "kit/reference/")),
+              f"the release ships {path}, which HEAD does not hold")
+    check(not (out / "kit" / "release").exists(), "the release ships kit/release/")
+    check("build-asan.log" not in shipped, "the release ships build-asan.log")
+    print(f"ships {len(shipped)} files: HEAD's, less solutions/, .ci, logs, build and scratch "
+          "files; plus the docs and the reference program")
+
+
+def student_readme(out):
+    text = (out / "README.md").read_text()
+    for word in INSTRUCTOR_ONLY:
+        found = re.search(word, text, re.IGNORECASE)
+        check(not found, f"the student README shows the instructor's '{found and found.group(0)}'")
+    for needed in ("./plab test --impl student --stage 01", "--out mine.out",
+                   "./plab diff datasets/golden/course-1.out mine.out", "handouts/",
+                   "docs/html/index.html", "kit/reference/bin/plab-reference"):
+        check(needed in text, f"the student README does not say '{needed}'")
+    for folder in sorted((out / "stages").glob("[0-9][0-9]-*")):
+        check(f"stages/{folder.name}" in text, f"the student README does not list {folder.name}")
+    print("README.md is the student's: the kit, the commands, every stage in order, testing, "
+          "handouts; no instructor-only command or folder")
+
+
+def docs_and_reference(out):
+    index = out / "docs" / "html" / "index.html"
+    check(index.exists(), "no docs in the release")
+    html = " ".join(p.read_text(errors="replace") for p in (out / "docs" / "html").glob("*.html"))
+    for line in ("mine.push_back", "heap.push"):  # solution-only lines of stages 02, 03 and 06
+        check(line not in html, f"the release's docs show a solution's '{line}'")
+    sources = " ".join(p.read_text(errors="replace") for p in (out / "stages").rglob("*.cpp"))
+    check("heap.push" not in sources, "the release's stages/ hold a solution's line")
+    reference = out / "kit" / "reference" / "bin" / "plab-reference"
+    check(reference.is_file() and os.access(reference, os.X_OK), "no reference program")
+    check((out / "kit" / "reference" / "README.md").exists(), "no note beside the reference program")
+    ran = run(reference, out / "datasets" / "scenes" / "course-1.in", "--quiet")
+    check(ran.stdout == (out / "datasets" / "golden" / "course-1.out").read_text(),
+          "the reference program does not print the golden output")
+    print("docs built from the release (no solution's line); the reference program prints the "
+          "golden output of course-1")
+
+
+def release_tests(out, kit):
+    build = out / "build"
+    run("cmake", "-S", out, "-B", build, "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
+        "-DPLAB_ENABLE_CUDA=OFF")
+    run("cmake", "--build", build, "-j", "2")
+    print("the release configures and builds on its own")
+    r = run("ctest", "--test-dir", build, "-L", "^kit$", "-E", "render")
+    print("its kit tests pass: " + next((l for l in r.stdout.splitlines() if "tests passed" in l), ""))
+    for stage in ("01", "02", "03"):
+        r = run("ctest", "--test-dir", build, "-L", f"^stage{stage}$", "-LE", "long",
+                "--output-on-failure", ok=False)
+        check(r.returncode != 0, f"stage {stage}'s tests pass on an untouched starting point")
+        said = f"stage {stage}: EXERCISE 1 ("
+        check(said in r.stdout, f"stage {stage}'s failing tests do not say '{said}...':\n{r.stdout[-2000:]}")
+        print(f"stage {stage}: tests fail on the starting point, saying '{said}...) is not done yet'")
+    against = r"^stage01\.student\.AgainstOtherStage$"
+    r = run("ctest", "--test-dir", build, "-R", against, "--output-on-failure", ok=False)
+    check(r.returncode != 0 and "EXERCISE" in r.stdout,
+          f"stage 01's stage-against-stage tests do not fail on the starting point:\n{r.stdout[-2000:]}")
+    # copyfile, not copy2: a new mtime, so that the build sees the change
+    shutil.copyfile(kit / "solutions" / "01-naive" / "step.cpp", out / "stages" / "01-naive" / "step.cpp")
+    run("cmake", "--build", build, "-j", "2")
+    r = run("ctest", "--test-dir", build, "-R", against, "-V", ok=False)
+    passed = re.search(r"\[  PASSED  \] (\d+) test", r.stdout)
+    check(r.returncode == 0 and passed and int(passed.group(1)) > 0,
+          f"stage 01's stage-against-stage tests fail with a solution's step.cpp:\n{r.stdout[-3000:]}")
+    check("[  SKIPPED ]" not in r.stdout,
+          f"stage 01's stage-against-stage tests skip:\n{r.stdout[-3000:]}")
+    print(f"stage 01 finished: its {passed.group(1)} stage-against-stage tests run against "
+          "kit/reference/bin/plab-reference and pass, none skipped")
+
+
+def failed_part_way(plab, clone, kit, scratch):
+    git(clone, "checkout", "-q", "--", "stages")
+    git(clone, "clean", "-q", "-fd", "stages")
+    shutil.copyfile(kit / "solutions" / "01-naive" / "step.cpp", clone / "stages" / "01-naive" / "step.cpp")
+    git(clone, "commit", "-q", "-am", "stage 01 done (not a starting point)")
+    out = scratch / "broken"
+    r = run(plab, "release", "--kit", clone, "--out", out, ok=False)
+    said = r.stdout + r.stderr
+    check(r.returncode != 0, "a release whose stage 01 is finished was not refused")
+    check("stage 01" in said and "not its untouched starting point" in said,
+          f"the failed release does not name stage 01:\n{said[-2000:]}")
+    check(not out.exists(), "a release that failed part-way left its folder behind")
+    check(not list(scratch.glob(".broken.*")), "a release that failed part-way left its temporary folder")
+    print("a committed stage that is not its starting point: the release fails part-way, names "
+          "stage 01, and leaves no folder behind")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("plab", help="the plab program (build/bin/plab)")
+    ap.add_argument("--kit", default=str(pathlib.Path(__file__).resolve().parents[1]),
+                    help="the instructor's kit, a git checkout (default: the one of this script)")
+    ap.add_argument("--keep", action="store_true", help="keep the scratch folder")
+    a = ap.parse_args()
+    kit = pathlib.Path(a.kit)
+    scratch = pathlib.Path(tempfile.mkdtemp(prefix="plab-release-check-"))
+    try:
+        clone = scratch / "kit"
+        run("git", "clone", "-q", kit, clone)
+        git(clone, "config", "user.email", "release-check@plab.invalid")
+        git(clone, "config", "user.name", "release check")
+        refused_when_dirty(a.plab, clone, scratch)
+        out = released_allow_dirty(a.plab, clone, scratch)
+        ships_only_students_files(clone, out)
+        student_readme(out)
+        docs_and_reference(out)
+        release_tests(out, kit)
+        failed_part_way(a.plab, clone, kit, scratch)
+    finally:
+        if a.keep:
+            print(f"kept {scratch}")
+        else:
+            shutil.rmtree(scratch, ignore_errors=True)
+    print("release check passed")
+
+
+if __name__ == "__main__":
+    main()

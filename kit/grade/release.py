@@ -1,46 +1,254 @@
 #!/usr/bin/env python3
-"""plab release: writes the student version of the kit into a new folder: everything but the
-solutions, the instructor's CI and build folders, with the HTML docs built from that very copy
-(so that they show the starting points, never a solution). No hidden-test seed is stored
-anywhere in the kit: `plab grade` takes it at grading time.
+"""plab release: writes the student version of the kit into a new folder, from what git's HEAD
+holds (never the working folder): the kit without the solutions, the instructor's CI, logs, build
+and scratch files; a README written for students; the reference stage's solution as a compiled
+program (kit/reference/bin/plab-reference, never its source), so that a student's stage-against-
+stage tests run; and the HTML docs built from the release itself (they show the starting points,
+never a solution). Before anything is written it builds the release and checks that every stage
+is its untouched starting point (its program stops with "stage NN: EXERCISE n (...) is not done
+yet", exit code 3). The release is made in a temporary folder beside OUT and renamed to OUT at the
+end: one that fails part-way leaves nothing behind. No hidden-test seed is stored anywhere in the
+kit: `plab grade` takes it at grading time.
 
-  release.py --kit-source DIR --out DIR
+  release.py --kit-source DIR --out DIR [--allow-dirty]
+
+It refuses when stages/ has uncommitted changes or untracked files, unless --allow-dirty is given:
+then it releases HEAD's stages/ and names the changes it left out.
 """
 import argparse
+import fnmatch
+import json
+import os
 import pathlib
+import re
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
 
-LEFT_OUT = (".git", "build", "build-*", "solutions", ".ci", "__pycache__", "*.partial",
-            "*.png", ".gl", ".whl")
+# Tracked paths that are the instructor's, never a student's: the solutions, the CI, the student
+# README's own source (it becomes README.md), and the instructor's README (replaced).
+INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "README.md")
+# Files that belong to nobody's copy even when tracked by mistake: logs, build folders, scratch.
+SCRATCH = ("*.log", "*.partial", "*.orig", "*.rej", "*.swp", "*~", "*.pyc", "__pycache__/*",
+           "build/*", "build-*/*", ".configure.log")
+STUDENT_README = "kit/release/README.student.md"
+REFERENCE = "kit/reference/bin/plab-reference"
+REFERENCE_NOTE = """# The reference program
+
+`bin/plab-reference` is the compiled reference stage's solution (stage {stage}) of this kit, built
+by `plab release` from commit {commit}. The stage-against-stage tests (`AgainstOtherStage`, part of
+`./plab test`) run it on fresh random scenes and check that your stage prints exactly the same
+text. It takes the arguments of `./plab run`'s stage programs:
+
+```sh
+kit/reference/bin/plab-reference datasets/scenes/course-1.in --out reference.out
+```
+
+It was built for the machine the release was made on (Debian, x86-64, g++ with OpenMP).
+"""
+NOT_DONE = r"stage {id}: EXERCISE [0-9]+ \([^)]+\) is not done yet"
+
+
+def fail(message):
+    sys.exit(f"plab release: {message}")
+
+
+def run(cmd, what, **kw):
+    """Runs cmd; on failure stops with what failed and the end of its output."""
+    done = subprocess.run([str(c) for c in cmd], capture_output=True, **kw)
+    if done.returncode != 0:
+        out = done.stdout if isinstance(done.stdout, str) else done.stdout.decode(errors="replace")
+        err = done.stderr if isinstance(done.stderr, str) else done.stderr.decode(errors="replace")
+        fail(f"{what} failed ({' '.join(map(str, cmd))}, exit {done.returncode}):\n"
+             f"{out[-3000:]}{err[-3000:]}")
+    return done
+
+
+def git(kit, *args):
+    return run(["git", "-C", kit, *args], f"git {args[0]}", text=True).stdout
+
+
+def left_out(path, ignored):
+    """Why a tracked file of HEAD is not shipped (None: it is)."""
+    for prefix in INSTRUCTOR_ONLY:
+        if path == prefix or (prefix.endswith("/") and path.startswith(prefix)):
+            return "instructor only"
+    if path in ignored:
+        return "listed in .gitignore"
+    name = path.rsplit("/", 1)[-1]
+    if any(fnmatch.fnmatch(name, p) or fnmatch.fnmatch(path, p) for p in SCRATCH):
+        return "log, build or scratch file"
+    return None
+
+
+def configure(source, build, *extra):
+    gen = ["-G", "Ninja"] if shutil.which("ninja") else []
+    run(["cmake", "-S", source, "-B", build, *gen, "-DCMAKE_BUILD_TYPE=Release",
+         "-DPLAB_BUILD_TESTS=OFF", "-DPLAB_ENABLE_CUDA=OFF", *extra],
+        f"configuring {source.name}", text=True)
+
+
+def is_gpu_stage(folder):
+    """A CUDA stage (plab_add_stage(... GPU ...)): not compiled without a CUDA compiler."""
+    return re.search(r"plab_add_stage\([^)]*\bGPU\b", (folder / "CMakeLists.txt").read_text())
+
+
+def check_starting_points(release, build):
+    """Every stage of the release must be its untouched starting point: its program stops with
+    its "not done yet" message (exit 3). A CUDA stage is not compiled here (the check builds
+    without CUDA): its sources must still hold the exercises that stop it."""
+    scene = release / "datasets" / "scenes" / "course-1.in"
+    said = []
+    for folder in sorted((release / "stages").glob("[0-9][0-9]-*")):
+        if not (folder / "CMakeLists.txt").exists():
+            continue
+        sid = folder.name[:2]
+        program = build / "bin" / f"plab-run-{sid}-student"
+        pattern = NOT_DONE.format(id=sid)
+        if not program.exists():
+            gpu = is_gpu_stage(folder)
+            sources = " ".join(p.read_text(errors="replace") for p in folder.iterdir()
+                               if p.suffix in (".cpp", ".cu", ".cuh", ".hpp", ".h"))
+            if not gpu:
+                fail(f"stage {sid}'s starting point did not compile (stages/{folder.name})")
+            if "PLAB_EXERCISE(" not in sources:
+                fail(f"stage {sid} (CUDA) has no PLAB_EXERCISE left in stages/{folder.name}: "
+                     "it is not its untouched starting point")
+            said.append(f"  stage {sid}: CUDA, not compiled here; its sources still stop at "
+                        "PLAB_EXERCISE")
+            continue
+        done = subprocess.run([str(program), str(scene)], capture_output=True, text=True)
+        if done.returncode == 4 and "no CUDA device" in done.stderr:
+            said.append(f"  stage {sid}: built; it needs a GPU to run")
+            continue
+        found = re.search(pattern, done.stderr)
+        if found and done.returncode == -signal.SIGABRT and "plab::NotDone" in done.stderr:
+            # Thrown inside an OpenMP parallel region, where the runner cannot catch it: the
+            # starting point is untouched, but it aborts instead of exiting 3.
+            said.append(f"  stage {sid}: {found.group(0)} (but aborted: NotDone thrown inside "
+                        "an OpenMP parallel region, not reported with exit 3 by the runner)")
+            continue
+        if done.returncode != 3 or not found:
+            fail(f"stage {sid} in HEAD's stages/{folder.name} is not its untouched starting point: "
+                 f"its program should stop with 'stage {sid}: EXERCISE n (...) is not done yet' "
+                 f"(exit 3); it exited {done.returncode} with:\n{done.stderr[-1500:]}")
+        said.append(f"  stage {sid}: {found.group(0)}")
+    return said
+
+
+def build_release(kit, head, work, say):
+    """Writes the release into work / "release" and returns that folder."""
+    full, release = work / "head", work / "release"
+    full.mkdir()
+    tar = subprocess.run(["git", "-C", str(kit), "archive", "--format=tar", head],
+                         capture_output=True)
+    if tar.returncode != 0:
+        fail(f"git archive {head} failed:\n{tar.stderr.decode(errors='replace')}")
+    run(["tar", "-x", "-C", full], "unpacking git archive", input=tar.stdout)
+
+    files = git(kit, "ls-tree", "-r", "-z", "--name-only", head).split("\0")
+    files = [f for f in files if f]
+    # Tracked files that .gitignore lists (committed by mistake, like a build log): left out.
+    check = subprocess.run(["git", "-C", str(kit), "check-ignore", "--no-index", "--stdin"],
+                           input="\n".join(files) + "\n", capture_output=True, text=True)
+    if check.returncode not in (0, 1):
+        fail(f"git check-ignore failed:\n{check.stderr}")
+    ignored = set(check.stdout.splitlines())
+    if not (full / STUDENT_README).exists():
+        fail(f"HEAD has no {STUDENT_README} (the release's README)")
+    dropped = {}
+    for f in files:
+        why = left_out(f, ignored)
+        if why:
+            dropped.setdefault(why, []).append(f)
+            continue
+        src = full / f
+        if src.is_symlink() or not src.is_file():
+            continue
+        dst = release / f
+        dst.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(src, dst)
+    shutil.copy2(full / STUDENT_README, release / "README.md")
+    for why, paths in sorted(dropped.items()):
+        tops = sorted({p.split("/")[0] + "/" if p.startswith(("solutions/", ".ci/")) else p
+                       for p in paths})
+        say(f"left out ({why}): {', '.join(tops)}")
+
+    build = work / "build-release"
+    say("building the release's starting points to check them", flush=True)
+    configure(release, build)
+    # The stage programs only (the CUDA stages are not configured here), each that compiles
+    # (-k 0): a stage that does not is named by the check below.
+    programs = [f"plab-run-{d.name[:2]}-student" for d in sorted((release / "stages").glob("[0-9][0-9]-*"))
+                if (d / "CMakeLists.txt").exists() and not is_gpu_stage(d)]
+    keep_going = ["--", "-k", "0"] if shutil.which("ninja") else []
+    subprocess.run(["cmake", "--build", str(build), "--target", *programs, *keep_going],
+                   capture_output=True)
+    for line in check_starting_points(release, build):
+        say(line)
+
+    manifest = json.loads((full / "datasets" / "manifest.json").read_text())
+    stage = manifest["reference_stage"]
+    say(f"building the reference program (stage {stage}'s solution at HEAD)", flush=True)
+    build_ref = work / "build-reference"
+    configure(full, build_ref)
+    run(["cmake", "--build", build_ref, "--target", f"plab-run-{stage}-solution"],
+        f"building stage {stage}'s solution", text=True)
+    reference = release / REFERENCE
+    reference.parent.mkdir(parents=True, exist_ok=True)
+    shutil.copy2(build_ref / "bin" / f"plab-run-{stage}-solution", reference)
+    (reference.parent.parent / "README.md").write_text(
+        REFERENCE_NOTE.format(stage=stage, commit=head))
+    say(f"reference program: {REFERENCE} (stage {stage}'s solution, compiled; no source)")
+
+    say("building the student docs from the release itself (Doxygen)", flush=True)
+    run(["cmake", "--build", build, "--target", "docs"], "building the docs", text=True)
+    shutil.copytree(build / "docs" / "html", release / "docs" / "html")
+    return release
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--kit-source", required=True)
-    ap.add_argument("--out", required=True)
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--kit-source", required=True, help="the instructor's kit (a git checkout)")
+    ap.add_argument("--out", required=True, help="a new (or empty) folder")
+    ap.add_argument("--allow-dirty", action="store_true",
+                    help="release HEAD's stages/ even when stages/ has uncommitted changes")
     a = ap.parse_args()
-    kit, out = pathlib.Path(a.kit_source), pathlib.Path(a.out).resolve()
-    if out.exists() and any(out.iterdir()):
-        sys.exit(f"plab release: {out} exists and is not empty; name a new folder")
-    if out.is_relative_to(kit.resolve()):
-        sys.exit("plab release: write the release outside the kit's own folder")
-    shutil.copytree(kit, out, ignore=shutil.ignore_patterns(*LEFT_OUT), dirs_exist_ok=True)
-    print(f"copied the kit without {', '.join(LEFT_OUT)} into {out}")
-    print("building the student docs from the release itself (Doxygen)", flush=True)
-    with tempfile.TemporaryDirectory(prefix="plab-release-docs-") as build:
-        gen = ["-G", "Ninja"] if shutil.which("ninja") else []
-        steps = [["cmake", "-S", out, "-B", build, *gen, "-DCMAKE_BUILD_TYPE=Release",
-                  "-DPLAB_BUILD_TESTS=OFF", "-DPLAB_ENABLE_CUDA=OFF"],
-                 ["cmake", "--build", build, "--target", "docs"]]
-        for step in steps:
-            done = subprocess.run([str(s) for s in step], capture_output=True, text=True)
-            if done.returncode != 0:
-                sys.exit(f"plab release: {' '.join(map(str, step))} failed:\n"
-                         f"{done.stdout[-3000:]}{done.stderr[-3000:]}")
-        shutil.copytree(pathlib.Path(build) / "docs" / "html", out / "docs" / "html")
+    kit, out = pathlib.Path(a.kit_source).resolve(), pathlib.Path(a.out).resolve()
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        fail(f"{out} exists and is not empty; name a new folder")
+    if out.is_relative_to(kit):
+        fail("write the release outside the kit's own folder")
+    if not out.parent.is_dir():
+        fail(f"{out.parent} does not exist")
+    inside = subprocess.run(["git", "-C", str(kit), "rev-parse", "--show-toplevel"],
+                            capture_output=True, text=True)
+    if inside.returncode != 0 or pathlib.Path(inside.stdout.strip()).resolve() != kit:
+        fail(f"{kit} is not the top of a git checkout: a release is made from git's HEAD")
+    head = git(kit, "rev-parse", "HEAD").strip()
+    subject = git(kit, "log", "-1", "--format=%s", head).strip()
+    dirty = git(kit, "status", "--porcelain=v1", "--untracked-files=all", "--", "stages").splitlines()
+    if dirty and not a.allow_dirty:
+        fail("stages/ has changes that are not committed:\n" + "\n".join(f"  {d}" for d in dirty) +
+             "\nCommit them (the release is made from HEAD), or give --allow-dirty to release "
+             "HEAD's stages/ without them.")
+    print(f"releasing HEAD {head[:12]} ({subject}): the files git holds there, not the working "
+          "folder", flush=True)
+    if dirty:
+        print("--allow-dirty: stages/ as committed at HEAD is included; these uncommitted changes "
+              "are not:\n" + "\n".join(f"  {d}" for d in dirty))
+
+    work = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent))
+    try:
+        release = build_release(kit, head, work, print)
+        if out.exists():
+            out.rmdir()
+        os.rename(release, out)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
     print(f"docs: {out / 'docs' / 'html' / 'index.html'}")
     print(f"release ready: cd {out} && ./plab test --impl student   (fails until the exercises are done)")
 
