@@ -8,6 +8,7 @@ without end are stopped, scored zero with the reason, and still get a results.js
   grader_selftest.py PLAB_PROGRAM KIT_SOURCE_DIR SCRATCH_DIR [CASE ...]
 """
 import json
+import re
 import pathlib
 import shutil
 import subprocess
@@ -34,11 +35,11 @@ def submission(name, tree="solutions", mutations=()):
     return root
 
 
-def grade(name, root):
+def grade(name, root, *extra):
     out = scratch / f"{name}.json"
     out.unlink(missing_ok=True)
     done = subprocess.run([plab, "grade", "--submission", root, "--stages", "01,02,03", "--out",
-                           out, "--hidden-seed", "7"], capture_output=True, text=True)
+                           out, "--hidden-seed", "7", *extra], capture_output=True, text=True)
     (scratch / f"{name}.log").write_text(done.stdout + done.stderr)
     assert out.exists(), f"{name}: no results.json written:\n{done.stdout[-3000:]}{done.stderr}"
     tests = {t["name"]: t for t in json.loads(out.read_text())["tests"]}
@@ -132,7 +133,7 @@ def case_mutants_b():
         ("03", "std::vector<FoundPair>& mine = found[omp_get_thread_num()];",
          "std::vector<FoundPair>& mine = found[0];"),
     ])
-    tests, _ = grade("mutants-b", root)
+    tests, _ = grade("mutants-b", root, "--races")
     t = tests["02: public event-at-step-end"]
     check("t <= 1", t["status"] == "failed" and "first difference" in t["output"],
           "02: event-at-step-end fails with a first difference")
@@ -140,6 +141,10 @@ def case_mutants_b():
     bad = failed(tests, "03:")
     check("data race", bool(bad), f"stage 03 with 2 threads fails {len(bad)} tests, e.g. "
           f"{next(iter(bad), '')}: {next(iter(bad.values()), {}).get('output', '')[:80]!r}")
+    race = tests.get("03: data races (ThreadSanitizer, 3 threads)", {})
+    unavailable = "not available" in race.get("output", "")
+    check("data race", unavailable or re.search(r"data race at step\.cpp:\d+", race.get("output", "")),
+          f"--races names the race with file and line: {race.get('output', 'no race test')!r}")
 
 
 def case_mutants_hidden():

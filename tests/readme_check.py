@@ -37,7 +37,13 @@ import time
 
 # Instructor lines that are not run, and why.
 SKIPPED = {"./plab test --long": "the N = 10000, 500-step scene on every stage takes many minutes "
-                                 "per stage; the plain ./plab test line runs every other test"}
+                                 "per stage; the plain ./plab test line runs every other test",
+           "./plab golden": "regenerates every golden file (minutes); CI runs ./plab golden --check, "
+                            "which makes the same files and compares them",
+           "./plab accuracy --csv acc.csv --plot acc.png": "the full lab takes many minutes; its "
+                            "short run is the test accuracy.short",
+           "./plab stress": "the full suite takes many minutes; its short run is the test "
+                            "stress.short"}
 # Instructor lines (by their start) and the files they must leave (relative to the clone).
 WRITES = {"./plab docs": ["build/docs/html/index.html"],
           "./plab gen": ["scene.in"],
@@ -45,8 +51,7 @@ WRITES = {"./plab docs": ["build/docs/html/index.html"],
           "./plab render datasets/scenes/dense-box.in": ["dense-box.gif"],
           "./plab grade": ["alice/results.json"],
           "./plab release": ["../particle-lab-student/README.md",
-                             "../particle-lab-student/kit/reference/bin/plab-reference"],
-          "./plab accuracy": ["acc.csv", "acc.png"]}
+                             "../particle-lab-student/kit/reference/bin/plab-reference"]}
 NOT_DONE = re.compile(r"stage 01: EXERCISE 1 \([^)]+\) is not done yet")
 
 

@@ -579,7 +579,7 @@ void add_grade(CLI::App& app) {
     std::string submission, stages, out = "results.json", junit, rubric, scratch;
     std::string sandbox = "auto";
     long long seed = -1;
-    bool keep = false, no_sandbox = false;
+    bool keep = false, no_sandbox = false, races = false;
   };
   auto a = std::make_shared<Args>();
   auto* c = app.add_subcommand(
@@ -609,6 +609,9 @@ void add_grade(CLI::App& app) {
   c->add_flag("--no-sandbox", a->no_sandbox,
               "run student code with the grader's own rights (printed on every result)");
   c->add_flag("--keep", a->keep, "keep the scratch folder");
+  c->add_flag("--races", a->races,
+              "also build the OpenMP stages (03, 06) with ThreadSanitizer in the sandbox and report "
+              "the first data race with file and line (a test worth no points)");
   c->callback([a] {
     if (default_impl() != "solution")
       throw std::runtime_error("grading needs the instructor's kit (with solutions/)");
@@ -626,6 +629,7 @@ void add_grade(CLI::App& app) {
     if (!a->scratch.empty()) args.insert(args.end(), {"--scratch", a->scratch});
     if (a->keep) args.emplace_back("--keep");
     if (a->no_sandbox) args.emplace_back("--no-sandbox");
+    if (a->races) args.emplace_back("--races");
     g_status = run_program(args);
   });
 }

@@ -86,6 +86,27 @@ class Run:
             return f.read().decode(errors="replace")
 
 
+TOOLS = ("cmake", "ninja", "c++", "g++", "gcc", "nvcc", "clang++")  # what a build inside runs
+
+
+def _toolchain():
+    """(folders to bind read-only, PATH) for build tools installed outside /usr (a cmake from
+    PyPI in /usr/local/bin linking to /opt, say): each tool's install prefix, never a home."""
+    binds, path = [], CLEAN_ENV["PATH"].split(":")
+    for tool in TOOLS:
+        found = shutil.which(tool)
+        if not found:
+            continue
+        for p in (pathlib.Path(found), pathlib.Path(os.path.realpath(found))):
+            prefix = p.parent.parent
+            if not str(p).startswith("/usr/") and not str(prefix).startswith(("/home", "/root")) \
+                    and str(prefix) != "/" and str(prefix) not in binds:
+                binds.append(str(prefix))
+            if str(p.parent) not in path:
+                path.append(str(p.parent))
+    return binds, ":".join(path)
+
+
 def _feed(pipe, text):
     """Writes `text` into a program's stdin and closes it (the program may stop reading)."""
     try:
@@ -109,7 +130,7 @@ class Sandbox:
         self.box = self.scratch / "box"
         self.box.mkdir(exist_ok=True)
         os.chmod(self.scratch, 0o711)  # the sandbox's uid may pass through, never list
-        os.chmod(self.box, 0o755)
+        os.chmod(self.box, 0o711)
 
     # -- what student code may write ----------------------------------------------------------
     def writable_dir(self, parent, prefix):
@@ -124,7 +145,7 @@ class Sandbox:
         """A folder in box/ that student code may read, not write."""
         d = self.box / name
         d.mkdir(parents=True, exist_ok=True)
-        os.chmod(d, 0o755)
+        os.chmod(d, 0o711 if name == "bin" else 0o755)  # programs: reached by name, never listed
         return d
 
     # -- command lines -------------------------------------------------------------------------
@@ -147,6 +168,9 @@ class Sandbox:
         for etc in ("/etc/alternatives", "/etc/ld.so.cache", "/etc/ld.so.conf",
                     "/etc/ld.so.conf.d"):
             args += ["--ro-bind-try", etc, etc]
+        tool_binds, _ = _toolchain()
+        for prefix in tool_binds:
+            args += ["--ro-bind", prefix, prefix]
         if gpu:
             for dev in sorted(glob.glob("/dev/nvidia*")):
                 args += ["--dev-bind", dev, dev]
@@ -154,7 +178,7 @@ class Sandbox:
             args += ["--ro-bind", str(outside), str(inside)]
         for inside, outside in rw.items():
             args += ["--bind", str(outside), str(inside)]
-        for key, value in CLEAN_ENV.items():
+        for key, value in dict(CLEAN_ENV, PATH=_toolchain()[1]).items():
             args += ["--setenv", key, value]
         return args + ["--chdir", str(chdir), "--"]
 
@@ -178,7 +202,7 @@ class Sandbox:
                     return mapping[inside] + a[len(inside):]
             return a
         line = [outside(a) for a in argv]
-        env_all = dict(CLEAN_ENV, **extra)
+        env_all = dict(CLEAN_ENV, PATH=_toolchain()[1], **extra)
         if self.mode == "user":
             return self._as_sandbox_user() + line, outside(chdir), env_all
         return line, outside(chdir), env_all
