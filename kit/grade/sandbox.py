@@ -309,30 +309,34 @@ def _probe(mode, scratch):
         shutil.rmtree(out, ignore_errors=True)
 
 
+def _cannot(mode):
+    """Why `mode` cannot be tried at all here, or None."""
+    if mode == "bwrap":
+        return None if shutil.which("bwrap") else "bubblewrap: not installed (Debian package bubblewrap)"
+    if not _root():
+        return "unprivileged user: needs the grader to run as root"
+    return None if shutil.which("setpriv") else \
+        "unprivileged user: setpriv not found (Debian package util-linux)"
+
+
 def choose(request, scratch):
     """The isolation to grade with: `request` is auto, bwrap, user or none. Returns (mode,
     None) or (None, why nothing works)."""
     if request == "none":
         return "none", None
+    failed = {"bwrap": "bubblewrap: namespaces not allowed here",
+              "user": f"unprivileged user: could not run as uid {SANDBOX_UID}"}
     tried = []
-    if request in ("auto", "bwrap"):
-        if not shutil.which("bwrap"):
-            tried.append("bubblewrap: not installed (Debian package bubblewrap)")
-        else:
-            ok, why = _probe("bwrap", scratch)
+    for mode in ("bwrap", "user"):  # strongest first
+        if request not in ("auto", mode):
+            continue
+        why = _cannot(mode)
+        if why is None:
+            ok, problem = _probe(mode, scratch)
             if ok:
-                return "bwrap", None
-            tried.append(f"bubblewrap: namespaces not allowed here ({why})")
-    if request in ("auto", "user"):
-        if not _root():
-            tried.append("unprivileged user: needs the grader to run as root")
-        elif not shutil.which("setpriv"):
-            tried.append("unprivileged user: setpriv not found (Debian package util-linux)")
-        else:
-            ok, why = _probe("user", scratch)
-            if ok:
-                return "user", None
-            tried.append(f"unprivileged user: could not run as uid {SANDBOX_UID} ({why})")
+                return mode, None
+            why = f"{failed[mode]} ({problem})"
+        tried.append(why)
     return None, "; ".join(tried)
 
 
