@@ -220,7 +220,8 @@ void step(const Box&, Particles&) {
 """,
     "daemon": r"""
 namespace plab {
-void step(const Box&, Particles&) {
+void step(const Box&, Particles& p) {
+  for (std::size_t i = 0; i < p.size(); ++i) p.x[i] = -1;  // and a wrong step
   static bool started = false;
   if (started) return;
   started = true;

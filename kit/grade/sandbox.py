@@ -197,6 +197,9 @@ class Sandbox:
 
         def outside(a):
             a = str(a)
+            key, eq, value = a.partition("=")  # -DNAME=/plab/...: the value is a path too
+            if eq and key.startswith("-"):
+                return key + eq + outside(value)
             for inside in sorted(mapping, key=len, reverse=True):
                 if a == inside or a.startswith(inside + "/"):
                     return mapping[inside] + a[len(inside):]
