@@ -105,6 +105,16 @@ def implied(before, after):
     return f"changed velocity as in a pair collision ({v0[0]:.8f}, {v0[1]:.8f}) -> ({v1[0]:.8f}, {v1[1]:.8f})"
 
 
+def readable_by_all(folder):
+    """Folders 0755 and files 0644 (0755 where the owner may run them) under `folder`: a copy that
+    the sandbox's uid can read whatever the modes of what it was copied from."""
+    for path in [folder, *folder.rglob("*")]:
+        if path.is_symlink():
+            continue
+        mode = path.stat().st_mode
+        os.chmod(path, 0o755 if path.is_dir() or mode & 0o100 else 0o644)
+
+
 class Refused(Exception):
     """The grader will not grade (no sandbox, a private file readable, a stage it does not know):
     the text says why and what to do."""
@@ -221,6 +231,7 @@ class Grader:
                 continue
             for f in sources:
                 shutil.copy2(f, dest / f.name)
+        readable_by_all(src)  # the kit may be private (Gradescope's setup.sh makes it so)
         build = self.sandbox.writable_dir(self.sandbox.box, "build-")
         mounts = ({"/plab/src": src}, {"/plab/build": build})
         print(f"building stages {', '.join(sorted({s.sid for s in stages}))} in the sandbox",
