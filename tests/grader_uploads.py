@@ -8,6 +8,7 @@ grader, long):
 - a stage the rubric does not know is a clear error, and results.json says so (never empty);
 - the hidden seed is in the summary and in results.json's extra_data, not in what students see,
   and `--seed S` replays the same hidden scenes;
+- an output left as a link (symbolic or hard) to another file, a golden one say, is never read;
 - without namespaces the grader refuses to run student code as an unprivileged user that could read
   the kit's private parts; `--no-sandbox` is printed on every result.
 
@@ -110,6 +111,25 @@ def case_refusals():
               f"an unprivileged user that could read the kit is refused: {message[:160]!r}")
 
 
+def case_links():
+    """A program that leaves a link to a golden file as its output gets nothing for it."""
+    sys.path.insert(0, str(kit / "kit" / "grade"))
+    import sandbox
+    golden = kit / "datasets" / "golden" / "course-1.out"
+    out = scratch / "links"
+    out.mkdir(parents=True)
+    run = sandbox.Run(0, 0.0, None, None, "", out)
+    (out / "out.txt").symlink_to(golden)
+    check("links", run.read_output() is None, "an output that is a symbolic link is not read")
+    (out / "out.txt").unlink()
+    shutil.copyfile(golden, out / "copy.out")
+    os.link(out / "copy.out", out / "out.txt")
+    check("links", run.read_output() is None, "an output with a second name (a hard link) is not read")
+    (out / "out.txt").unlink()
+    (out / "out.txt").write_text("0 0 1.00000000 1.00000000 0.00000000 0.00000000\n")
+    check("links", run.read_output() is not None, "a plain output file is read")
+
+
 def case_no_sandbox():
     flat = scratch / "flat-honest"
     flat.mkdir(parents=True)
@@ -127,7 +147,8 @@ shutil.rmtree(scratch, ignore_errors=True)
 scratch.mkdir(parents=True)
 try:
     only = set(sys.argv[4:])
-    for name, case in (("refusals", case_refusals), ("flat", case_flat_and_replay),
+    for name, case in (("links", case_links), ("refusals", case_refusals),
+                       ("flat", case_flat_and_replay),
                        ("no-sandbox", case_no_sandbox)):
         if not only or name in only:
             case()
