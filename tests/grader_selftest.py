@@ -137,7 +137,14 @@ def case_mutants_b():
     t = tests["02: public event-at-step-end"]
     check("t <= 1", t["status"] == "failed" and "first difference" in t["output"],
           "02: event-at-step-end fails with a first difference")
-    check_hidden("t <= 1 / data race", tests, ["02", "03"])
+    check_hidden("t <= 1", tests, ["02"])
+    # A race may or may not change a printed bit in one run; ThreadSanitizer finds it every time,
+    # and a race found costs the rubric's races_points: points lost beyond the public scenes.
+    race_lost = sum(t["max_score"] - t["score"] for n, t in tests.items()
+                    if n.startswith("03:") and "ThreadSanitizer" in n)
+    beyond = points_lost(tests, "03", True) + race_lost
+    check("data race", beyond > 0, f"stage 03 loses {beyond:g} points beyond the public scenes "
+          f"(hidden scenes: {points_lost(tests, '03', True):g}, race check: {race_lost:g})")
     bad = failed(tests, "03:")
     check("data race", bool(bad), f"stage 03 with 2 threads fails {len(bad)} tests, e.g. "
           f"{next(iter(bad), '')}: {next(iter(bad.values()), {}).get('output', '')[:80]!r}")

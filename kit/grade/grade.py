@@ -362,8 +362,11 @@ class Grader:
     def race_check(self, st, program, folder):
         """The stage built again with ThreadSanitizer (clang, LLVM's OpenMP and Archer), in the
         sandbox, and run on a hidden crowded scene with 3 threads: the first data race with file
-        and line. No points: it tells the student where a race is before it costs them some."""
+        and line. A race found costs the rubric's races_points (a racy program is wrong even when
+        the race did not change a printed bit on this machine); visible, so that the student
+        learns where it is. Not checked (no clang here, the build failed): no points either way."""
         test = f"{st.key}: data races (ThreadSanitizer, 3 threads)"
+        points = self.rubric["correctness"].get("races_points", 0)
         problem = races.toolchain_problem()
         if isinstance(program, str) or problem:
             why = problem or f"stage {st.sid} {program.splitlines()[0]}"
@@ -400,13 +403,14 @@ class Grader:
         race = races.first_race(report, [f.name for f in (self.sandbox.box / "src" / "stages" /
                                                           self.kit_folders[st.sid]).iterdir()])
         if race:
-            self.results.add(test, 0, 0, False, race, False, run.seconds)
+            self.results.add(test, 0, points, False, race, False, run.seconds)
         elif run.reason or (run.rc not in (0, 3)):
             self.results.add(test, 0, 0, False, "not checked: the ThreadSanitizer run "
                              f"{run.reason or 'exited ' + str(run.rc)}: {report.strip()[-300:]}")
         else:
-            self.results.add(test, 0, 0, True, "no data race found (3 threads, one hidden "
-                             f"scene of N = {h['n']}, {h['steps']} steps)", False, run.seconds)
+            self.results.add(test, points, points, True, "no data race found (3 threads, one "
+                             f"hidden scene of N = {h['n']}, {h['steps']} steps)", False,
+                             run.seconds)
 
 
     def ref_seconds(self, st, scene):
