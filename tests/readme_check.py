@@ -12,9 +12,10 @@ scratch copies:
    home whose `alice` is a submission (the kit's stages/ with the solutions' files of stages 01-03
    copied in) for the grader's line. Checked: every line exits 0 and writes what it names
    (scene.in, out.txt, dense-box.gif, alice/results.json, the release, acc.csv and acc.png);
-2. README.md's student block, in the same clone after the instructor's block;
-3. the student README's student block in the release that the instructor's block wrote
-   (../particle-lab-student).
+2. README.md's student block, in the same clone after the instructor's block.
+
+The student README's own block is run in a release by tests/release_check.py (test release), in
+the release that it has built already, with student_block() below.
 
 In a student block the `./plab test` line before `$EDITOR` must fail with "stage 01: EXERCISE 1
 (...) is not done yet"; `$EDITOR` is a command that copies solutions/01-naive/step.cpp over the
@@ -135,8 +136,7 @@ def main():
     ap.add_argument("--kit", default=str(pathlib.Path(__file__).resolve().parents[1]),
                     help="the instructor's kit, a git checkout (default: the one of this script)")
     ap.add_argument("--part", choices=("all", "instructor", "student"), default="all",
-                    help="student: only the two student blocks (README.md's in a clone, the "
-                         "student README's in a release made for it)")
+                    help="student: only README.md's student block, in a clone")
     ap.add_argument("--keep", action="store_true", help="keep the scratch folder")
     a = ap.parse_args()
     kit = pathlib.Path(a.kit).resolve()
@@ -147,10 +147,8 @@ def main():
         done = subprocess.run(["git", "clone", "-q", str(kit), str(clone)], capture_output=True, text=True)
         check(done.returncode == 0, f"git clone failed: {done.stderr}")
         readme = (clone / "README.md").read_text()
-        student_readme = (clone / "kit/release/README.student.md").read_text()
         instructor = block(readme, "Instructor quick start", "README.md")
         student = block(readme, "Student quick start", "README.md")
-        student_too = block(student_readme, "Student quick start", "the student README")
         solution = clone / "solutions/01-naive/step.cpp"
         home = scratch / "home"
         submission = home / "alice"
@@ -160,20 +158,12 @@ def main():
                 shutil.copy2(f, submission / "stages" / stage / f.name)
         env = dict(os.environ, HOME=str(home), EDITOR=f"cp {solution}")
         configure(clone)
-        release = scratch / "particle-lab-student"
         if a.part in ("all", "instructor"):
             print(f"README.md, instructor quick start, in a clone of HEAD ({clone}):", flush=True)
             instructor_block(instructor, clone, env)
         if a.part in ("all", "student"):
-            if not release.exists():
-                print("making the release for the student README's block", flush=True)
-                done, _ = run_line("./plab release --out ../particle-lab-student", clone, env)
-                check(done.returncode == 0, f"plab release failed:\n{done.stdout[-2000:]}{done.stderr[-2000:]}")
             print("README.md, student quick start, in the same clone:", flush=True)
             student_block(student, clone, solution, env, "README.md's student quick start")
-            print(f"the student README's quick start, in the release ({release}):", flush=True)
-            configure(release)
-            student_block(student_too, release, solution, env, "the student README's quick start")
     finally:
         if a.keep:
             print(f"kept {scratch}")

@@ -12,7 +12,10 @@
    untouched starting points with "stage NN: EXERCISE n (...) is not done yet", stage 01's
    stage-against-stage tests too; with a solution's step.cpp copied into stages/01-naive, those
    tests run against the reference program (not skipped) and pass;
-4. a commit whose stages/01-naive is not the starting point: the release fails part-way and
+4. the student README's quick start (its ```sh block under "Student quick start"), run line by
+   line as written in the release with ./plab, as tests/readme_check.py runs README.md's: the
+   test before `$EDITOR` fails with "EXERCISE 1 (...) is not done yet", every other line exits 0;
+5. a commit whose stages/01-naive is not the starting point: the release fails part-way and
    leaves no folder behind (neither the target nor its temporary folder).
 
 The scratch folder is removed whatever the outcome.
@@ -161,6 +164,22 @@ def release_tests(out, kit):
           "kit/reference/bin/plab-reference and pass, none skipped")
 
 
+def student_quick_start(out, clone, kit, scratch):
+    """The student README's own quick start, in the release built above (readme_check's runner)."""
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+    import readme_check  # noqa: E402  (beside this file)
+    (out / "stages" / "01-naive" / "step.cpp").write_text(  # the starting point again
+        git(clone, "show", "HEAD:stages/01-naive/step.cpp").stdout)
+    lines = readme_check.block((out / "README.md").read_text(), "Student quick start",
+                               "the student README")
+    solution = kit / "solutions" / "01-naive" / "step.cpp"
+    home = scratch / "home"
+    home.mkdir(exist_ok=True)
+    env = dict(os.environ, HOME=str(home), EDITOR=f"cp {solution}")
+    print("the student README's quick start, in the release:", flush=True)
+    readme_check.student_block(lines, out, solution, env, "the student README's quick start")
+
+
 def failed_part_way(plab, clone, kit, scratch):
     git(clone, "checkout", "-q", "--", "stages")
     git(clone, "clean", "-q", "-fd", "stages")
@@ -199,6 +218,7 @@ def main():
         student_readme(out)
         docs_and_reference(out)
         release_tests(out, kit)
+        student_quick_start(out, clone, kit, scratch)
         failed_part_way(a.plab, clone, kit, scratch)
     finally:
         if a.keep:

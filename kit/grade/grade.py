@@ -244,7 +244,7 @@ class Grader:
             prebuilt = [f"-DPLAB_PREBUILT_KIT=/plab/kitlib/{kit_lib.name}"]
         conf = self.sandbox.run(["cmake", "-S", "/plab/src", "-B", "/plab/build", "-G", "Ninja",
                                  "-DCMAKE_BUILD_TYPE=Release", "-DPLAB_BUILD_TESTS=OFF",
-                                 *prebuilt], *mounts, "/plab/build", 600, 2**30, memory=False)
+                                 "-DPLAB_CCACHE=OFF", *prebuilt], *mounts, "/plab/build", 600, 2**30, memory=False)
         if conf.rc != 0 or conf.reason:
             log = pathlib.Path(conf.stdout).read_text(errors="replace") + conf.stderr
             return {sid: built.get(sid, "the kit's build could not be configured: " +
@@ -376,7 +376,7 @@ class Grader:
         mounts = ({"/plab/src": self.sandbox.box / "src"}, {"/plab/build": build})
         target = f"plab-run-{st.sid}-student"
         for argv in (["cmake", "-S", "/plab/src", "-B", "/plab/build", "-G", "Ninja",
-                      *races.TSAN_CMAKE_ARGS],
+                      "-DPLAB_CCACHE=OFF", *races.TSAN_CMAKE_ARGS],
                      ["cmake", "--build", "/plab/build", "--target", target]):
             b = self.sandbox.run(argv, *mounts, "/plab/build", 900, 2**30, memory=False)
             if b.rc != 0 or b.reason:
