@@ -53,18 +53,25 @@ def git(repo, *args, ok=True):
     return run("git", "-C", repo, *args, ok=ok)
 
 
+def refused(plab, clone, scratch, name, what, must_say):
+    """Runs a release that must fail: non-zero exit, every word of must_say in what it says, and
+    neither the target folder nor its temporary folder left behind."""
+    out = scratch / name
+    r = run(plab, "release", "--kit", clone, "--out", out, ok=False)
+    said = r.stdout + r.stderr
+    check(r.returncode != 0, f"a release with {what} was not refused")
+    check(all(s in said for s in must_say), f"the refusal of {what} does not say {must_say}:\n"
+                                            f"{said[-2000:]}")
+    check(not out.exists(), f"the refused release ({what}) left its folder behind")
+    check(not list(scratch.glob(f".{name}.*")), f"the refused release ({what}) left a temporary folder")
+
+
 def refused_when_dirty(plab, clone, scratch):
     (clone / "stages" / "01-naive" / "step.cpp").write_text(
         (clone / "stages" / "01-naive" / "step.cpp").read_text() + "\n// a change not committed\n")
     (clone / "stages" / "02-heap" / "notes.txt").write_text("an untracked scratch file\n")
-    out = scratch / "refused"
-    r = run(plab, "release", "--kit", clone, "--out", out, ok=False)
-    said = r.stdout + r.stderr
-    check(r.returncode != 0, "a release with uncommitted changes in stages/ was not refused")
-    check("stages/01-naive/step.cpp" in said and "stages/02-heap/notes.txt" in said,
-          f"the refusal does not name the uncommitted files:\n{said}")
-    check(not out.exists(), "a refused release left its folder behind")
-    check(not list(scratch.glob(".refused.*")), "a refused release left a temporary folder")
+    refused(plab, clone, scratch, "refused", "uncommitted changes in stages/",
+            ["stages/01-naive/step.cpp", "stages/02-heap/notes.txt"])
     print("dirty stages/: refused, naming the changed and the untracked file; nothing written")
 
 
@@ -185,14 +192,8 @@ def failed_part_way(plab, clone, kit, scratch):
     git(clone, "clean", "-q", "-fd", "stages")
     shutil.copyfile(kit / "solutions" / "01-naive" / "step.cpp", clone / "stages" / "01-naive" / "step.cpp")
     git(clone, "commit", "-q", "-am", "stage 01 done (not a starting point)")
-    out = scratch / "broken"
-    r = run(plab, "release", "--kit", clone, "--out", out, ok=False)
-    said = r.stdout + r.stderr
-    check(r.returncode != 0, "a release whose stage 01 is finished was not refused")
-    check("stage 01" in said and "not its untouched starting point" in said,
-          f"the failed release does not name stage 01:\n{said[-2000:]}")
-    check(not out.exists(), "a release that failed part-way left its folder behind")
-    check(not list(scratch.glob(".broken.*")), "a release that failed part-way left its temporary folder")
+    refused(plab, clone, scratch, "broken", "a finished stage 01 committed",
+            ["stage 01", "not its untouched starting point"])
     print("a committed stage that is not its starting point: the release fails part-way, names "
           "stage 01, and leaves no folder behind")
 
