@@ -1,6 +1,6 @@
 #!/bin/sh
 # The C++ compiler launcher of the build (CMakeLists.txt, PLAB_CCACHE):
-#   ccache-launcher.sh SOURCE_ROOT COMPILER ARGS...
+#   sh ccache-launcher.sh SOURCE_ROOT COMPILER ARGS...   (by sh: no execute bit needed in a zip)
 # runs the compiler through ccache, with the paths inside SOURCE_ROOT made relative (so that two
 # copies of the kit share cached objects), where ccache is installed and its cache folder can be
 # written; otherwise (a read-only home, a sandbox, no ccache) the compiler itself, unchanged.
