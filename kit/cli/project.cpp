@@ -110,6 +110,19 @@ bool names_stage(const std::string& line, const std::string& id, const std::stri
     if (line.find(t) != std::string::npos) return true;
   return false;
 }
+
+/// A compiler message's file name relative to the source folder: the compiler names it in full,
+/// or (ccache with CCACHE_BASEDIR) relative to the build folder, "../stages/...".
+std::string path_from_source_dir(const std::string& line) {
+  const std::string root = source_dir() + "/";
+  if (line.rfind(root, 0) == 0) return line.substr(root.size());
+  const std::size_t colon = line.find(':');
+  if (colon == std::string::npos || colon == 0 || line[0] == '/') return line;
+  const fs::path file = (fs::path(build_dir()) / line.substr(0, colon)).lexically_normal();
+  const fs::path relative = file.lexically_relative(fs::path(source_dir()).lexically_normal());
+  if (relative.empty() || *relative.begin() == "..") return line;
+  return relative.generic_string() + line.substr(colon);
+}
 }  // namespace
 
 std::string first_compiler_error(const std::string& id, const std::string& impl) {
@@ -125,9 +138,7 @@ std::string first_compiler_error(const std::string& id, const std::string& impl)
     if (!in_stage || (line.find("error:") == std::string::npos &&
                       line.find("undefined reference") == std::string::npos))
       continue;
-    const std::string root = source_dir() + "/";
-    if (line.rfind(root, 0) == 0) line = line.substr(root.size());
-    return line;
+    return path_from_source_dir(line);
   }
   return "";
 }

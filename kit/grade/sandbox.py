@@ -36,11 +36,21 @@ import time
 SANDBOX_UIDS = range(64900, 65000)
 
 
+def _lock_dir():
+    """Where the uid locks live: the machine's own lock folder, which every grading on the machine
+    sees, even one whose /tmp is private (a grading inside a container or a bubblewrap sandbox of
+    its own, as the Gradescope test's fake /autograder is); the temporary folder otherwise."""
+    for d in ("/run/lock", "/var/lock"):
+        if os.path.isdir(d) and os.access(d, os.W_OK):
+            return pathlib.Path(d)
+    return pathlib.Path(tempfile.gettempdir())
+
+
 def _hold_uid():
     """A uid of SANDBOX_UIDS that no other grading holds; held until this process ends."""
     import fcntl
     for uid in SANDBOX_UIDS:
-        lock = open(pathlib.Path(tempfile.gettempdir()) / f"plab-sandbox-uid-{uid}.lock", "a")
+        lock = open(_lock_dir() / f"plab-sandbox-uid-{uid}.lock", "a")
         try:
             fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
