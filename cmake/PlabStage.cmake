@@ -8,7 +8,7 @@
 # plab::make_stepper(); PLAB_GPU_STAGE is set for it and its users), skipped without nvcc.
 # CUDA_SOURCES: a CPU stage's GPU version, compiled when nvcc is found (PLAB_HYBRID_STAGE is then
 # set: its make_stepper() takes the GPU when there is one). EXACT: the exact event-driven
-# reference (stage 07), not MODEL.md's stepped model: its sources define plab::make_stepper()
+# reference (stage 07), not model.md's stepped model: its sources define plab::make_stepper()
 # (PLAB_EXACT_STAGE is set), it has its own tests and golden files. FLOAT: the stage also defines
 # plab::step_float() (PLAB_FLOAT_STAGE is set), the float variant `plab accuracy` measures.
 function(plab_add_stage)

@@ -1,6 +1,6 @@
 /// \file event_driven_test.cpp
 /// \brief The tests of the exact event-driven stage (07): its golden files, conservation (energy
-/// to rounding, no overlap, every centre in the box), agreement with MODEL.md's stepped model on
+/// to rounding, no overlap, every centre in the box), agreement with model.md's stepped model on
 /// scenes where no particle meets two events in one step, and the collision rate of kinetic
 /// theory (Enskog with Henderson's equation of state) on an equilibrated gas.
 #include <gtest/gtest.h>
@@ -35,7 +35,7 @@ std::string run_exact(const plab::Scene& scene) {
   return out.text();
 }
 
-/// MODEL.md's stepped model, by the kit's own greedy oracle (independent of every stage).
+/// model.md's stepped model, by the kit's own greedy oracle (independent of every stage).
 std::string run_stepped(plab::Scene scene) {
   const plab::StepFn oracle = [](const plab::Box& box, plab::Particles& p) {
     plab::apply(box, p, plab::plan_step(box, p));
@@ -112,7 +112,7 @@ TEST(Conservation, DenseGas) {
   EXPECT_LT(worst_outside, 1e-9 * scene.box.L);
 }
 
-/// Whether no particle meets two events in one step, by the exact run's counters. Then MODEL.md's
+/// Whether no particle meets two events in one step, by the exact run's counters. Then model.md's
 /// stepped model is exact too, and both must agree to the printed 8 decimals.
 bool one_event_per_step(const plab::Scene& scene) {
   plab::Particles p = scene.particles;
@@ -151,11 +151,11 @@ void expect_agree(const std::string& exact, const std::string& stepped, const st
 }
 
 TEST(AgreesWithSteps, CourseAndHandScenes) {
-  // Scenes built on a convention of MODEL.md that exact dynamics does not share.
+  // Scenes built on a convention of model.md that exact dynamics does not share.
   const std::vector<std::pair<std::string, std::string>> conventions = {
-      {"grazing", "MODEL.md counts a tangent pass (discriminant exactly 0) as a collision; with no "
+      {"grazing", "model.md counts a tangent pass (discriminant exactly 0) as a collision; with no "
                   "normal velocity at contact it changes nothing, and the exact model skips it"},
-      {"overlap-start", "MODEL.md collides a pair that starts overlapping at t = 0 whichever way it "
+      {"overlap-start", "model.md collides a pair that starts overlapping at t = 0 whichever way it "
                         "moves; the exact model lets a receding pair separate"},
       {"resting-on-wall", "a wall hit falls on the last step's end (t = 12): the exact run's "
                           "clock, summed from event to event, puts it a rounding before"}};

@@ -1,5 +1,5 @@
 /// \file scene_test.cpp
-/// \brief Reading scenes: every malformed case of MODEL.md gives `FILE:LINE: expected ..., found ...`.
+/// \brief Reading scenes: every malformed case of model.md gives `FILE:LINE: expected ..., found ...`.
 #include <gtest/gtest.h>
 
 #include <string>

@@ -1,5 +1,5 @@
 /// \file sweep_test.cpp
-/// \brief The broad phase never drops a pair whose MODEL.md pair time is below 1: random pairs
+/// \brief The broad phase never drops a pair whose model.md pair time is below 1: random pairs
 /// placed to meet at a chosen time, and grazing pairs whose closest approach is right at 2r.
 #include <gtest/gtest.h>
 

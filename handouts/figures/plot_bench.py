@@ -13,7 +13,7 @@ DIR, by default beside itself; `plab docs` writes them into build/docs/figures)
   accuracy.png          run time against error of the stepped model's variants, against stage
                         07's exact dynamics, best-for-its-cost variants ringed (data/accuracy.csv,
                         from `plab accuracy --csv`)
-  pairtime-ulps.png     the pair time's error in ulps, MODEL.md's form and the robust one
+  pairtime-ulps.png     the pair time's error in ulps, model.md's form and the robust one
                         (data/pairtime-ulps.csv, from `plab stress --ulps-csv`)
 """
 import argparse
@@ -183,7 +183,7 @@ def accuracy_frontier(path, out):
 
 
 def pairtime_ulps(path, out):
-    """Bars of the pair time's error in ulps: one panel per kind of pair, MODEL.md's form and the
+    """Bars of the pair time's error in ulps: one panel per kind of pair, model.md's form and the
     robust one."""
     data = {}
     with open(path, newline="") as f:

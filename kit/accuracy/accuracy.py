@@ -3,7 +3,7 @@
 
 Started by `./plab accuracy`. For each scene it runs the exact event-driven stage (07) and, against
 it, the fastest stepped stage (06) in variants: K substeps per printed step (K = 1, 2, 4, ..., 64;
-velocities divided by K, K times the steps), in double (MODEL.md's contract) and in float, on the
+velocities divided by K, K times the steps), in double (model.md's contract) and in float, on the
 CPU and, where there is a GPU, on the GPU (double). Errors, at equal physical time:
   collisions  the stepped run's pair collisions over the exact run's (1: none missed)
   overlap     the mean fraction of disks overlapping another at the printed times, and the deepest
@@ -19,7 +19,7 @@ import subprocess
 import sys
 
 SCENES = {
-    "report": ("the 2019 report's scene: N = 10^4, L = 20000, r = 1, MODEL.md's speeds",
+    "report": ("the 2019 report's scene: N = 10^4, L = 20000, r = 1, model.md's speeds",
                ["--n", "10000", "--l", "20000", "--r", "1", "--steps", "8", "--seed", "6"]),
     "dense-gas": ("a dense slow gas: N = 10^4, area fraction 0.3, speeds 1 to 2 (r = 1)",
                   ["--n", "10000", "--l", "323.6", "--r", "1", "--steps", "8", "--speed", "1:2",

@@ -169,7 +169,7 @@ void add_gen(CLI::App& app) {
   auto speed = std::make_shared<std::string>();
   auto out = std::make_shared<std::string>();
   g->seed = kDefaultSeed;
-  auto* c = app.add_subcommand("gen", "Write a random scene (MODEL.md's Generation): the same bits "
+  auto* c = app.add_subcommand("gen", "Write a random scene (model.md's Generation): the same bits "
                                       "on every platform for the same arguments.");
   c->add_option("--n", g->n, "number of particles")->required()->check(CLI::PositiveNumber);
   c->add_option("--l", g->L, "box side L")->required()->check(CLI::PositiveNumber);
@@ -284,6 +284,35 @@ void add_golden(CLI::App& app) {
   });
 }
 
+/// Runs `body` with TMPDIR pointing at an empty folder of the build, then checks that the tests
+/// left nothing there (a test creates its scratch files in a folder it removes, whatever the
+/// outcome): anything left is named and fails the run. The folder is removed either way, so the
+/// machine's /tmp is never touched by the tests.
+template <typename Body>
+int with_scratch_tmpdir(Body body) {
+  const fs::path scratch = fs::path(build_dir()) / ("test-tmp." + std::to_string(getpid()));
+  fs::remove_all(scratch);
+  fs::create_directories(scratch);
+  fs::permissions(scratch, fs::perms::all | fs::perms::sticky_bit);  // as /tmp: any test's uid
+  const char* before = std::getenv("TMPDIR");
+  const std::string saved = before ? before : "";
+  setenv("TMPDIR", scratch.c_str(), 1);
+  int status = body();
+  if (before) setenv("TMPDIR", saved.c_str(), 1); else unsetenv("TMPDIR");
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(scratch)) left.push_back(e.path().filename());
+  if (!left.empty()) {
+    std::sort(left.begin(), left.end());
+    std::printf("plab test: FAILED: the tests left %zu file(s) in their temporary folder "
+                "(TMPDIR=%s), e.g. %s: a test must remove its scratch files\n",
+                left.size(), scratch.c_str(), left.front().c_str());
+    status = status ? status : 1;
+  }
+  std::error_code ignored;
+  fs::remove_all(scratch, ignored);
+  return status;
+}
+
 void add_test(CLI::App& app) {
   auto impl = std::make_shared<std::string>();
   auto stage = std::make_shared<std::string>();
@@ -294,7 +323,10 @@ void add_test(CLI::App& app) {
   c->add_option("--impl", *impl, "solution or student (default as for run)");
   c->add_option("--stage", *stage, "only this stage's tests, e.g. 01");
   c->add_flag("--long", *long_too, "also the long tests (large scenes, several minutes)");
-  c->callback([impl, stage, long_too] {
+  auto fuzz = std::make_shared<bool>(false);
+  c->add_flag("--fuzz", *fuzz, "also the fuzz tests: stage against stage on scenes from fresh "
+                               "random seeds (printed with any failure), not the fixed ones");
+  c->callback([impl, stage, long_too, fuzz] {
     const std::string which = impl->empty() ? default_impl() : *impl;
     check_impl(which);
     std::vector<std::string> args{"ctest", "--test-dir", build_dir(), "--output-on-failure",
@@ -307,8 +339,11 @@ void add_test(CLI::App& app) {
     } else {
       args.insert(args.end(), {"-L", "^(kit|student)$"});
     }
-    if (!*long_too) args.insert(args.end(), {"-LE", "^long$"});
-    g_status = run_tests_reported({args, log});
+    if (!*long_too || !*fuzz)
+      args.insert(args.end(), {"-LE", !*long_too && !*fuzz ? "^(long|fuzz)$"
+                                      : !*long_too         ? "^long$"
+                                                           : "^fuzz$"});
+    g_status = with_scratch_tmpdir([&] { return run_tests_reported({args, log}); });
   });
 }
 
@@ -389,7 +424,7 @@ void add_bench(CLI::App& app) {
   };
   auto a = std::make_shared<Args>();
   auto* c = app.add_subcommand("bench", "Time stages on scenes like the 2019 report's (L = 20000, "
-                                        "r = 1, MODEL.md's speeds, perf mode): median of several "
+                                        "r = 1, model.md's speeds, perf mode): median of several "
                                         "whole-process runs, spread, and speedup over 1 thread.");
   c->add_option("--stage", a->stages, "stages, e.g. 02,03")->required()->delimiter(',');
   c->add_option("--threads", a->threads, "thread counts, e.g. 1,2")->delimiter(',')
@@ -404,7 +439,7 @@ void add_bench(CLI::App& app) {
   c->add_flag("--fixed-density", a->fixed_density,
               "scale the box with N (L = 20000 sqrt(N / 10^4)): the report's density at every N, "
               "with the report's speeds (2500 .. 5000) unless --speed says otherwise");
-  c->add_option("--speed", a->speed, "MIN:MAX speeds (default: MODEL.md's L/8 .. L/4, or 2500:5000 "
+  c->add_option("--speed", a->speed, "MIN:MAX speeds (default: model.md's L/8 .. L/4, or 2500:5000 "
                                      "with --fixed-density)");
   c->add_option("--impl", a->impl, "solution or student (default as for run)");
   c->add_option("--csv", a->csv, "also write the table as CSV to this file");

@@ -448,7 +448,7 @@ def scene_text(L, r, steps, parts):
 
 
 def model_pair_time(pi, pj, r):
-    """MODEL.md's pair time, the same double operations in the same order as model::pair_time()
+    """model.md's pair time, the same double operations in the same order as model::pair_time()
     (Python floats are IEEE doubles, never fused)."""
     dx, dy, dvx, dvy = pi[0] - pj[0], pi[1] - pj[1], pi[2] - pj[2], pi[3] - pj[3]
     c = (dx * dx + dy * dy) - (4 * r) * r
@@ -464,7 +464,7 @@ def model_pair_time(pi, pj, r):
 
 
 def model_wall_time(p, L, r):
-    """MODEL.md's wall time min(t_x, t_y), as model::wall_time()."""
+    """model.md's wall time min(t_x, t_y), as model::wall_time()."""
     def axis(pos, v):
         if v == 0:
             return math.inf

@@ -75,8 +75,8 @@ int main(int argc, char** argv) {
   int substeps = 1;
   std::string real = "double";
   std::string audit_path, audit_log_path, status_path;
-  CLI::App app{"Runs stage " PLAB_STAGE_ID " (" PLAB_IMPL ") on a scene and writes MODEL.md's output."};
-  app.add_option("scene", scene_path, "scene file (MODEL.md's input format)")->required();
+  CLI::App app{"Runs stage " PLAB_STAGE_ID " (" PLAB_IMPL ") on a scene and writes model.md's output."};
+  app.add_option("scene", scene_path, "scene file (model.md's input format)")->required();
   app.add_option("--out", out_path, "write the output here instead of stdout (all or nothing)");
   app.add_option("--digest", digest_path, "write one state digest per step to this file");
   app.add_option("--threads", threads, "threads for stages that use them (default: all cores)");
@@ -99,11 +99,11 @@ int main(int argc, char** argv) {
                  "write the run's timing as JSON to this file (what plab bench reads)");
   app.add_option("--substeps", substeps,
                  "plab accuracy: K model steps of 1/K per printed step (K a power of two keeps the "
-                 "velocity scaling exact); not MODEL.md's output")
+                 "velocity scaling exact); not model.md's output")
       ->check(CLI::Range(1, 1 << 20))->capture_default_str();
   app.add_option("--real", real,
                  "plab accuracy: run the model in float (stages built with it: 06) instead of "
-                 "MODEL.md's double; never for golden outputs")
+                 "model.md's double; never for golden outputs")
       ->check(CLI::IsMember({"double", "float"}))->capture_default_str();
   app.add_option("--audit", audit_path,
                  "check every state and step at full precision (no NaN, centres in the box, "

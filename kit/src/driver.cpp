@@ -92,7 +92,7 @@ RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOpt
   };
   const Particles* shown = k > 1 ? &initial : &p;  // the state as shown
   Particles before = p;  // the counters at the start of the step (only kept for options.events)
-  // Steps are audited from the state before them (MODEL.md's steps only: K == 1, not stage 07).
+  // Steps are audited from the state before them (model.md's steps only: K == 1, not stage 07).
   const bool audit_steps = options.audit && options.audit_steps && k == 1;
   const bool with_oracle = p.size() <= 3000;  // the oracle is O(N^2) a step
   Particles audited;  // the state before the step (audit_steps)

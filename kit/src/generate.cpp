@@ -1,5 +1,5 @@
 /// \file generate.cpp
-/// \brief MODEL.md's generator: no two disks overlap, speeds and directions without libm.
+/// \brief model.md's generator: no two disks overlap, speeds and directions without libm.
 #include "plab/generate.hpp"
 
 #include <algorithm>

@@ -1,5 +1,5 @@
 /// \file pairtime_ulps.cpp
-/// \brief `plab stress`'s check of the pair-time formula itself: the error, in ulps, of MODEL.md's
+/// \brief `plab stress`'s check of the pair-time formula itself: the error, in ulps, of model.md's
 /// pair time and of the robust contact time (both in double) against the robust form evaluated in
 /// long double (11 more bits), over random pairs, pairs near contact, grazing pairs, and pairs
 /// near contact with integer inputs (every coefficient exact in double: what is left is the
@@ -38,7 +38,7 @@ int main(int argc, char** argv) {
   long long count = 200000;
   std::uint64_t seed = 1;
   std::string csv;
-  CLI::App app{"Error in ulps of the pair time: MODEL.md's form and the robust form, in double, "
+  CLI::App app{"Error in ulps of the pair time: model.md's form and the robust form, in double, "
                "against the robust form in long double"};
   app.add_option("--pairs", count, "pairs of each kind")->capture_default_str();
   app.add_option("--seed", seed, "random seed")->capture_default_str();
@@ -100,7 +100,7 @@ int main(int argc, char** argv) {
       const long double want = plab::model::contact_time<long double>(
           -p.x, -p.y, p.vx, p.vy, static_cast<long double>(p.r));
       if (!std::isfinite(static_cast<double>(want))) continue;
-      // MODEL.md's form, i at the origin (lower index), j at (x, y) at rest.
+      // model.md's form, i at the origin (lower index), j at (x, y) at rest.
       const double t_model = plab::model::pair_time(0.0, 0.0, p.vx, p.vy, p.x, p.y, 0.0, 0.0, p.r);
       const double t_robust = plab::model::contact_time(-p.x, -p.y, p.vx, p.vy, p.r);
       if (std::isfinite(t_model)) model_err.push_back(ulps(t_model, want)); else ++model_missed;

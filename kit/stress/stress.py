@@ -24,7 +24,7 @@ import sys
 import time
 
 OUTSIDE_ULPS = 4      # a centre may be this many ulps of L outside [r, L - r] (rounding of x + t v)
-COLLISION_ULPS = 16   # a collision may change the energy of its disks by this many ulps (MODEL.md
+COLLISION_ULPS = 16   # a collision may change the energy of its disks by this many ulps (model.md
                       # turns the velocities into normal and tangent parts and back: a few roundings
                       # for each component)
 
@@ -72,11 +72,11 @@ def scenes(rng, long_steps):
     s.append(("tiny-r", "r = 1e-3 in L = 1e9, speeds L/8 to L/4 a step",
               ["--n", "200", "--l", "1e9", "--r", "1e-3", "--steps", "50", "--speed", "1.25e8:2.5e8",
                "--seed", "3"]))
-    # MODEL.md's generation takes speeds between L/4 and L/(8r) when r < 1/2: here up to 125 box
+    # model.md's generation takes speeds between L/4 and L/(8r) when r < 1/2: here up to 125 box
     # lengths a step. The once-per-step model reflects once and then moves on for the rest of the
     # step, so a disk crossing the box more than once a step leaves it: a limit of the model, not of
     # its arithmetic. The row shows it; it is expected and not counted as a violation.
-    s.append(("faster-than-box", "MODEL.md's speeds for r = 1e-3, L = 1e9: up to 125 box lengths a step "
+    s.append(("faster-than-box", "model.md's speeds for r = 1e-3, L = 1e9: up to 125 box lengths a step "
               "(expected to leave the box: the model's limit)",
               ["--n", "200", "--l", "1e9", "--r", "1e-3", "--steps", "50", "--seed", "3"]))
     s.append(("huge-r", "r = 4.99 in L = 10: a disk that can barely move",

@@ -3,7 +3,7 @@
 /// minimum picked again and again. O(N^2) memory and O(N^3) time per step, by design.
 //
 // =================================================================================================
-//  GOAL   Advance every particle by one step, exactly as MODEL.md says, the simplest way:
+//  GOAL   Advance every particle by one step, exactly as model.md says, the simplest way:
 //         1. compute every wall time and every pair time (an N x N matrix) from the start state;
 //         2. pick the earliest event among particles still free, accept it, repeat until no event
 //            before t = 1 is left;

@@ -17,7 +17,7 @@
 namespace plab {
 
 namespace {
-/// Orders the heap so that the earliest event (by MODEL.md's key) is on top.
+/// Orders the heap so that the earliest event (by model.md's key) is on top.
 struct Later {
   bool operator()(const model::Event& a, const model::Event& b) const { return model::key_less(b, a); }
 };

@@ -154,7 +154,7 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
   if (threadIdx.x == 0) a.flags->steps_done += 1;
 }
 
-/// Applies the plan; `Branchless` picks MODEL.md's branchless wall event (flip each axis whose
+/// Applies the plan; `Branchless` picks model.md's branchless wall event (flip each axis whose
 /// time equals the earlier one) over the branchy one: the same bits, less divergence.
 template <bool Branchless>
 __global__ void apply(ParticlesView p, Box box, StepArrays a) {

@@ -131,7 +131,7 @@ __device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, in
 }
 
 /// Entry e against entries [from, to) of its slab: the pairs that pass sweep::close_in_slab()
-/// get MODEL.md's pair time, unless slab k - 1 found them already (a pair listed twice is
+/// get model.md's pair time, unless slab k - 1 found them already (a pair listed twice is
 /// harmless to the rounds, but it fills slots), and are filed when the pair comes before both
 /// particles' walls.
 __device__ inline void test_entries(const ParticlesView& p, const Box& box, const StepArrays& a,

@@ -1,6 +1,6 @@
 /// \file solutions/06-broadphase/step.cpp
 /// \brief Stage 06, broad phase (CPU, OpenMP): a space-time grid finds every pair that can meet
-/// in the step, MODEL.md's pair time is computed for those alone, and the events are chosen by a
+/// in the step, model.md's pair time is computed for those alone, and the events are chosen by a
 /// greedy pass over the sparse candidates. Same bits as stages 01-05.
 //
 // =================================================================================================
@@ -11,8 +11,8 @@
 //            then test each against the same and the next cells (half of the 3 x 3
 //            neighbourhood; a fast particle: every cell within its search radius) with
 //            sweep::close_in_slab();
-//         2. narrow phase: MODEL.md's pair time for each pair that passed;
-//         3. MODEL.md's greedy selection over the sparse candidates (a pair at or after either
+//         2. narrow phase: model.md's pair time for each pair that passed;
+//         3. model.md's greedy selection over the sparse candidates (a pair at or after either
 //            wall time is never accepted), then apply.
 //         Memory O(N + candidates + cells): no N x N anything.
 //  READ   handouts/06-broadphase.md     TEST   ./plab test --impl student --stage 06
@@ -243,7 +243,7 @@ void search(Slab& s, const std::vector<sweep::Search>& reach, const sweep::Grid&
 
 }  // namespace
 
-/// One step in reals of type `Real`: `double` is MODEL.md's step, `float` the variant that
+/// One step in reals of type `Real`: `double` is model.md's step, `float` the variant that
 /// `plab accuracy` measures (the broad phase always works in double).
 template <class Real>
 void step_in(const Box& box, ParticlesOf<Real>& p) {

@@ -1,7 +1,7 @@
 /// \file solutions/07-event-driven/step.cpp
 /// \brief Stage 07, exact event-driven reference: continuous-time hard disks with every
 /// collision (no once-per-step limit), a priority queue of predicted events, and cell lists.
-/// Not MODEL.md's stepped model: this is the truth the stepped stages approximate.
+/// Not model.md's stepped model: this is the truth the stepped stages approximate.
 //
 // =================================================================================================
 //  GOAL   Stages 01-06 let a particle collide at most once per step and phase through the rest.
@@ -15,7 +15,7 @@
 //         3. particles are advanced lazily: each keeps its position at its own last event time;
 //         4. cell lists (cells at least 2r wide, crossing events) keep a prediction O(1), so an
 //            event costs O(log N), not O(N).
-//         The state is printed at integer times, in MODEL.md's output format.
+//         The state is printed at integer times, in model.md's output format.
 //  READ   handouts/07-event-driven.md     TEST   ./plab test --impl student --stage 07
 // =================================================================================================
 #include <algorithm>

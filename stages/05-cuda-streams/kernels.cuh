@@ -63,7 +63,7 @@ __global__ void wall_times(ParticlesView p, Box box, StepArrays a) {
 // step; when flags->overflow is already set on entry, return at once. Thread 0 adds 1 to
 // flags->steps_done at the end.
 
-/// Applies the plan; `Branchless` picks MODEL.md's branchless wall event (flip each axis whose
+/// Applies the plan; `Branchless` picks model.md's branchless wall event (flip each axis whose
 /// time equals the earlier one) over the branchy one: the same bits, less divergence.
 template <bool Branchless>
 __global__ void apply(ParticlesView p, Box box, StepArrays a) {

@@ -1,6 +1,6 @@
 /// \file stages/06-broadphase/step.cpp
 /// \brief Stage 06, broad phase (CPU, OpenMP): a space-time grid finds every pair that can meet
-/// in the step, MODEL.md's pair time is computed for those alone, and the events are chosen by a
+/// in the step, model.md's pair time is computed for those alone, and the events are chosen by a
 /// greedy pass over the sparse candidates. Same bits as stages 01-05.
 //
 // =================================================================================================
@@ -11,8 +11,8 @@
 //            then test each against the same and the next cells (half of the 3 x 3
 //            neighbourhood; a fast particle: every cell within its search radius) with
 //            sweep::close_in_slab();
-//         2. narrow phase: MODEL.md's pair time for each pair that passed;
-//         3. MODEL.md's greedy selection over the sparse candidates (a pair at or after either
+//         2. narrow phase: model.md's pair time for each pair that passed;
+//         3. model.md's greedy selection over the sparse candidates (a pair at or after either
 //            wall time is never accepted), then apply.
 //         Memory O(N + candidates + cells): no N x N anything.
 //  READ   handouts/06-broadphase.md     TEST   ./plab test --impl student --stage 06
@@ -221,7 +221,7 @@ void search(Slab& s, const std::vector<sweep::Search>& reach, const sweep::Grid&
 
 }  // namespace
 
-/// One step in reals of type `Real`: `double` is MODEL.md's step, `float` the variant that
+/// One step in reals of type `Real`: `double` is model.md's step, `float` the variant that
 /// `plab accuracy` measures (the broad phase always works in double).
 template <class Real>
 void step_in(const Box& box, ParticlesOf<Real>& p) {
@@ -258,7 +258,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
       bin(s, p, last, k, g);
       search(s, reach, g);
       // EXERCISE 2: the narrow phase. For each entry pair (a, b) in s.hits: the particles
-      // i < j, MODEL.md's pair time (pair_candidate(box, p, i, j)); keep it in s.found if it is
+      // i < j, model.md's pair time (pair_candidate(box, p, i, j)); keep it in s.found if it is
       // in the step. (The plan then drops every pair at or after either wall time: why may it?
       // handout 06)
       PLAB_EXERCISE(2, "the narrow phase: pair times of the pairs that passed");
@@ -266,7 +266,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
   }
 
   // EXERCISE 3: gather every thread's s.found, choose the events (plab::sparse_greedy_plan(),
-  // MODEL.md's greedy rule over the sparse candidates and the walls) and apply them in parallel
+  // model.md's greedy rule over the sparse candidates and the walls) and apply them in parallel
   // (plab::apply_one()).
   PLAB_EXERCISE(3, "select the events and apply them");
 }

@@ -30,7 +30,7 @@ struct Audit {
 
   /// Audits one state (after step `step`).
   void state(const Box& box, const Particles& p, long long step);
-  /// Audits one step of MODEL.md's stepped model from `before` to `after`: counters, and, when
+  /// Audits one step of model.md's stepped model from `before` to `after`: counters, and, when
   /// `with_oracle` (small scenes: the kit's greedy oracle is O(N^2)), the energy of each
   /// collision against its partner's.
   void step(const Box& box, const Particles& before, const Particles& after, bool with_oracle);

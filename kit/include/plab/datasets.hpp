@@ -19,7 +19,7 @@ struct GenParams {
   long long steps = 0;        //!< steps
   Mode mode = Mode::kPrint;   //!< output mode
   std::uint64_t seed = 0;     //!< generator seed
-  double speed_min = -1;      //!< speed range (length units per step); negative: MODEL.md's
+  double speed_min = -1;      //!< speed range (length units per step); negative: model.md's
   double speed_max = -1;      //!< default for the box (L/(8r) .. L/4)
 };
 

@@ -37,18 +37,18 @@ struct RunOptions {
   bool progress = false;        //!< show progress on stderr
   Audit* audit = nullptr;       //!< audit every state, and every step when substeps == 1
                                 //!< (plab stress, plab accuracy; optional)
-  bool audit_steps = true;      //!< with `audit`: also the steps (MODEL.md's one event per
+  bool audit_steps = true;      //!< with `audit`: also the steps (model.md's one event per
                                 //!< particle per step; off for the exact stage)
   int substeps = 1;             //!< `plab accuracy`: K model steps per printed step (velocities
                                 //!< divided by K, K S steps, every K-th state printed with its
                                 //!< velocities times K); a power of two keeps both scalings exact
 };
 
-/// Runs `scene` with `step`, writing MODEL.md's output to `out`: in print mode the blocks of steps
+/// Runs `scene` with `step`, writing model.md's output to `out`: in print mode the blocks of steps
 /// 0..S-1 then the final block (step S, with `pc wc`); in perf mode the step-0 block and the final
 /// block (only the final block when S = 0). The state is read back from the stage only when it is
 /// printed or digested. With `options.substeps` = K > 1 each printed step is K model steps of
-/// 1/K (MODEL.md's model refined in time; not MODEL.md's output).
+/// 1/K (model.md's model refined in time; not model.md's output).
 RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOptions& options = {});
 
 /// The same for a CPU stage's step function.

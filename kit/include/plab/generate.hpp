@@ -1,5 +1,5 @@
 /// \file generate.hpp
-/// \brief Reproducible random scenes (MODEL.md's Generation), the same bits on every platform.
+/// \brief Reproducible random scenes (model.md's Generation), the same bits on every platform.
 #pragma once
 
 #include <cstdint>
@@ -36,7 +36,7 @@ struct SpeedRange {
   double max = 0;  //!< highest speed
 };
 
-/// MODEL.md's default speeds: between L/(8r) and L/4 (the smaller is the lower bound).
+/// model.md's default speeds: between L/(8r) and L/4 (the smaller is the lower bound).
 SpeedRange default_speeds(const Box& box);
 
 /// Generates `n` particles: centres uniform in \f$[r, L-r]^2\f$ with no two disks overlapping

@@ -1,5 +1,5 @@
 /// \file grading.hpp
-/// \brief What the autograder asks of a stage's program: the events MODEL.md's greedy rule picks in
+/// \brief What the autograder asks of a stage's program: the events model.md's greedy rule picks in
 /// a step (to explain a divergence), and one step from every printed state (to score steps).
 #pragma once
 
@@ -13,7 +13,7 @@
 
 namespace plab {
 
-/// The events of one step by MODEL.md's rule, computed the plainest way: every candidate (walls,
+/// The events of one step by model.md's rule, computed the plainest way: every candidate (walls,
 /// pairs with t < 1) sorted by key, each accepted when its particles are still free. O(N^2 log N):
 /// an independent oracle for diagnosis and tests, not a stage.
 Plan plan_step(const Box& box, const Particles& p);

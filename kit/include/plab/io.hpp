@@ -1,5 +1,5 @@
 /// \file io.hpp
-/// \brief Reading scene files (with precise errors) and writing MODEL.md's output fast.
+/// \brief Reading scene files (with precise errors) and writing model.md's output fast.
 #pragma once
 
 #include <cstdint>
@@ -13,7 +13,7 @@ namespace plab {
 
 /// Reads a scene from `text`; `file` names it in error messages.
 /// Particles are left empty (and `generated` set) when the text has no particle lines.
-/// \throws InputError `FILE:LINE: expected ..., found ...` for anything MODEL.md rejects
+/// \throws InputError `FILE:LINE: expected ..., found ...` for anything model.md rejects
 Scene parse_scene(std::string_view text, const std::string& file);
 
 /// Reads a whole file into a string.
@@ -32,7 +32,7 @@ std::string format_scene(const Scene& scene);
 /// Writes at most 32 characters to `out` and returns the end.
 char* format_fixed8(char* out, double v);
 
-/// Appends MODEL.md's output to a buffer and flushes it to a `FILE*` in large writes.
+/// Appends model.md's output to a buffer and flushes it to a `FILE*` in large writes.
 class OutputWriter {
  public:
   /// Writes to `file` (not owned); a null file keeps everything in text().

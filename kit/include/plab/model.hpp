@@ -1,5 +1,5 @@
 /// \file model.hpp
-/// \brief The simulation model of MODEL.md, written once: every formula every stage uses.
+/// \brief The simulation model of model.md, written once: every formula every stage uses.
 ///
 /// Each function is a small inline function marked `PLAB_HD`, so the same code compiles for the
 /// CPU and, under nvcc, for the GPU. Every stage and every test calls these functions; no stage
@@ -8,7 +8,7 @@
 /// the project is compiled without FMA contraction (`-ffp-contract=off`, nvcc `--fmad=false`),
 /// and nothing is compiled with fast-math. See \ref model_page for the equations.
 ///
-/// The functions are templates on the real type `Real`, deduced from the arguments: MODEL.md and
+/// The functions are templates on the real type `Real`, deduced from the arguments: model.md and
 /// every golden output use `double`; `plab accuracy` also runs the model in `float`, and the
 /// stress suite evaluates the pair time in `long double` to measure the rounding of the double
 /// form. Instantiated with `double`, each function is exactly the double code it always was.
@@ -43,7 +43,7 @@ struct Event {
   int hi;    //!< same as `lo` for a wall, higher index for a pair
 };
 
-/// The strict total order of MODEL.md: by time, then wall before pair, then indices.
+/// The strict total order of model.md: by time, then wall before pair, then indices.
 PLAB_HD inline bool key_less(const Event& a, const Event& b) {
   if (a.t != b.t) return a.t < b.t;
   if (a.kind != b.kind) return a.kind < b.kind;
@@ -70,7 +70,7 @@ struct WallTimesOf {
   Real tx;  //!< time to reach a wall along x (steps; may be negative, +inf if vx == 0)
   Real ty;  //!< time to reach a wall along y
 };
-/// The wall times in MODEL.md's doubles.
+/// The wall times in model.md's doubles.
 using WallTimes = WallTimesOf<double>;
 
 /// Both axis wall times of a particle, from the start-of-step state.
@@ -123,7 +123,7 @@ PLAB_HD inline Real pair_time(Real xi, Real yi, Real vxi, Real vyi,
 /// \f[ t = \frac{c}{-b + \sqrt{D}} \f]
 /// which never subtracts two nearly equal numbers (the textbook \f$ (-b - \sqrt D)/a \f$ does,
 /// for grazing and near-contact pairs) and never divides by \f$ a = 0 \f$.
-/// This is not MODEL.md's pair time: the stepped stages must keep pair_time() for their bits.
+/// This is not model.md's pair time: the stepped stages must keep pair_time() for their bits.
 template <class Real>
 PLAB_HD inline Real contact_time(Real dx, Real dy, Real dvx, Real dvy, Real r) {
   const Real b = dx * dvx + dy * dvy;
@@ -141,7 +141,7 @@ template <class Real>
 PLAB_HD inline bool in_step(Real t) { return t < 1; }
 
 /// Whether a pair event at time `t` can be accepted at all against its particles' wall times:
-/// one at or after either wall time loses to that wall (it comes first in MODEL.md's key) and is
+/// one at or after either wall time loses to that wall (it comes first in model.md's key) and is
 /// never accepted. A not-a-number wall time is no candidate and beats nothing.
 template <class Real>
 PLAB_HD inline bool before_walls(Real t, Real wall_i, Real wall_j) {
@@ -155,7 +155,7 @@ PLAB_HD inline void free_move(Real& x, Real& y, Real vx, Real vy) {
   y = y + vy;
 }
 
-/// Applies a wall event to one particle (branchy form of MODEL.md), from its start-of-step state:
+/// Applies a wall event to one particle (branchy form of model.md), from its start-of-step state:
 /// move to the first wall, reflect, then move on for the rest of the step, stopping at the second
 /// wall if it is reached; at an exact corner both axes reflect. Increments `wc`.
 template <class Real>

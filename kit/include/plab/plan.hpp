@@ -71,7 +71,7 @@ inline void apply(const Box& box, ParticlesOf<Real>& p, const Plan& plan) {
   for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);
 }
 
-/// MODEL.md's selection over a list of candidate events (walls and pairs with t < 1): in key
+/// model.md's selection over a list of candidate events (walls and pairs with t < 1): in key
 /// order, each event is accepted when its particles are still free. Sorts `events`.
 inline Plan greedy_plan(std::vector<model::Event>& events, std::size_t n) {
   std::sort(events.begin(), events.end(),

@@ -44,13 +44,13 @@ struct ParticlesOf {
   }
 };
 
-/// The particles in MODEL.md's doubles: what every stage and file uses.
+/// The particles in model.md's doubles: what every stage and file uses.
 using Particles = ParticlesOf<double>;
 
 /// What the output shows: every step (`print`) or the first and last (`perf`).
 enum class Mode { kPrint, kPerf };
 
-/// A scene file read into memory (MODEL.md's input format).
+/// A scene file read into memory (model.md's input format).
 struct Scene {
   Box box;                   //!< the box and radius
   long long steps = 0;       //!< number of steps S

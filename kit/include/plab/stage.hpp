@@ -6,7 +6,7 @@
 /// plab::make_stepper() instead, keeping the state on the GPU between steps; a stage with both
 /// (`PLAB_HYBRID_STAGE`) defines both and runs on the GPU when it finds one. The exact
 /// event-driven stage 07 (`PLAB_EXACT_STAGE`) defines plab::make_stepper() too: it is not
-/// MODEL.md's stepped model, so it has no step(). The kit's driver does
+/// model.md's stepped model, so it has no step(). The kit's driver does
 /// everything else: reading the scene, printing, timing (see plab::simulate()).
 #pragma once
 
@@ -32,7 +32,7 @@ namespace plab {
 /// or of the exact event-driven stage (07), which keeps its own continuous-time state.
 std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p);
 #else
-/// Advances every particle by one step, as MODEL.md says. Implemented once per CPU stage.
+/// Advances every particle by one step, as model.md says. Implemented once per CPU stage.
 /// \param box the box and radius
 /// \param p   the state at the start of the step; on return, the state at its end
 void step(const Box& box, Particles& p);

@@ -5,7 +5,7 @@
 /// The step is split into \f$K\f$ equal time slabs. In slab \f$k\f$, with midpoint \f$t_m\f$ and
 /// half-width \f$h = 1/(2K)\f$, each particle is binned by its position \f$p + t_m v\f$ into a dense
 /// grid of rows of height \f$c \ge 2r + 2 h v_{cut} + 2m\f$, each split into narrow columns. If
-/// MODEL.md's pair time \f$t < 1\f$, the centres are (within rounding) \f$2r\f$ apart at \f$t\f$, which lies in some slab,
+/// model.md's pair time \f$t < 1\f$, the centres are (within rounding) \f$2r\f$ apart at \f$t\f$, which lies in some slab,
 /// \f$|t - t_m| \le h\f$; so their relative position \f$d\f$ at \f$t_m\f$ and relative velocity
 /// \f$w\f$ satisfy \f$\min_{|s| \le h} |d + s w| \le 2r + m\f$ (close_in_slab()), and their midpoint
 /// positions are at most \f$2r + m + h(|v_a| + |v_b|)\f$ apart. For two particles no faster than
@@ -15,7 +15,7 @@
 /// partner no faster than itself (a partner faster still searches for it). So the cell size
 /// follows the bulk of the speeds, not the single fastest particle of a hot gas.
 ///
-/// Two more things no pair needs: time after a particle's wall time (MODEL.md's key puts the wall
+/// Two more things no pair needs: time after a particle's wall time (model.md's key puts the wall
 /// first, so a later pair event of that particle is never accepted: path_end(), last_slab()),
 /// and cells outside the box (paths before their wall time stay inside; cell_of() clamps, which
 /// never separates two neighbours). The margin \f$m\f$ (a millionth of the scene's scale) covers
