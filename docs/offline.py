@@ -20,7 +20,8 @@ import sys
 #: What the pages need of MathJax 2: the rest (other outputs, fonts, localizations, the unpacked
 #: sources) is 40 MB that no page loads.
 MATHJAX_PARTS = ["MathJax.js", "extensions", "jax/input/TeX", "jax/element",
-                 "jax/output/HTML-CSS/jax.js", "jax/output/HTML-CSS/autoload", "jax/output/HTML-CSS/fonts/TeX",
+                 "jax/output/HTML-CSS/jax.js", "jax/output/HTML-CSS/config.js", "jax/output/HTML-CSS/autoload",
+                 "jax/output/HTML-CSS/fonts/TeX", "localization/en",
                  "fonts/HTML-CSS/TeX/woff"]
 
 #: A load from a remote address: <script src=...>, <link href=...> (style sheets, icons, fonts),
