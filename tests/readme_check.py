@@ -39,6 +39,8 @@ import time
 # Instructor lines that are not run, and why.
 SKIPPED = {"./plab test --long": "the N = 10000, 500-step scene on every stage takes many minutes "
                                  "per stage; the plain ./plab test line runs every other test",
+           "./plab test --fuzz": "the same tests again with fresh seeds for the stage-against-stage "
+                                 "scenes: CI runs the fuzz tests (label fuzz) in a step of their own",
            "./plab golden": "regenerates every golden file (minutes); CI runs ./plab golden --check, "
                             "which makes the same files and compares them",
            "./plab accuracy --csv acc.csv --plot acc.png": "the full lab takes many minutes; its "
