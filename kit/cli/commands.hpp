@@ -1,5 +1,6 @@
 /// \file cli/commands.hpp
-/// \brief The `plab` subcommands, each registered on the CLI11 app by one function.
+/// \brief The `plab` subcommands, each registered on the CLI11 app by one function, each in a
+/// file of its own: `plab NAME` is kit/cli/NAME.cpp (helpers they share: common.hpp).
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -11,7 +12,7 @@ void add_built(CLI::App& app);   //!< `plab built`: is a stage built from its cu
 void add_render(CLI::App& app);  //!< `plab render`: animate a run, or two outputs side by side
 void add_grade(CLI::App& app);   //!< `plab grade`: the autograder
 void add_release(CLI::App& app);  //!< `plab release`: the student version of the kit
-void add_gradescope(CLI::App& app);  //!< `plab gradescope`: the autograder zip (cli/gradescope.cpp)
+void add_gradescope(CLI::App& app);  //!< `plab gradescope`: the autograder zip
 void add_accuracy(CLI::App& app); //!< `plab accuracy`: run time against error (stages 06, 07)
 void add_stress(CLI::App& app);   //!< `plab stress`: hostile scenes, invariants, pair-time ulps
 void add_gen(CLI::App& app);     //!< `plab gen`: write a reproducible random scene

@@ -1,0 +1,128 @@
+/// \file cli/bench.cpp
+/// \brief `plab bench`: timings, medians, speedups, CSV.
+#include "common.hpp"
+
+namespace plab::cli {
+
+void add_bench(CLI::App& app) {
+  struct Args {
+    std::vector<std::string> stages, schedules{"dynamic,16"};
+    std::vector<int> threads{1};
+    std::vector<long long> n{1000, 2000, 4000};
+    long long steps = 500;
+    int runs = 3;
+    std::string csv, impl;
+    std::uint64_t seed = 1;
+    bool fixed_density = false;
+    std::string speed;
+  };
+  auto a = std::make_shared<Args>();
+  auto* c = app.add_subcommand("bench", "Time stages on scenes like the 2019 report's (L = 20000, "
+                                        "r = 1, model.md's speeds, perf mode): median of several "
+                                        "whole-process runs, spread, and speedup over 1 thread.");
+  c->add_option("--stage", a->stages, "stages, e.g. 02,03")->required()->delimiter(',');
+  c->add_option("--threads", a->threads, "thread counts, e.g. 1,2")->delimiter(',')
+      ->capture_default_str();
+  c->add_option("--n", a->n, "particle counts")->delimiter(',')->capture_default_str();
+  c->add_option("--steps", a->steps, "steps S")->capture_default_str();
+  c->add_option("--runs", a->runs, "timed runs per configuration")->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  c->add_option("--schedule", a->schedules, "OpenMP schedules to compare, e.g. static dynamic,16 "
+                                            "guided")->capture_default_str();
+  c->add_option("--seed", a->seed, "scene seed")->capture_default_str();
+  c->add_flag("--fixed-density", a->fixed_density,
+              "scale the box with N (L = 20000 sqrt(N / 10^4)): the report's density at every N, "
+              "with the report's speeds (2500 .. 5000) unless --speed says otherwise");
+  c->add_option("--speed", a->speed, "MIN:MAX speeds (default: model.md's L/8 .. L/4, or 2500:5000 "
+                                     "with --fixed-density)");
+  c->add_option("--impl", a->impl, "solution or student (default as for run)");
+  c->add_option("--csv", a->csv, "also write the table as CSV to this file");
+  c->callback([a] {
+    const std::string impl = a->impl.empty() ? default_impl() : a->impl;
+    check_impl(impl);
+    std::string csv =
+        "stage,impl,n,steps,threads,schedule,runs,median_s,min_s,max_s,speedup,step_median_s,"
+        "step_min_s,step_max_s,timer,device,device_bytes\n";
+    std::printf("%-5s %6s %5s %7s %-11s %10s %9s %8s %10s %9s  %s\n", "stage", "N", "S", "threads",
+                "schedule", "median s", "spread", "speedup", "in steps", "ms/step", "device");
+    const std::string report = temp_path("bench-report.json");
+    for (const long long n : a->n) {
+      const std::string scene = temp_path("bench-" + std::to_string(n) + (a->fixed_density ? "-fd-" : "-") +
+                                          std::to_string(a->steps) + "-" + std::to_string(a->seed) +
+                                          ".in");
+      const double L = a->fixed_density ? 20000 * std::sqrt(n / 1e4) : 20000;
+      GenParams g{n, L, 1, a->steps, Mode::kPerf, a->seed};
+      if (!a->speed.empty()) {
+        const auto colon = a->speed.find(':');
+        g.speed_min = std::stod(a->speed.substr(0, colon));
+        g.speed_max = std::stod(a->speed.substr(colon + 1));
+      } else if (a->fixed_density) {
+        g.speed_min = 2500;
+        g.speed_max = 5000;
+      }
+      write_text(scene, format_scene(generate_scene(g)));
+      for (const std::string& raw : a->stages) {
+        const std::string id = two_digits(raw);
+        const std::string program = require_stage(id, impl);
+        for (const std::string& schedule : a->schedules) {
+          double one_thread = 0;
+          for (const int threads : a->threads) {
+            std::vector<double> t, steps_t;
+            nlohmann::json last;
+            for (int k = 0; k < a->runs; ++k) {
+              if (stderr_is_terminal())
+                std::fprintf(stderr, "\r  stage %s N=%lld threads=%d run %d/%d ", id.c_str(), n,
+                             threads, k + 1, a->runs);
+              const auto t0 = std::chrono::steady_clock::now();
+              const int rc = run_program({program, scene, "--quiet", "--out", "/dev/null",
+                                          "--threads", std::to_string(threads), "--schedule",
+                                          schedule, "--report", report});
+              if (rc != 0)
+                throw std::runtime_error("stage " + id + " failed (exit " + std::to_string(rc) +
+                                         ") on " + scene);
+              t.push_back(wall_seconds(t0));
+              last = nlohmann::json::parse(read_file(report));
+              steps_t.push_back(last.at("step_seconds").get<double>());
+            }
+            if (stderr_is_terminal()) std::fprintf(stderr, "\r%60s\r", "");
+            std::sort(t.begin(), t.end());
+            std::sort(steps_t.begin(), steps_t.end());
+            const double median = t[t.size() / 2];
+            const double step_median = steps_t[steps_t.size() / 2];
+            const std::string device = last.at("device").get<std::string>();
+            const std::string timer = last.at("timer").get<std::string>();
+            const bool gpu = device != "cpu";
+            if (threads == a->threads.front()) one_thread = median;
+            const double spread = (t.back() - t.front()) / median;
+            char speedup[32] = "-";
+            if (one_thread > 0 && !gpu)
+              std::snprintf(speedup, sizeof speedup, "%.2f", one_thread / median);
+            std::printf("%-5s %6lld %5lld %7s %-11s %10.3f %8.1f%% %8s %10.4f %9.4f  %s (%s)\n",
+                        id.c_str(), n, a->steps, gpu ? "-" : std::to_string(threads).c_str(),
+                        gpu ? "-" : schedule.c_str(), median, 100 * spread, speedup, step_median,
+                        a->steps ? 1e3 * step_median / a->steps : 0.0, device.c_str(),
+                        timer.c_str());
+            std::fflush(stdout);
+            char row[512];
+            std::snprintf(row, sizeof row,
+                          "%s,%s,%lld,%lld,%d,\"%s\",%d,%.6f,%.6f,%.6f,%s,%.6f,%.6f,%.6f,%s,\"%s\",%zu\n",
+                          id.c_str(), impl.c_str(), n, a->steps, threads, schedule.c_str(), a->runs,
+                          median, t.front(), t.back(), speedup, step_median, steps_t.front(),
+                          steps_t.back(), timer.c_str(), device.c_str(),
+                          last.value("device_bytes", std::size_t{0}));
+            csv += row;
+            if (gpu) break;  // threads and schedules are CPU settings
+          }
+        }
+      }
+    }
+    if (!a->csv.empty()) write_text(a->csv, csv);
+    std::printf("median s: whole-process wall seconds (start-up, scene reading and, on a GPU, "
+                "context creation included; output to /dev/null); spread = (max - min) / median "
+                "over %d runs; speedup: over the first thread count; in steps: the median of the "
+                "stage's own time in steps (host clock on the CPU, CUDA events on a GPU)\n",
+                a->runs);
+  });
+}
+
+}  // namespace plab::cli

@@ -1,0 +1,63 @@
+/// \file cli/common.cpp
+/// \brief The helpers the `plab` commands share (common.hpp).
+#include "common.hpp"
+
+namespace plab::cli {
+
+int g_status = 0;
+
+int exit_status() { return g_status; }
+
+std::string two_digits(const std::string& stage) {
+  return stage.size() == 1 ? "0" + stage : stage;
+}
+
+void check_impl(const std::string& impl) {
+  if (impl != "solution" && impl != "student")
+    throw std::runtime_error("--impl must be 'solution' or 'student', not '" + impl + "'");
+}
+
+std::string require_stage(const std::string& id, const std::string& impl) {
+  bool exists = false;
+  std::string known;
+  for (const auto& s : stages(impl)) {
+    exists = exists || s.id == id;
+    known += (known.empty() ? "" : ", ") + s.id;
+  }
+  const std::string tree = impl == "solution" ? "solutions/" : "stages/";
+  if (!exists)
+    throw std::runtime_error("there is no stage " + id + " in " + tree + " (stages: " +
+                             (known.empty() ? "none" : known) + ")");
+  const std::string program = stage_program(id, impl);
+  if (!fs::exists(program))
+    throw std::runtime_error("stage " + id + " (" + impl + ") is not built: its code in " + tree +
+                             " did not compile. See the errors with: cmake --build " + build_dir() +
+                             " --target plab-run-" + id + "-" + impl);
+  if (const std::string problem = stage_build_problem(id, impl); !problem.empty())
+    throw std::runtime_error(problem);
+  return program;
+}
+
+double wall_seconds(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::string fmt_double(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+std::string temp_path(const std::string& stem) {
+  const fs::path dir = fs::path(build_dir()) / "tmp";
+  fs::create_directories(dir);
+  return (dir / (stem + "." + std::to_string(getpid()))).string();
+}
+
+void write_text(const std::string& path, const std::string& text) {
+  OutputFile f(path);
+  std::fwrite(text.data(), 1, text.size(), f.get());
+  f.commit();
+}
+
+}  // namespace plab::cli

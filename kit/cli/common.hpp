@@ -1,0 +1,50 @@
+/// \file cli/common.hpp
+/// \brief What the `plab` commands share: the exit status they set, and small helpers (each
+/// command is one file, kit/cli/NAME.cpp, registered in main.cpp through commands.hpp).
+#pragma once
+
+#include <unistd.h>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <nlohmann/json.hpp>
+#include <vector>
+#include "plab/datasets.hpp"
+#include "plab/diff.hpp"
+#include "plab/errors.hpp"
+#include "plab/generate.hpp"
+#include "plab/io.hpp"
+#include "plab/runtime.hpp"
+#include "project.hpp"
+#include "test_report.hpp"
+#include "watch.hpp"
+#include "commands.hpp"
+
+namespace plab::cli {
+namespace fs = std::filesystem;
+
+/// The exit status the chosen command asks for (main returns it; see exit_status()).
+extern int g_status;
+
+/// "1" -> "01": a stage number as the kit names its folders and targets.
+std::string two_digits(const std::string& stage);
+/// Throws unless `impl` is "solution" or "student".
+void check_impl(const std::string& impl);
+/// The stage program, or a clear error saying why there is none (no such stage, not built, or
+/// not built from its current code).
+std::string require_stage(const std::string& id, const std::string& impl);
+/// Seconds since `t0`.
+double wall_seconds(std::chrono::steady_clock::time_point t0);
+/// A double as text that reads back to the same value.
+std::string fmt_double(double v);
+/// A scratch file name in build/tmp/, unique to this process.
+std::string temp_path(const std::string& stem);
+/// Writes `text` to `path` whole or not at all (plab::OutputFile).
+void write_text(const std::string& path, const std::string& text);
+
+}  // namespace plab::cli

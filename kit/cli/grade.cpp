@@ -1,0 +1,67 @@
+/// \file cli/grade.cpp
+/// \brief `plab grade`: the autograder.
+#include "common.hpp"
+
+namespace plab::cli {
+
+void add_grade(CLI::App& app) {
+  struct Args {
+    std::string submission, stages, out = "results.json", junit, rubric, scratch;
+    std::string sandbox = "auto";
+    long long seed = -1;
+    bool keep = false, no_sandbox = false, races = false;
+  };
+  auto a = std::make_shared<Args>();
+  auto* c = app.add_subcommand(
+      "grade", "Grade a submission: builds its stages with the kit's own code in a sandbox, runs "
+               "them there under limits against public and hidden scenes, one step at a time and "
+               "for speed, and writes Gradescope's results.json, JUnit XML and a summary (with the "
+               "hidden scenes' seed). Points: kit/grade/rubric.json.");
+  c->add_option("--submission", a->submission,
+                "what the student uploaded: the kit folder, a stages/ folder, a zip of either, or "
+                "one stage's files flat")
+      ->required()->check(CLI::ExistingPath);
+  c->add_option("--stages", a->stages,
+                "stages to grade, e.g. 01,06 (default: every stage the submission has; 06 means "
+                "06 on the CPU and, with a GPU, 06-gpu)");
+  c->add_option("--out", a->out, "results.json to write (always written; the summary goes "
+                                 "beside it, NAME.summary.txt)")->capture_default_str();
+  c->add_option("--junit", a->junit, "JUnit XML to write (default: beside --out, .xml)");
+  c->add_option("--seed,--hidden-seed", a->seed,
+                "the hidden scenes' seed: replays a grading (default: random, recorded in the "
+                "summary and in results.json's extra_data)");
+  c->add_option("--rubric", a->rubric, "rubric file (default: kit/grade/rubric.json)");
+  c->add_option("--scratch", a->scratch, "where to build and run (default: the system's temp)");
+  c->add_option("--sandbox", a->sandbox,
+                "auto (bubblewrap where namespaces are allowed, else an unprivileged user), "
+                "bwrap or user")
+      ->check(CLI::IsMember({"auto", "bwrap", "user"}))->capture_default_str();
+  c->add_flag("--no-sandbox", a->no_sandbox,
+              "run student code with the grader's own rights (printed on every result)");
+  c->add_flag("--keep", a->keep, "keep the scratch folder");
+  c->add_flag("--races", a->races,
+              "also build the OpenMP stages (03, 06) with ThreadSanitizer in the sandbox and report "
+              "the first data race with file and line (a test worth no points)");
+  c->callback([a] {
+    if (default_impl() != "solution")
+      throw std::runtime_error("grading needs the instructor's kit (with solutions/)");
+    std::vector<std::string> args{"python3", source_dir() + "/kit/grade/grade.py", "--submission",
+                                  a->submission, "--out", a->out, "--rubric",
+                                  a->rubric.empty() ? source_dir() + "/kit/grade/rubric.json"
+                                                    : a->rubric,
+                                  "--kit-source", source_dir(), "--kit-build", build_dir(),
+                                  "--sandbox", a->sandbox};
+    if (!a->stages.empty()) args.insert(args.end(), {"--stages", a->stages});
+    if (!a->junit.empty()) args.insert(args.end(), {"--junit", a->junit});
+    // The seed goes through the environment, which other users cannot read (a command line
+    // can be read by every process of the machine, student code run as another uid included).
+    if (a->seed >= 0) setenv("PLAB_GRADE_SEED", std::to_string(a->seed).c_str(), 1);
+    if (!a->scratch.empty()) args.insert(args.end(), {"--scratch", a->scratch});
+    if (a->keep) args.emplace_back("--keep");
+    if (a->no_sandbox) args.emplace_back("--no-sandbox");
+    if (a->races) args.emplace_back("--races");
+    g_status = run_program(args);
+  });
+}
+
+}  // namespace plab::cli

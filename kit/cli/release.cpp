@@ -1,0 +1,35 @@
+/// \file cli/release.cpp
+/// \brief `plab release`: the student version of the kit.
+#include "common.hpp"
+
+namespace plab::cli {
+
+void add_release(CLI::App& app) {
+  struct Args {
+    std::string out, kit;
+    bool allow_dirty = false;
+  };
+  auto a = std::make_shared<Args>();
+  auto* c = app.add_subcommand("release", "Write the student version of the kit into a new folder, "
+                                          "from git's HEAD: no solutions/, no CI, a student "
+                                          "README, the reference stage as a compiled program, "
+                                          "docs built from the copy itself; every stage checked "
+                                          "to be its untouched starting point.");
+  c->add_option("--out", a->out, "a new (or empty) folder")->required();
+  c->add_flag("--allow-dirty", a->allow_dirty,
+              "release HEAD's stages/ even when stages/ has uncommitted changes (they are left "
+              "out, and named)");
+  c->add_option("--kit", a->kit, "the kit checkout to release (default: this one)")
+      ->check(CLI::ExistingDirectory);
+  c->callback([a] {
+    if (default_impl() != "solution")
+      throw std::runtime_error("this is already a student copy (it has no solutions/)");
+    std::vector<std::string> args{"python3", source_dir() + "/kit/grade/release.py",
+                                  "--kit-source", a->kit.empty() ? source_dir() : a->kit,
+                                  "--out", a->out};
+    if (a->allow_dirty) args.push_back("--allow-dirty");
+    g_status = run_program(args);
+  });
+}
+
+}  // namespace plab::cli

@@ -1,0 +1,56 @@
+/// \file cli/run.cpp
+/// \brief `plab run`: simulate a scene with one stage.
+#include "common.hpp"
+
+namespace plab::cli {
+
+void add_run(CLI::App& app) {
+  struct Args {
+    std::string stage, impl, scene, out, digest, schedule, explain;
+    int threads = 0;
+    double timeout = 0;
+    std::uint64_t seed = kDefaultSeed;
+    bool quiet = false;
+  };
+  auto a = std::make_shared<Args>();
+  auto* c = app.add_subcommand("run", "Simulate SCENE with one stage; output to stdout (or --out), "
+                                      "a timing summary to stderr.");
+  c->add_option("--stage", a->stage, "stage number, e.g. 01")->required();
+  c->add_option("--impl", a->impl,
+                "solution (solutions/) or student (stages/); default: solution when solutions/ "
+                "exists, otherwise student");
+  c->add_option("--threads", a->threads, "threads for stages that use them");
+  c->add_option("--schedule", a->schedule, "OpenMP schedule: static, dynamic or guided[,CHUNK]");
+  c->add_option("--out", a->out, "write the output to this file (only when the run succeeds)");
+  c->add_option("--digest", a->digest, "write one state digest per step to this file");
+  c->add_option("--seed", a->seed, "seed for scenes without particle lines")->capture_default_str();
+  c->add_flag("--quiet", a->quiet, "no timing summary");
+  c->add_option("--timeout", a->timeout,
+                "end the run (and everything it started) after this many seconds, saying at which "
+                "step it was; exit status 124")->check(CLI::PositiveNumber);
+  c->add_option("--explain", a->explain,
+                "K:I[,J...]: instead of the output, the events of particles I, J... in step K (the "
+                "kit's oracle, from this stage's state at the start of step K)");
+  c->add_option("scene", a->scene, "scene file")->required()->check(CLI::ExistingFile);
+  c->callback([a] {
+    const std::string impl = a->impl.empty() ? default_impl() : a->impl;
+    check_impl(impl);
+    const std::string id = two_digits(a->stage);
+    std::vector<std::string> args{require_stage(id, impl), a->scene, "--seed",
+                                  std::to_string(a->seed)};
+    if (a->threads > 0) args.insert(args.end(), {"--threads", std::to_string(a->threads)});
+    if (!a->schedule.empty()) args.insert(args.end(), {"--schedule", a->schedule});
+    if (!a->out.empty()) args.insert(args.end(), {"--out", a->out});
+    if (!a->digest.empty()) args.insert(args.end(), {"--digest", a->digest});
+    if (!a->explain.empty()) args.insert(args.end(), {"--explain", a->explain});
+    if (a->quiet) args.emplace_back("--quiet");
+    const std::string status = temp_path("run.status");
+    args.insert(args.end(), {"--status", status});
+    g_status = run_stage_watched(args, {"stage " + id + " (" + impl + ") on " +
+                                            fs::path(a->scene).filename().string(),
+                                        a->timeout, status});
+    fs::remove(status);
+  });
+}
+
+}  // namespace plab::cli

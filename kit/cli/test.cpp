@@ -1,0 +1,73 @@
+/// \file cli/test.cpp
+/// \brief `plab test`: run the test suite with CTest.
+#include "common.hpp"
+
+namespace plab::cli {
+namespace {
+
+/// Runs `body` with TMPDIR pointing at an empty folder of the build, then checks that the tests
+/// left nothing there (a test creates its scratch files in a folder it removes, whatever the
+/// outcome): anything left is named and fails the run. The folder is removed either way, so the
+/// machine's /tmp is never touched by the tests.
+template <typename Body>
+int with_scratch_tmpdir(Body body) {
+  const fs::path scratch = fs::path(build_dir()) / ("test-tmp." + std::to_string(getpid()));
+  fs::remove_all(scratch);
+  fs::create_directories(scratch);
+  fs::permissions(scratch, fs::perms::all | fs::perms::sticky_bit);  // as /tmp: any test's uid
+  const char* before = std::getenv("TMPDIR");
+  const std::string saved = before ? before : "";
+  setenv("TMPDIR", scratch.c_str(), 1);
+  int status = body();
+  if (before) setenv("TMPDIR", saved.c_str(), 1); else unsetenv("TMPDIR");
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(scratch)) left.push_back(e.path().filename());
+  if (!left.empty()) {
+    std::sort(left.begin(), left.end());
+    std::printf("plab test: FAILED: the tests left %zu file(s) in their temporary folder "
+                "(TMPDIR=%s), e.g. %s: a test must remove its scratch files\n",
+                left.size(), scratch.c_str(), left.front().c_str());
+    status = status ? status : 1;
+  }
+  std::error_code ignored;
+  fs::remove_all(scratch, ignored);
+  return status;
+}
+
+}  // namespace
+
+void add_test(CLI::App& app) {
+  auto impl = std::make_shared<std::string>();
+  auto stage = std::make_shared<std::string>();
+  auto long_too = std::make_shared<bool>(false);
+  auto* c = app.add_subcommand("test", "Run the test suite (GoogleTest through CTest). Default: "
+                                       "the kit, the solutions and the starting-point checks in "
+                                       "the instructor's copy; the kit and your stages otherwise.");
+  c->add_option("--impl", *impl, "solution or student (default as for run)");
+  c->add_option("--stage", *stage, "only this stage's tests, e.g. 01");
+  c->add_flag("--long", *long_too, "also the long tests (large scenes, several minutes)");
+  auto fuzz = std::make_shared<bool>(false);
+  c->add_flag("--fuzz", *fuzz, "also the fuzz tests: stage against stage on scenes from fresh "
+                               "random seeds (printed with any failure), not the fixed ones");
+  c->callback([impl, stage, long_too, fuzz] {
+    const std::string which = impl->empty() ? default_impl() : *impl;
+    check_impl(which);
+    std::vector<std::string> args{"ctest", "--test-dir", build_dir(), "--output-on-failure",
+                                  "-j", "2"};
+    const std::string log = build_dir() + "/test-logs/plab-test.log";
+    if (!stage->empty()) {
+      args.insert(args.end(), {"-L", "^stage" + two_digits(*stage) + "$", "-L", "^" + which + "$"});
+    } else if (which == "solution") {
+      args.insert(args.end(), {"-L", "^(kit|solution|starting-point)$"});
+    } else {
+      args.insert(args.end(), {"-L", "^(kit|student)$"});
+    }
+    if (!*long_too || !*fuzz)
+      args.insert(args.end(), {"-LE", !*long_too && !*fuzz ? "^(long|fuzz)$"
+                                      : !*long_too         ? "^long$"
+                                                           : "^fuzz$"});
+    g_status = with_scratch_tmpdir([&] { return run_tests_reported({args, log}); });
+  });
+}
+
+}  // namespace plab::cli
