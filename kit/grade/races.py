@@ -4,6 +4,7 @@ What the autograder (and tests/tsan_mutant_check.py) imports:
 
   TSAN_CMAKE_ARGS       the extra cmake -D arguments of a thread-sanitized build of the kit
   TSAN_EXIT_CODE        the exit code of a program TSan stopped (tsan_env's exitcode=)
+  SCHEDULES             the OpenMP schedules to run it with, in turn
   tsan_env(threads=3)   the environment to run a TSan-built program with
   first_race(stderr_text, source_names)   a one-line message about the first data race, or None
   toolchain_problem()   None when clang++, LLVM's OpenMP runtime and Archer are there, else a sentence
@@ -24,6 +25,11 @@ import subprocess
 import tempfile
 
 TSAN_EXIT_CODE = 66
+
+#: The OpenMP schedules a stage is run with under TSan, in turn: static,1 first (every thread gets
+#: iterations of every loop, whatever the timing: a race between threads is then always made),
+#: then dynamic,1.
+SCHEDULES = ("static,1", "dynamic,1")
 
 TSAN_CMAKE_ARGS: list[str] = [
     "-DCMAKE_CXX_COMPILER=clang++",
