@@ -17,6 +17,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <mutex>
+#include <set>
+#include <stdexcept>
 #include <thread>
 
 namespace plab::test {
@@ -33,6 +35,7 @@ struct Watched {
   std::atomic<Clock::rep> last{Clock::now().time_since_epoch().count()};
   std::atomic<pid_t> child{0};
   std::atomic<bool> armed{false};  //!< something is watched: the stall limit applies
+  std::set<std::string> scratch;    //!< ScratchDir folders alive now (under `mutex`)
 };
 
 Watched& state() {
@@ -54,6 +57,11 @@ double seconds_since(Clock::rep then) {
 [[noreturn]] void stop(const std::string& why) {
   Watched& w = state();
   if (const pid_t child = w.child.load(); child > 0) kill(child, SIGKILL);
+  {  // the test's scratch folders, which no destructor will remove after _exit()
+    std::lock_guard lock(w.mutex);
+    std::error_code ignored;
+    for (const std::string& dir : w.scratch) std::filesystem::remove_all(dir, ignored);
+  }
   std::fprintf(stdout, "\n%s\n", why.c_str());
   std::fprintf(stderr, "\n%s\n", why.c_str());
   std::fflush(nullptr);
@@ -179,6 +187,23 @@ int run_watched(const std::string& command_line) {
   set_child(0);
   unwatch();
   return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WEXITSTATUS(status);
+}
+
+ScratchDir::ScratchDir() {
+  std::string templ = (std::filesystem::temp_directory_path() / "plab-test-XXXXXX").string();
+  if (mkdtemp(templ.data()) == nullptr) throw std::runtime_error("cannot create " + templ);
+  path_ = templ;
+  Watched& w = state();
+  std::lock_guard lock(w.mutex);
+  w.scratch.insert(path_.string());
+}
+
+ScratchDir::~ScratchDir() {
+  Watched& w = state();
+  std::lock_guard lock(w.mutex);
+  w.scratch.erase(path_.string());
+  std::error_code ignored;
+  std::filesystem::remove_all(path_, ignored);
 }
 
 }  // namespace plab::test

@@ -6,6 +6,7 @@
 
 #include <sys/types.h>
 
+#include <filesystem>
 #include <memory>
 #include <string>
 
@@ -26,6 +27,22 @@ void unwatch();
 
 /// Records a child process the watchdog must end with the test (0: none any more).
 void set_child(pid_t pid);
+
+/// A folder of its own under the temporary folder ($TMPDIR, which `plab test` points into build/),
+/// removed with everything in it whatever the outcome: when it goes out of scope (a passed or a
+/// failed assertion) and when the watchdog ends the program (an endless loop).
+class ScratchDir {
+ public:
+  ScratchDir();
+  ~ScratchDir();
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  /// The path of `name` inside the folder.
+  [[nodiscard]] std::string file(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  std::filesystem::path path_;
+};
 
 /// A maker of steppers whose steppers report each step to the watchdog.
 MakeStepper watched(MakeStepper make);

@@ -145,28 +145,6 @@ void expect_same_on_cpu(const std::string& expected, const plab::Scene& scene,
   }
 }
 
-/// A folder of its own under the temporary folder ($TMPDIR, which `plab test` points into build/),
-/// removed with everything in it when the test leaves, whatever the outcome.
-class ScratchDir {
- public:
-  ScratchDir() {
-    std::string templ = (std::filesystem::temp_directory_path() / "plab-test-XXXXXX").string();
-    if (mkdtemp(templ.data()) == nullptr) throw std::runtime_error("cannot create " + templ);
-    path_ = templ;
-  }
-  ~ScratchDir() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  ScratchDir(const ScratchDir&) = delete;
-  ScratchDir& operator=(const ScratchDir&) = delete;
-  /// The path of `name` inside the folder.
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  std::filesystem::path path_;
-};
-
 /// The seed of a random scene: fixed (the scene's number plus a constant), so that a failure
 /// comes back when rerun, or fresh from the machine's entropy under PLAB_FUZZ=1 (the `fuzz`
 /// tests). Either way the failure message prints it as `plab gen ... --seed S`.
@@ -182,7 +160,7 @@ std::uint64_t scene_seed(std::size_t index) {
 void expect_same_as_other(const plab::Scene& scene, const std::string& how_made) {
   const std::string other = PLAB_OTHER_PROGRAM;
   if (other.empty()) GTEST_SKIP() << "no other stage's solution is built to compare with";
-  const ScratchDir scratch;
+  const plab::test::ScratchDir scratch;
   const std::string scene_file = scratch.file("scene.in");
   const std::string out_file = scratch.file("reference.out");
   {
