@@ -16,10 +16,12 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <exception>
 #include <mutex>
-#include <set>
 #include <stdexcept>
 #include <thread>
+#include <vector>
 
 namespace plab::test {
 namespace {
@@ -35,7 +37,6 @@ struct Watched {
   std::atomic<Clock::rep> last{Clock::now().time_since_epoch().count()};
   std::atomic<pid_t> child{0};
   std::atomic<bool> armed{false};  //!< something is watched: the stall limit applies
-  std::set<std::string> scratch;    //!< ScratchDir folders alive now (under `mutex`)
 };
 
 Watched& state() {
@@ -53,15 +54,85 @@ double seconds_since(Clock::rep then) {
       .count();
 }
 
+/// The scratch folders alive now and the files named in them (ScratchDir), as fixed C strings,
+/// so that they can be removed from a signal handler with unlink() and rmdir() alone, which are
+/// async-signal-safe: whatever ends the program, the folders go with it.
+struct ScratchRegistry {
+  static constexpr int kMax = 64;
+  char path[kMax][512] = {};        //!< files first, folders after them, by slot
+  bool folder[kMax] = {};
+  std::atomic<int> count{0};
+};
+
+ScratchRegistry& scratch_registry() {
+  static ScratchRegistry r;
+  return r;
+}
+
+/// Records `path` (a folder, or a file inside one) for removal; false when there is no room.
+bool register_scratch(const std::string& path, bool is_folder) {
+  ScratchRegistry& r = scratch_registry();
+  const int slot = r.count.load();
+  if (slot >= ScratchRegistry::kMax || path.size() >= sizeof r.path[0]) return false;
+  std::memcpy(r.path[slot], path.c_str(), path.size() + 1);
+  r.folder[slot] = is_folder;
+  r.count = slot + 1;
+  return true;
+}
+
+/// Removes every registered file, then every registered folder (async-signal-safe).
+void remove_scratch() {
+  ScratchRegistry& r = scratch_registry();
+  const int n = r.count.load();
+  for (int k = n - 1; k >= 0; --k)
+    if (!r.folder[k] && r.path[k][0] != '\0') unlink(r.path[k]);
+  for (int k = n - 1; k >= 0; --k)
+    if (r.folder[k] && r.path[k][0] != '\0') rmdir(r.path[k]);
+}
+
+/// A fatal signal: the scratch folders are removed, then the signal does what it would have
+/// done (SA_RESETHAND restored the default action).
+void on_fatal_signal(int signum) {
+  remove_scratch();
+  raise(signum);
+}
+
+std::terminate_handler g_previous_terminate = nullptr;
+
+/// An uncaught exception (a stage's "not done yet" thrown inside an OpenMP region ends up here):
+/// the scratch folders are removed, then the usual message and abort().
+[[noreturn]] void on_terminate() {
+  remove_scratch();
+  if (g_previous_terminate) g_previous_terminate();
+  std::abort();
+}
+
+/// Removes the scratch folders however the program ends: std::terminate, abort, and (where no
+/// sanitizer owns these signals for its own reports) a crash.
+void install_scratch_cleanup() {
+  g_previous_terminate = std::set_terminate(on_terminate);
+  std::vector<int> signals{SIGABRT, SIGTERM, SIGINT};
+#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+#if defined(__has_feature)
+#if !__has_feature(address_sanitizer) && !__has_feature(thread_sanitizer)
+  signals.insert(signals.end(), {SIGSEGV, SIGBUS, SIGFPE, SIGILL});
+#endif
+#else
+  signals.insert(signals.end(), {SIGSEGV, SIGBUS, SIGFPE, SIGILL});
+#endif
+#endif
+  struct sigaction action {};
+  action.sa_handler = on_fatal_signal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESETHAND;
+  for (const int signum : signals) sigaction(signum, &action, nullptr);
+}
+
 /// Ends the test program (and its child, if any) with `why` on both streams (CTest keeps both).
 [[noreturn]] void stop(const std::string& why) {
   Watched& w = state();
   if (const pid_t child = w.child.load(); child > 0) kill(child, SIGKILL);
-  {  // the test's scratch folders, which no destructor will remove after _exit()
-    std::lock_guard lock(w.mutex);
-    std::error_code ignored;
-    for (const std::string& dir : w.scratch) std::filesystem::remove_all(dir, ignored);
-  }
+  remove_scratch();  // no destructor runs after _exit()
   std::fprintf(stdout, "\n%s\n", why.c_str());
   std::fprintf(stderr, "\n%s\n", why.c_str());
   std::fflush(nullptr);
@@ -140,6 +211,7 @@ class WatchedStepper final : public Stepper {
 /// Installs the listener and starts the watchdog before main() runs.
 [[maybe_unused]] const bool installed = [] {
   testing::UnitTest::GetInstance()->listeners().Append(new NoCaseChecked);
+  install_scratch_cleanup();
   std::thread(watchdog).detach();
   return true;
 }();
@@ -193,17 +265,27 @@ ScratchDir::ScratchDir() {
   std::string templ = (std::filesystem::temp_directory_path() / "plab-test-XXXXXX").string();
   if (mkdtemp(templ.data()) == nullptr) throw std::runtime_error("cannot create " + templ);
   path_ = templ;
-  Watched& w = state();
-  std::lock_guard lock(w.mutex);
-  w.scratch.insert(path_.string());
+  if (!register_scratch(path_.string(), true))
+    throw std::runtime_error("too many scratch folders at once in one test program");
 }
 
 ScratchDir::~ScratchDir() {
-  Watched& w = state();
-  std::lock_guard lock(w.mutex);
-  w.scratch.erase(path_.string());
   std::error_code ignored;
   std::filesystem::remove_all(path_, ignored);
+  // Forget what was registered for this folder (slots are reused from the end).
+  ScratchRegistry& r = scratch_registry();
+  int n = r.count.load();
+  for (int k = 0; k < n; ++k)
+    if (std::strncmp(r.path[k], path_.c_str(), path_.native().size()) == 0) r.path[k][0] = '\0';
+  while (n > 0 && r.path[n - 1][0] == '\0') --n;
+  r.count = n;
+}
+
+std::string ScratchDir::file(const std::string& name) const {
+  const std::string path = (path_ / name).string();
+  if (!register_scratch(path, false))
+    throw std::runtime_error("too many scratch files at once in one test program");
+  return path;
 }
 
 }  // namespace plab::test

@@ -29,16 +29,17 @@ void unwatch();
 void set_child(pid_t pid);
 
 /// A folder of its own under the temporary folder ($TMPDIR, which `plab test` points into build/),
-/// removed with everything in it whatever the outcome: when it goes out of scope (a passed or a
-/// failed assertion) and when the watchdog ends the program (an endless loop).
+/// removed whatever the outcome: when it goes out of scope (a passed or a failed assertion), when
+/// the watchdog ends the program (an endless loop), and when the program dies of an uncaught
+/// exception, abort() or a crash (the files named through file() and the folder, from a handler).
 class ScratchDir {
  public:
   ScratchDir();
   ~ScratchDir();
   ScratchDir(const ScratchDir&) = delete;
   ScratchDir& operator=(const ScratchDir&) = delete;
-  /// The path of `name` inside the folder.
-  [[nodiscard]] std::string file(const std::string& name) const { return (path_ / name).string(); }
+  /// The path of `name` inside the folder (remembered: removed with it, however the program ends).
+  [[nodiscard]] std::string file(const std::string& name) const;
 
  private:
   std::filesystem::path path_;
