@@ -52,18 +52,20 @@ def copy_mathjax(source, html):
     return dest
 
 
-def remote_loads(html):
-    """[(file, line number, text)] of every remote load in the docs' own pages, scripts and styles
-    (the local MathJax copy is Debian's and loads nothing remote in this configuration)."""
-    found = []
+def scan(html):
+    """([(file, line number, text)] of every remote load in the docs' own pages, scripts and
+    styles, whether a page loads MathJax). The local MathJax copy is Debian's and loads nothing
+    remote in this configuration."""
+    found, uses_mathjax = [], False
     for path in sorted(html.rglob("*")):
         if path.suffix not in (".html", ".htm", ".js", ".css", ".svg") or "mathjax" in path.parts:
             continue
         text = path.read_text(errors="replace")
+        uses_mathjax = uses_mathjax or (path.suffix == ".html" and "MathJax.js" in text)
         for number, line in enumerate(text.splitlines(), 1):
             if REMOTE_LOAD.search(line):
                 found.append((path.relative_to(html), number, line.strip()[:160]))
-    return found
+    return found, uses_mathjax
 
 
 def main():
@@ -75,9 +77,8 @@ def main():
     args = ap.parse_args()
     if not args.check_only:
         copy_mathjax(args.mathjax, args.html)
-    problems = [f"{f}:{n}: loads from a remote address: {t}" for f, n, t in remote_loads(args.html)]
-    uses_mathjax = any("MathJax.js" in p.read_text(errors="replace")
-                       for p in args.html.glob("*.html"))
+    loads, uses_mathjax = scan(args.html)
+    problems = [f"{f}:{n}: loads from a remote address: {t}" for f, n, t in loads]
     if uses_mathjax and not (args.html / "mathjax" / "MathJax.js").is_file():
         problems.append("the pages load mathjax/MathJax.js but the docs have no local copy")
     if problems:

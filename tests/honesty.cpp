@@ -59,8 +59,8 @@ double seconds_since(Clock::rep then) {
 /// async-signal-safe: whatever ends the program, the folders go with it.
 struct ScratchRegistry {
   static constexpr int kMax = 64;
-  char path[kMax][512] = {};        //!< files first, folders after them, by slot
-  bool folder[kMax] = {};
+  char path[kMax][512] = {};  //!< a registered path per slot ("" once its folder is gone)
+  bool folder[kMax] = {};     //!< whether the slot's path is a folder (removed after the files)
   std::atomic<int> count{0};
 };
 

@@ -62,10 +62,10 @@ void add_test(CLI::App& app) {
     } else {
       args.insert(args.end(), {"-L", "^(kit|student)$"});
     }
-    if (!*long_too || !*fuzz)
-      args.insert(args.end(), {"-LE", !*long_too && !*fuzz ? "^(long|fuzz)$"
-                                      : !*long_too         ? "^long$"
-                                                           : "^fuzz$"});
+    std::string left_out;  // the labels not asked for, as one -LE regular expression
+    if (!*long_too) left_out = "long";
+    if (!*fuzz) left_out += (left_out.empty() ? "" : "|") + std::string("fuzz");
+    if (!left_out.empty()) args.insert(args.end(), {"-LE", "^(" + left_out + ")$"});
     g_status = with_scratch_tmpdir([&] { return run_tests_reported({args, log}); });
   });
 }
