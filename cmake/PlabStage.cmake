@@ -1,20 +1,66 @@
-# plab_add_stage(SOURCES file... [CUDA_SOURCES file...] [TEST_MAX_N n] [GPU] [EXACT] [FLOAT])
+# plab_add_stage()
 #
-# Called from each stage folder's CMakeLists.txt (stages/NN-name or solutions/NN-name). Adds:
-#   plab_stage_NN_IMPL   a library with the stage's step() (IMPL: student or solution)
-#   plab-run-NN-IMPL     the program `plab run --stage NN --impl IMPL` starts
-# and records the stage so that tests/ adds its tests. TEST_MAX_N: the largest scene its golden
-# tests run (stage 01 is O(N^3) per step by design). GPU: a CUDA stage (its sources define
-# plab::make_stepper(); PLAB_GPU_STAGE is set for it and its users), skipped without nvcc.
-# CUDA_SOURCES: a CPU stage's GPU version, compiled when nvcc is found (PLAB_HYBRID_STAGE is then
-# set: its make_stepper() takes the GPU when there is one). EXACT: the exact event-driven
-# reference (stage 07), not model.md's stepped model: its sources define plab::make_stepper()
-# (PLAB_EXACT_STAGE is set), it has its own tests and golden files. FLOAT: the stage also defines
-# plab::step_float() (PLAB_FLOAT_STAGE is set), the float variant `plab accuracy` measures.
+# Called from each stage folder's CMakeLists.txt (stages/NN-name or solutions/NN-name). What the
+# stage is comes from the folder's stage.json (docs/ARCHITECTURE.md lists its keys):
+#   sources       the stage's sources (they define plab::make_stepper(), see stage.hpp)
+#   cuda_sources  a CPU stage's GPU path, compiled when nvcc is found (else the kit's stand-in
+#                 kit/src/no_gpu_path.cpp: the stage runs on the CPU)
+#   needs_gpu     a CUDA stage: skipped without nvcc
+#   needs_openmp  skipped without OpenMP
+#   model         "stepped" (model.md) or "exact" (stage 07: its own tests and golden files)
+#   float_path, test_max_n, test_sizes, switches, simd: read by the runner and the tests
+# Adds:
+#   plab_stage_NN_IMPL   a library with the stage's code and its plab::stage_info()
+#   plab-run-NN-IMPL     the runner (compiled once, kit/runner) linked with it: what
+#                        `plab run --stage NN --impl IMPL` starts
+# and records the stage's folder so that tests/ adds its tests.
+
+# plab_stage_json(folder key out [default]): a value of folder/stage.json ("" or the default when
+# absent); lists come back as CMake lists.
+function(plab_stage_json folder key out)
+  file(READ ${folder}/stage.json json)
+  string(JSON type ERROR_VARIABLE missing TYPE "${json}" ${key})
+  if(missing)
+    set(${out} "${ARGN}" PARENT_SCOPE)
+    return()
+  endif()
+  string(JSON value GET "${json}" ${key})
+  if(type STREQUAL "ARRAY")
+    string(JSON count LENGTH "${json}" ${key})
+    set(value "")
+    if(count GREATER 0)
+      math(EXPR last "${count} - 1")
+      foreach(k RANGE ${last})
+        string(JSON item GET "${json}" ${key} ${k})
+        list(APPEND value ${item})
+      endforeach()
+    endif()
+  elseif(type STREQUAL "BOOLEAN")
+    if(value)
+      set(value TRUE)
+    else()
+      set(value FALSE)
+    endif()
+  endif()
+  set(${out} "${value}" PARENT_SCOPE)
+endfunction()
+
+# C++ text for a list of strings: {"a", "b"}.
+function(plab_cpp_strings out)
+  set(text "")
+  foreach(item IN LISTS ARGN)
+    if(text)
+      string(APPEND text ", ")
+    endif()
+    string(APPEND text "\"${item}\"")
+  endforeach()
+  set(${out} "{${text}}" PARENT_SCOPE)
+endfunction()
+
 function(plab_add_stage)
-  cmake_parse_arguments(S "GPU;EXACT;FLOAT" "TEST_MAX_N" "SOURCES;CUDA_SOURCES" ${ARGN})
-  get_filename_component(folder ${CMAKE_CURRENT_SOURCE_DIR} NAME)
-  get_filename_component(tree ${CMAKE_CURRENT_SOURCE_DIR} DIRECTORY)
+  set(dir ${CMAKE_CURRENT_SOURCE_DIR})
+  get_filename_component(folder ${dir} NAME)
+  get_filename_component(tree ${dir} DIRECTORY)
   get_filename_component(tree ${tree} NAME)
   string(SUBSTRING ${folder} 0 2 id)
   string(SUBSTRING ${folder} 3 -1 name)
@@ -23,40 +69,59 @@ function(plab_add_stage)
   else()
     set(impl student)
   endif()
-  if(S_GPU AND NOT PLAB_HAVE_CUDA)
+  plab_stage_json(${dir} sources sources)
+  plab_stage_json(${dir} cuda_sources cuda_sources)
+  plab_stage_json(${dir} needs_gpu needs_gpu FALSE)
+  plab_stage_json(${dir} needs_openmp needs_openmp FALSE)
+  plab_stage_json(${dir} model model stepped)
+  plab_stage_json(${dir} float_path float_path FALSE)
+  plab_stage_json(${dir} test_max_n test_max_n 1000000000)
+  plab_stage_json(${dir} test_sizes test_sizes small medium)
+  plab_stage_json(${dir} switches switches)
+  plab_stage_json(${dir} simd simd)
+  if(needs_gpu AND NOT PLAB_HAVE_CUDA)
     message(STATUS "stage ${id} (${impl}): skipped, no CUDA compiler")
     return()
   endif()
-  if(NOT S_TEST_MAX_N)
-    set(S_TEST_MAX_N 1000000000)
+  if(needs_openmp AND NOT OpenMP_CXX_FOUND)
+    message(WARNING "OpenMP not found: stage ${id} (${impl}) is skipped")
+    return()
   endif()
 
+  # What the stage is, for the runner and the tests (plab::stage_info()).
+  set(gpu_path FALSE)
+  if(cuda_sources AND PLAB_HAVE_CUDA)
+    set(gpu_path TRUE)
+  endif()
+  foreach(flag IN ITEMS needs_gpu gpu_path float_path)
+    if(${flag})
+      set(${flag}_cpp true)
+    else()
+      set(${flag}_cpp false)
+    endif()
+  endforeach()
+  plab_cpp_strings(test_sizes_cpp ${test_sizes})
+  plab_cpp_strings(switches_cpp ${switches})
+  plab_cpp_strings(simd_cpp ${simd})
+  set(info_cpp ${CMAKE_CURRENT_BINARY_DIR}/stage_info.cpp)
+  configure_file(${PROJECT_SOURCE_DIR}/cmake/stage_info.cpp.in ${info_cpp} @ONLY)
+
   set(lib plab_stage_${id}_${impl})
-  add_library(${lib} STATIC ${S_SOURCES})
+  add_library(${lib} STATIC ${sources} ${info_cpp})
   target_link_libraries(${lib} PUBLIC plab::kit)
   target_compile_definitions(${lib} PRIVATE PLAB_STAGE_ID="${id}")
-  if(S_FLOAT)
-    target_compile_definitions(${lib} PUBLIC PLAB_FLOAT_STAGE=1)
-  endif()
-  set(kind cpu)
-  if(S_EXACT)
-    set(kind exact)
-    target_compile_definitions(${lib} PUBLIC PLAB_EXACT_STAGE=1)
-  elseif(S_GPU)
-    set(kind gpu)
+  if(needs_gpu)
     target_link_libraries(${lib} PUBLIC plab::cuda)
-    target_compile_definitions(${lib} PUBLIC PLAB_GPU_STAGE=1)
-  elseif(S_CUDA_SOURCES AND PLAB_HAVE_CUDA)
-    set(kind hybrid)
-    target_sources(${lib} PRIVATE ${S_CUDA_SOURCES})
+  elseif(gpu_path)
+    target_sources(${lib} PRIVATE ${cuda_sources})
     target_link_libraries(${lib} PUBLIC plab::cuda)
-    target_compile_definitions(${lib} PUBLIC PLAB_HYBRID_STAGE=1)
+  elseif(cuda_sources)
+    target_sources(${lib} PRIVATE ${PROJECT_SOURCE_DIR}/kit/src/no_gpu_path.cpp)
   endif()
 
   set(program plab-run-${id}-${impl})
-  add_executable(${program} ${PROJECT_SOURCE_DIR}/kit/runner/main.cpp)
-  target_link_libraries(${program} PRIVATE ${lib} CLI11::CLI11 nlohmann_json::nlohmann_json)
-  target_compile_definitions(${program} PRIVATE PLAB_STAGE_ID="${id}" PLAB_IMPL="${impl}")
+  add_executable(${program})
+  target_link_libraries(${program} PRIVATE plab_runner ${lib})
 
-  set_property(GLOBAL APPEND PROPERTY PLAB_STAGES "${id}:${name}:${impl}:${S_TEST_MAX_N}:${kind}")
+  set_property(GLOBAL APPEND PROPERTY PLAB_STAGE_DIRS ${dir})
 endfunction()

@@ -31,7 +31,9 @@ const plab::Manifest& manifest() {
 
 std::string run_exact(const plab::Scene& scene) {
   plab::OutputWriter out(nullptr);
-  plab::simulate(scene, plab::make_stepper, out);
+  plab::simulate(scene, [](const plab::Box& box, plab::Particles& p) {
+    return plab::make_stepper(box, p);
+  }, out);
   return out.text();
 }
 

@@ -1,9 +1,12 @@
 /// \file stage_test.cpp
-/// \brief The tests of one stage, compiled once per stage and tree against its step():
+/// \brief The tests of every stepped stage, compiled once and linked with each stage's library:
 /// golden outputs and per-step digests, the same text as another stage on fresh random scenes,
-/// and the invariants of the model.
+/// and the invariants of the model. What the stage is (plab::stage_info()) says what runs: a
+/// CUDA stage's tests skip without a GPU, its switches are each checked, scene sizes and N are
+/// limited as its stage.json says.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -21,15 +24,18 @@
 #include "plab/runtime.hpp"
 #include "plab/stage.hpp"
 #include "honesty.hpp"
-#if PLAB_GPU_STAGE
-#include "plab/cuda/check.hpp"
-/// CUDA stages: every test skips, with the runtime's reason, where no GPU can be used.
-#define PLAB_SKIP_WITHOUT_DEVICE()                                                   \
-  if (const std::string why = plab::cuda::missing_device(); !why.empty())           \
-  GTEST_SKIP() << "no CUDA device (" << why << "): stage " PLAB_STAGE_ID " not run"
-#else
-#define PLAB_SKIP_WITHOUT_DEVICE() static_cast<void>(0)
-#endif
+
+namespace plab::test {
+/// The other stage this one is compared with, and its solution's program ("": none built).
+/// Written by tests/CMakeLists.txt for each stage's test program.
+extern const char* const kOtherId;
+extern const char* const kOtherProgram;
+}  // namespace plab::test
+
+/// A CUDA stage's tests skip, with the runtime's reason, where no GPU can be used.
+#define PLAB_SKIP_WITHOUT_DEVICE()                                                        \
+  if (const std::string why = missing_device(); !why.empty())                           \
+  GTEST_SKIP() << why << ": stage " << plab::stage_info().id << " not run"
 
 namespace plab {
 // Readable test parameters in GoogleTest's messages.
@@ -41,6 +47,41 @@ void PrintTo(const GenParams& g, std::ostream* os) {
 }  // namespace plab
 
 namespace {
+
+using plab::test::kOtherId;
+
+/// The stage's options: the environment's documented overrides (PLAB_SIMD, PLAB_DEVICE: the
+/// CTest entries of each vector path), plus what a test sets.
+plab::StageOptions stage_options = plab::StageOptions::from_environment();
+
+/// This stage with the test's options.
+plab::MakeStepper this_stage() {
+  const plab::StageOptions options = stage_options;
+  return [options](const plab::Box& box, plab::Particles& p) {
+    return plab::make_stepper(box, p, options);
+  };
+}
+
+/// Why this stage cannot run here ("" when it can): a stage that needs a GPU is started once on
+/// one particle, and its NoDevice says why not.
+std::string missing_device() {
+  static const std::string why = [] {
+    if (!plab::stage_info().needs_gpu) return std::string();
+    plab::Particles p;
+    p.resize(1);
+    p.x[0] = p.y[0] = 5;
+    try {
+      plab::make_stepper({10, 1}, p, stage_options);
+    } catch (const plab::NoDevice& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  }();
+  return why;
+}
+
+/// "stage NN".
+std::string this_name() { return "stage " + plab::stage_info().id; }
 
 /// Output and digests of this stage on a scene.
 struct Result {
@@ -55,7 +96,7 @@ Result run_here(const plab::Scene& scene, const std::string& what) {
   std::FILE* mem = open_memstream(&buf, &len);
   plab::OutputWriter out(nullptr);
   plab::test::watch(what, scene.steps);
-  plab::simulate(scene, plab::test::watched(plab::make_stepper), out, {mem, nullptr, false});
+  plab::simulate(scene, plab::test::watched(this_stage()), out, {mem, nullptr, false});
   plab::test::unwatch();
   std::fclose(mem);
   Result r{out.text(), std::string(buf, len)};
@@ -66,7 +107,7 @@ Result run_here(const plab::Scene& scene, const std::string& what) {
 /// Fails with `plab diff`'s report when two texts differ.
 void expect_same(const std::string& expected, const std::string& actual, const std::string& what) {
   if (const auto d = plab::first_difference(expected, actual))
-    ADD_FAILURE() << "stage " PLAB_STAGE_ID " differs from " << what << ":\n" << d->describe();
+    ADD_FAILURE() << this_name() << " differs from " << what << ":\n" << d->describe();
 }
 
 std::vector<plab::Dataset> datasets(bool large) {
@@ -86,14 +127,15 @@ std::string test_name(const testing::TestParamInfo<plab::Dataset>& info) {
 /// Runs a dataset and compares with its golden output and digests.
 void check_golden(const plab::Dataset& d) {
   PLAB_SKIP_WITHOUT_DEVICE();
-  if (d.particles > PLAB_TEST_MAX_N)
+  const plab::StageInfo& info = plab::stage_info();
+  if (d.particles > info.test_max_n)
     GTEST_SKIP() << "N = " << d.particles << " is above this stage's test limit of "
-                 << PLAB_TEST_MAX_N << " (see its CMakeLists.txt)";
-  if (std::string(PLAB_STAGE_ID) == "01" && d.size != "small")
-    GTEST_SKIP() << "stage 01 is O(N^3) per step: small scenes only";
+                 << info.test_max_n << " (test_max_n in its stage.json)";
+  if (std::find(info.test_sizes.begin(), info.test_sizes.end(), d.size) == info.test_sizes.end())
+    GTEST_SKIP() << this_name() << " runs no " << d.size << " scenes (test_sizes in its stage.json)";
   const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
   const Result r = run_here(plab::load_scene(m.scene_path(d), plab::kDefaultSeed),
-                            "stage " PLAB_STAGE_ID ", scene " + d.name);
+                            this_name() + ", scene " + d.name);
   // The digests only locate what the output shows already: checked when the output is equal.
   if (plab::first_difference(plab::read_file(m.golden_path(d)), r.output))
     expect_same(plab::read_file(m.golden_path(d)), r.output, m.golden_path(d));
@@ -128,7 +170,7 @@ void expect_same_on_cpu(const std::string& expected, const plab::Scene& scene,
   plab::set_threads(1);
   const std::string serial = run_here(scene, what).output;
   if (plab::first_difference(expected, serial)) {
-    expect_same(expected, serial, "stage " PLAB_OTHER_ID " on " + how_made);
+    expect_same(expected, serial, std::string("stage ") + kOtherId + " on " + how_made);
     return;
   }
   for (const char* schedule : {"static", "dynamic,1", "guided"}) {
@@ -138,7 +180,8 @@ void expect_same_on_cpu(const std::string& expected, const plab::Scene& scene,
       const std::string output = run_here(scene, what).output;
       if (!plab::first_difference(expected, output)) continue;
       expect_same(expected, output,
-                  "stage " PLAB_OTHER_ID " with " + std::to_string(threads) + " threads, schedule " +
+                  std::string("stage ") + kOtherId + " with " + std::to_string(threads) +
+                      " threads, schedule " +
                       schedule + " (with 1 thread it prints the same) on " + how_made);
       return;
     }
@@ -154,11 +197,33 @@ std::uint64_t scene_seed(std::uint64_t fixed) {
   return fixed;
 }
 
+/// Checks this stage's output against `expected` with each of its switches off (none, each alone,
+/// all at once: stage 05's graph, streams, branchless), reporting the first variant that differs.
+void expect_same_with_switches(const std::string& expected, const plab::Scene& scene,
+                               const std::string& what, const std::string& how_made) {
+  const std::vector<std::string> switches = plab::stage_info().switches;
+  std::vector<std::vector<std::string>> variants{{}};
+  for (const std::string& s : switches) variants.push_back({s});
+  if (switches.size() > 1) variants.push_back(switches);
+  const plab::StageOptions saved = stage_options;
+  for (const auto& off : variants) {
+    stage_options.off = off;
+    const std::string output = run_here(scene, what).output;
+    if (!plab::first_difference(expected, output)) continue;
+    std::string named;
+    for (const std::string& s : off) named += (named.empty() ? "" : ",") + s;
+    expect_same(expected, output,
+                std::string("stage ") + kOtherId + " with --off '" + named + "' on " + how_made);
+    break;  // one report: the first variant that differs
+  }
+  stage_options = saved;
+}
+
 /// Writes `scene` to a file, runs the other stage's solution on it, and checks that this stage
 /// prints the same text in each of its variants: threads and schedules on the CPU
-/// (expect_same_on_cpu()), each PLAB_CUDA_OFF switch on the GPU (the first that differs).
+/// (expect_same_on_cpu()), each switch of a CUDA stage (expect_same_with_switches()).
 void expect_same_as_other(const plab::Scene& scene, const std::string& how_made) {
-  const std::string other = PLAB_OTHER_PROGRAM;
+  const std::string other = plab::test::kOtherProgram;
   if (other.empty()) GTEST_SKIP() << "no other stage's solution is built to compare with";
   const plab::test::ScratchDir scratch;
   const std::string scene_file = scratch.file("scene.in");
@@ -170,23 +235,15 @@ void expect_same_as_other(const plab::Scene& scene, const std::string& how_made)
     std::fclose(f);
   }
   const std::string command = other + " --quiet --out " + out_file + " " + scene_file;
-  plab::test::watch("stage " PLAB_OTHER_ID "'s solution (the reference) on " + how_made, 0);
+  plab::test::watch(std::string("stage ") + kOtherId + "'s solution (the reference) on " + how_made,
+                    0);
   ASSERT_EQ(plab::test::run_watched(command), 0) << command;
   const std::string expected = plab::read_file(out_file);
-  const std::string what = "stage " PLAB_STAGE_ID " on " + how_made;
-#if PLAB_GPU_STAGE
-  for (const char* off : {"", "graph", "streams", "branchless", "graph,streams,branchless"}) {
-    setenv("PLAB_CUDA_OFF", off, 1);
-    const std::string output = run_here(scene, what).output;
-    if (!plab::first_difference(expected, output)) continue;
-    expect_same(expected, output,
-                "stage " PLAB_OTHER_ID " with PLAB_CUDA_OFF=" + std::string(off) + " on " + how_made);
-    break;  // one report: the first variant that differs
-  }
-  unsetenv("PLAB_CUDA_OFF");
-#else
-  expect_same_on_cpu(expected, scene, what, how_made);
-#endif
+  const std::string what = this_name() + " on " + how_made;
+  if (plab::stage_info().needs_gpu)
+    expect_same_with_switches(expected, scene, what, how_made);
+  else
+    expect_same_on_cpu(expected, scene, what, how_made);
 }
 
 TEST_P(AgainstOtherStage, SameText) {
@@ -237,7 +294,7 @@ TEST(Invariants, EnergyConservedFiniteCountersGrow) {
   PLAB_SKIP_WITHOUT_DEVICE();
   const plab::Scene scene = plab::generate_scene({80, 60, 1, 1, plab::Mode::kPerf, 77});
   plab::Particles p = scene.particles;
-  const auto stage = plab::make_stepper(scene.box, p);
+  const auto stage = plab::make_stepper(scene.box, p, stage_options);
   auto energy = [&p] {
     double e = 0;
     for (std::size_t i = 0; i < p.size(); ++i) e += p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i];
@@ -245,7 +302,7 @@ TEST(Invariants, EnergyConservedFiniteCountersGrow) {
   };
   const double e0 = energy();
   long long events = 0;
-  plab::test::watch("stage " PLAB_STAGE_ID ", invariants on 80 generated particles", 100);
+  plab::test::watch(this_name() + ", invariants on 80 generated particles", 100);
   for (int s = 0; s < 100; ++s) {
     stage->step();
     plab::test::stepped(s + 1);

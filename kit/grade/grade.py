@@ -219,7 +219,8 @@ class Grader:
         for sid in sorted({s.sid for s in stages}):
             dest = src / "stages" / folders[sid]
             dest.mkdir(parents=True)
-            shutil.copy2(self.kit / "stages" / folders[sid] / "CMakeLists.txt", dest)  # never theirs
+            for declared in ("CMakeLists.txt", "stage.json"):  # never theirs
+                shutil.copy2(self.kit / "stages" / folders[sid] / declared, dest)
             if sid not in found:
                 built[sid] = f"the submission has no stages/{folders[sid]}/"
                 continue

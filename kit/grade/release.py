@@ -91,8 +91,8 @@ def configure(source, build, *extra):
 
 
 def is_gpu_stage(folder):
-    """A CUDA stage (plab_add_stage(... GPU ...)): not compiled without a CUDA compiler."""
-    return re.search(r"plab_add_stage\([^)]*\bGPU\b", (folder / "CMakeLists.txt").read_text())
+    """A CUDA stage (needs_gpu in its stage.json): not compiled without a CUDA compiler."""
+    return json.loads((folder / "stage.json").read_text()).get("needs_gpu", False)
 
 
 def check_starting_points(release, build):

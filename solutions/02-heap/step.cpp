@@ -50,4 +50,9 @@ void step(const Box& box, Particles& p) {
   for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);
 }
 
+/// Stage 02's entry point (stage.hpp): the kit runs step() on the CPU.
+std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions& options) {
+  return cpu_stage(box, p, options, {step});
+}
+
 }  // namespace plab

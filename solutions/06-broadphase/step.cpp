@@ -31,6 +31,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "plab/stage.hpp"
@@ -216,27 +217,29 @@ __attribute__((target("avx2"), flatten)) void search_avx2(
 }
 #endif
 
-/// The widest vectors the CPU has, or narrower ones if PLAB_SIMD says so (`portable`, `avx2`:
-/// the tests run every path the machine has and compare their bits).
-Isa chosen_isa() {
+/// The vectors the pair test uses in this run: the widest the CPU has, or narrower ones when
+/// the run asks (StageOptions::simd `portable` or `avx2`: the tests run every path the machine has
+/// and compare their bits). Set once by make_stepper(), before any step.
+Isa isa_in_use = Isa::kPortable;
+
+/// The widest vectors the CPU has, or narrower ones if `asked` says so.
+Isa choose_isa(const std::string& asked) {
   Isa best = Isa::kPortable;
 #if PLAB_AVX2
   best = __builtin_cpu_supports("avx512f") ? Isa::kAvx512
          : __builtin_cpu_supports("avx2")  ? Isa::kAvx2
                                            : Isa::kPortable;
 #endif
-  const char* asked = std::getenv("PLAB_SIMD");
-  if (asked && std::strcmp(asked, "portable") == 0) return Isa::kPortable;
-  if (asked && std::strcmp(asked, "avx2") == 0 && best == Isa::kAvx512) return Isa::kAvx2;
+  if (asked == "portable") return Isa::kPortable;
+  if (asked == "avx2" && best == Isa::kAvx512) return Isa::kAvx2;
   return best;
 }
 
 /// Slab k's search, with the chosen vectors.
 void search(Slab& s, const std::vector<sweep::Search>& reach, const sweep::Grid& g) {
-  static const Isa isa = chosen_isa();
 #if PLAB_AVX2
-  if (isa == Isa::kAvx512) return search_avx512(s, reach, g);
-  if (isa == Isa::kAvx2) return search_avx2(s, reach, g);
+  if (isa_in_use == Isa::kAvx512) return search_avx512(s, reach, g);
+  if (isa_in_use == Isa::kAvx2) return search_avx2(s, reach, g);
 #endif
   search_cells<Isa::kPortable>(s, reach, g);
 }
@@ -297,5 +300,12 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
 void step(const Box& box, Particles& p) { step_in(box, p); }
 
 void step_float(const Box& box, ParticlesOf<float>& p) { step_in(box, p); }
+
+/// Stage 06's entry point (stage.hpp): the GPU path (step.cu) when the run and the machine allow
+/// it, otherwise step() on the CPU with the vectors `options.simd` asks for (or step_float()).
+std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions& options) {
+  isa_in_use = choose_isa(options.simd);
+  return cpu_stage(box, p, options, {step, step_float, make_gpu_stepper});
+}
 
 }  // namespace plab

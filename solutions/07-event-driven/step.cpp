@@ -308,7 +308,8 @@ class EventDriven final : public Stepper {
 
 }  // namespace
 
-std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p) {
+/// Stage 07's entry point (stage.hpp): the exact run in continuous time, read at whole times.
+std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions&) {
   return std::make_unique<EventDriven>(box, p);
 }
 

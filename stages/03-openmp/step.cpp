@@ -48,4 +48,9 @@ void step([[maybe_unused]] const Box& box, Particles& p) {
   PLAB_EXERCISE(3, "apply the events in parallel");
 }
 
+/// Stage 03's entry point (stage.hpp): the kit runs step() on the CPU.
+std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions& options) {
+  return cpu_stage(box, p, options, {step});
+}
+
 }  // namespace plab

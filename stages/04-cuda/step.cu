@@ -101,7 +101,8 @@ class CudaStepper final : public Stepper {
 
 }  // namespace
 
-std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p) {
+/// Stage 04's entry point (stage.hpp): a run on the GPU (NoDevice without one).
+std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions&) {
   return std::make_unique<CudaStepper>(box, p);
 }
 

@@ -1,0 +1,42 @@
+/// \file runner/report.cpp
+/// \brief The runner's report: one timing line on stderr, and the JSON that plab bench reads.
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "plab/io.hpp"
+#include "plab/runtime.hpp"
+#include "runner.hpp"
+
+namespace plab::runner {
+
+void report(const Options& o, const Scene& scene, const RunStats& stats) {
+  const StageInfo& info = stage_info();
+  if (!o.report_path.empty()) {
+    OutputFile file(o.report_path);
+    const nlohmann::json j = {
+        {"stage", info.id},               {"impl", info.impl},
+        {"n", scene.particles.size()},    {"steps", scene.steps},
+        {"threads", get_threads()},       {"device", stats.device},
+        {"timer", stats.timer},           {"step_seconds", stats.step_seconds},
+        {"device_bytes", stats.device_bytes},
+        {"total_seconds", stats.total_seconds},
+        {"pair_events", stats.pair_events}, {"wall_events", stats.wall_events},
+        {"substeps", o.substeps},         {"real", o.real}};
+    const std::string text = j.dump(2) + "\n";
+    std::fputs(text.c_str(), file.get());
+    file.commit();
+  }
+  if (o.quiet) return;
+  std::fprintf(stderr,
+               "stage %s (%s) on %s: N=%zu S=%lld threads=%d: %.3f s in steps (%.3f ms/step, "
+               "%s), %.3f s total; %lld pair and %lld wall collisions\n",
+               info.id.c_str(), info.impl.c_str(), stats.device.c_str(), scene.particles.size(),
+               scene.steps, get_threads(), stats.step_seconds,
+               scene.steps ? 1e3 * stats.step_seconds / scene.steps : 0.0, stats.timer.c_str(),
+               stats.total_seconds, stats.pair_events, stats.wall_events);
+  if (stats.device_bytes)
+    std::fprintf(stderr, "stage %s (%s): %.2f MB of device memory held\n", info.id.c_str(),
+                 info.impl.c_str(), stats.device_bytes / 1e6);
+}
+
+}  // namespace plab::runner

@@ -1,0 +1,83 @@
+/// \file runner/run.cpp
+/// \brief What the runner runs: the scene with the stage (the loop is plab::simulate()), and the
+/// grader's two modes (one step from each printed block, the events of chosen particles).
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "plab/grading.hpp"
+#include "plab/io.hpp"
+#include "plab/runtime.hpp"
+#include "runner.hpp"
+
+namespace plab::runner {
+
+namespace {
+
+/// The stage's entry point with this run's options.
+MakeStepper stage_maker(const Options& o) {
+  const StageOptions options = o.stage;
+  return [options](const Box& box, Particles& p) { return make_stepper(box, p, options); };
+}
+
+}  // namespace
+
+Scene load(const Options& o) {
+  Scene scene = load_scene(o.scene_path, o.seed);
+  if (!o.mode.empty()) scene.mode = (o.mode == "print") ? Mode::kPrint : Mode::kPerf;
+  if (o.steps >= 0) scene.steps = o.steps;
+  return scene;
+}
+
+RunStats simulate_scene(const Options& o, const Scene& scene) {
+  const MakeStepper make = with_status(stage_maker(o), o.status_path, scene.steps * o.substeps);
+  OutputFile out(o.out_path);
+  OutputFile digest(o.digest_path, /*optional=*/true);
+  OutputFile events(o.events_path, /*optional=*/true);
+  OutputFile audit_log(o.audit_log_path, /*optional=*/true);
+  Audit audit;
+  audit.log = audit_log.get();
+  OutputWriter writer(out.get());
+  const RunStats stats =
+      simulate(scene, make, writer,
+               {digest.get(), events.get(),
+                !o.quiet && o.status_path.empty() && stderr_is_terminal(),
+                o.audit_path.empty() ? nullptr : &audit,
+                /*audit_steps=*/stage_info().model == "stepped", o.substeps});
+  out.commit();
+  digest.commit();
+  events.commit();
+  audit_log.commit();
+  if (!o.audit_path.empty()) {
+    OutputFile report(o.audit_path);
+    std::fputs(audit.json().c_str(), report.get());
+    report.commit();
+  }
+  return stats;
+}
+
+void step_from_each(const Options& o, const Scene& scene) {
+  OutputFile out(o.out_path);
+  plab::step_from_each(scene.box, parse_output(read_file(o.step_from), o.step_from),
+                       stage_maker(o), out.get());
+  out.commit();
+}
+
+void explain(const Options& o, const Scene& scene) {
+  std::vector<int> which;
+  const auto colon = o.explain.find(':');
+  const long long k = std::stoll(o.explain.substr(0, colon));
+  const std::string list = colon == std::string::npos ? "" : o.explain.substr(colon + 1);
+  for (std::size_t at = 0; at < list.size();) {
+    const auto comma = list.find(',', at);
+    which.push_back(std::stoi(list.substr(at, comma - at)));
+    at = comma == std::string::npos ? list.size() : comma + 1;
+  }
+  Particles p = scene.particles;
+  const auto stage = make_stepper(scene.box, p, o.stage);
+  for (long long s = 0; s < k; ++s) stage->step();
+  stage->read(p);
+  std::fputs(describe_events(scene.box, p, which).c_str(), stdout);
+}
+
+}  // namespace plab::runner
