@@ -232,3 +232,92 @@ TEST(RestOfStep, UsesTheOtherAssociation) {
   }
   EXPECT_GT(differing, 10);
 }
+
+TEST(AxisTimeTo, EachDirectionAndZero) {
+  EXPECT_EQ(m::axis_time_to<double>(3, 2, 1, 9), 3.0);     // (9 - 3) / 2
+  EXPECT_EQ(m::axis_time_to<double>(3, -2, 1, 9), 1.0);    // (3 - 1) / (0 - -2)
+  EXPECT_EQ(m::axis_time_to<double>(3, 0, 1, 9), kInf);
+  EXPECT_EQ(m::axis_time_to<double>(9.5, 1, 1, 9), -0.5);  // already past hi: negative
+  EXPECT_EQ(m::axis_rest_wall_time<double>(5, 2, L, r), 2.0);  // the bounds r and L - r
+  EXPECT_EQ(m::axis_rest_wall_time<double>(5, -2, L, r), 2.0);
+}
+
+TEST(ContinuousTime, PositionAt) {
+  EXPECT_EQ(m::position_at<double>(2, 0.5, 1, 3), 3.0);   // 2 + (3 - 1) * 0.5
+  EXPECT_EQ(m::position_at<double>(2, 0.5, 3, 1), 1.0);   // backwards in time
+  EXPECT_EQ(m::position_at<double>(2, 0.5, 4, 4), 2.0);   // at its own time: where it is stored
+}
+
+TEST(ContinuousTime, AxisExitTimeNeverBeforeNow) {
+  EXPECT_EQ(m::axis_exit_time<double>(3, 2, 1, 9), 3.0);
+  EXPECT_EQ(m::axis_exit_time<double>(3, -2, 1, 9), 1.0);
+  EXPECT_EQ(m::axis_exit_time<double>(3, 0, 1, 9), kInf);
+  EXPECT_TRUE(same_bits(m::axis_exit_time<double>(9.5, 1, 1, 9), 0.0));   // past hi: now, +0.0
+  EXPECT_TRUE(same_bits(m::axis_exit_time<double>(9, 1, 1, 9), 0.0));     // on hi
+  EXPECT_EQ(m::axis_exit_time<double>(0.5, 1, 1, 9), 8.5);                 // below lo, moving up
+}
+
+TEST(ContinuousTime, ExitWallTimes) {
+  const m::WallTimes w = m::exit_wall_times<double>(3, 6, -2, 4, L, r);
+  EXPECT_EQ(w.tx, 1.0);   // (3 - 1) / 2
+  EXPECT_EQ(w.ty, 0.75);  // ((10 - 1) - 6) / 4
+  EXPECT_EQ(m::wall_time<double>(w), 0.75);
+  const m::WallTimes past = m::exit_wall_times<double>(9.5, 5, 1, 0, L, r);
+  EXPECT_TRUE(same_bits(past.tx, 0.0));
+  EXPECT_EQ(past.ty, kInf);
+  // The association of axis_rest_wall_time(): ((L - r) - x) = 7.800000000000002 here, where
+  // ((L - x) - r) = 7.8.
+  const double big_l = 10.3, small_r = 0.7, x = 1.8;
+  ASSERT_NE((big_l - small_r) - x, (big_l - x) - small_r);
+  EXPECT_TRUE(same_bits(m::exit_wall_times<double>(x, 5, 1, 0, big_l, small_r).tx,
+                        (big_l - small_r) - x));
+}
+
+TEST(ContinuousTime, ContactTimeFromAnyOrigin) {
+  // i stored at t = 1 at x = 2 moving +1, j stored at t = 0 at x = 10 moving -1 (same y).
+  // From t0 = 1: centres 2 and 9, gap 7 - 2r = 5 closing at 2: t = 45 / (14 + 4) = 2.5.
+  EXPECT_EQ(m::contact_time_from<double>(1, 2, 5, 1, 0, 1, 10, 5, -1, 0, 0, r), 2.5);
+  // From t0 = 2: centres 3 and 8, t = 21 / (10 + 4) = 1.5 (the same contact, at time 3.5).
+  EXPECT_EQ(m::contact_time_from<double>(2, 2, 5, 1, 0, 1, 10, 5, -1, 0, 0, r), 1.5);
+  // From t0 = 4: centres 5 and 6, overlapping and approaching: now.
+  EXPECT_EQ(m::contact_time_from<double>(4, 2, 5, 1, 0, 1, 10, 5, -1, 0, 0, r), 0.0);
+  // From t0 = 5: centres 6 and 5, they have passed: receding, never.
+  EXPECT_EQ(m::contact_time_from<double>(5, 2, 5, 1, 0, 1, 10, 5, -1, 0, 0, r), kInf);
+}
+
+TEST(ContinuousTime, ContactResponseExchangesNormalComponents) {
+  double vxi = 1, vyi = 0, vxj = -1, vyj = 0;  // head-on along x: the velocities swap
+  m::contact_response<double>(0, 0, vxi, vyi, 2, 0, vxj, vyj);
+  EXPECT_EQ(vxi, -1.0);
+  EXPECT_EQ(vxj, 1.0);
+  EXPECT_EQ(vyi, 0.0);
+  EXPECT_EQ(vyj, 0.0);
+  vxi = 1, vyi = 0, vxj = 0, vyj = 0;  // d = (-1, -1): b = -1, f = -1/2
+  m::contact_response<double>(0, 0, vxi, vyi, 1, 1, vxj, vyj);
+  EXPECT_EQ(vxi, 0.5);
+  EXPECT_EQ(vyi, -0.5);
+  EXPECT_EQ(vxj, 0.5);
+  EXPECT_EQ(vyj, 0.5);
+  vxi = 1, vyi = 0, vxj = -1, vyj = 0;  // normal along y, velocities along x: unchanged
+  m::contact_response<double>(0, 0, vxi, vyi, 0, 2, vxj, vyj);
+  EXPECT_EQ(vxi, 1.0);
+  EXPECT_EQ(vxj, -1.0);
+  EXPECT_EQ(vyi, 0.0);
+  EXPECT_EQ(vyj, 0.0);
+}
+
+TEST(Reflect, FlipsTheAxesHit) {
+  double vx = 3, vy = -4;
+  m::reflect<double>(vx, vy, true, false);
+  EXPECT_EQ(vx, -3.0);
+  EXPECT_EQ(vy, -4.0);
+  m::reflect<double>(vx, vy, false, true);
+  EXPECT_EQ(vx, -3.0);
+  EXPECT_EQ(vy, 4.0);
+  m::reflect<double>(vx, vy, true, true);  // a corner
+  EXPECT_EQ(vx, 3.0);
+  EXPECT_EQ(vy, -4.0);
+  m::reflect<double>(vx, vy, false, false);
+  EXPECT_EQ(vx, 3.0);
+  EXPECT_EQ(vy, -4.0);
+}

@@ -135,8 +135,8 @@ class EventDriven final : public Stepper {
   void read(Particles& out) override {
     out = p_;
     for (std::size_t i = 0; i < p_.size(); ++i) {
-      out.x[i] = p_.x[i] + (now_ - t_[i]) * p_.vx[i];
-      out.y[i] = p_.y[i] + (now_ - t_[i]) * p_.vy[i];
+      out.x[i] = model::position_at(p_.x[i], p_.vx[i], t_[i], now_);
+      out.y[i] = model::position_at(p_.y[i], p_.vy[i], t_[i], now_);
     }
   }
 
@@ -160,16 +160,9 @@ class EventDriven final : public Stepper {
   }
   /// Moves particle `i` along its straight path to time `t` (it is stored at its own time).
   void advance(int i, double t) {
-    p_.x[i] = p_.x[i] + (t - t_[i]) * p_.vx[i];
-    p_.y[i] = p_.y[i] + (t - t_[i]) * p_.vy[i];
+    p_.x[i] = model::position_at(p_.x[i], p_.vx[i], t_[i], t);
+    p_.y[i] = model::position_at(p_.y[i], p_.vy[i], t_[i], t);
     t_[i] = t;
-  }
-
-  /// Time from now until a centre at `pos` moving at `v` reaches `lo` or `hi` (+inf if v == 0).
-  static double exit_time(double pos, double v, double lo, double hi) {
-    if (v > 0) return std::max(0.0, (hi - pos) / v);
-    if (v < 0) return std::max(0.0, (pos - lo) / (0 - v));
-    return model::never();
   }
 
   /// Predicts particle `i`'s next event and queues it. Wall and pair times are computed from the
@@ -177,12 +170,11 @@ class EventDriven final : public Stepper {
   /// only collisions change the stored states, so cell crossings and stale events leave no trace
   /// in the rounding, and the cell size changes the speed, never the result.
   void predict(int i) {
-    const double vx = p_.vx[i], vy = p_.vy[i], ti = t_[i];
-    const double L = box_.L, r = box_.r;
     // Walls: the centre reaches r or L - r; both axes at the same time is a corner.
-    const double wx = exit_time(p_.x[i], vx, r, L - r), wy = exit_time(p_.y[i], vy, r, L - r);
-    Event best{std::max(now_, ti + std::min(wx, wy)), kWallHit, i, -1,
-               (wx <= wy ? 1 : 0) | (wy <= wx ? 2 : 0), 0};
+    const model::WallTimes w =
+        model::exit_wall_times(p_.x[i], p_.y[i], p_.vx[i], p_.vy[i], box_.L, box_.r);
+    Event best{std::max(now_, t_[i] + model::wall_time(w)), kWallHit, i, -1,
+               (w.tx <= w.ty ? 1 : 0) | (w.ty <= w.tx ? 2 : 0), 0};
     cached_[i] = scan(i, cx_[i] - 1, cx_[i] + 1, cy_[i] - 1, cy_[i] + 1, best);
     schedule(i);
   }
@@ -190,15 +182,14 @@ class EventDriven final : public Stepper {
   /// The earliest of `best` and the pair events of `i` with the particles of cells
   /// [gx0, gx1] x [gy0, gy1] (clipped to the grid).
   Event scan(int i, int gx0, int gx1, int gy0, int gy1, Event best) const {
-    const double vx = p_.vx[i], vy = p_.vy[i], ti = t_[i], r = box_.r;
     for (int gy = std::max(0, gy0); gy <= std::min(cells_ - 1, gy1); ++gy) {
       for (int gx = std::max(0, gx0); gx <= std::min(cells_ - 1, gx1); ++gx) {
         for (int j = head_[static_cast<std::size_t>(gy) * cells_ + gx]; j >= 0; j = next_[j]) {
           if (j == i) continue;
-          const double t0 = std::max(ti, t_[j]);
-          const double dx = (p_.x[i] + (t0 - ti) * vx) - (p_.x[j] + (t0 - t_[j]) * p_.vx[j]);
-          const double dy = (p_.y[i] + (t0 - ti) * vy) - (p_.y[j] + (t0 - t_[j]) * p_.vy[j]);
-          const double dt = model::contact_time(dx, dy, vx - p_.vx[j], vy - p_.vy[j], r);
+          const double t0 = std::max(t_[i], t_[j]);
+          const double dt = model::contact_time_from(t0, p_.x[i], p_.y[i], p_.vx[i], p_.vy[i],
+                                                     t_[i], p_.x[j], p_.y[j], p_.vx[j], p_.vy[j],
+                                                     t_[j], box_.r);
           // The pair that has just collided recedes; rounding must not make it meet again at once.
           if (dt == 0 && last_[i] == j && last_[j] == i) continue;
           if (t0 + dt < best.t) best = Event{std::max(now_, t0 + dt), kPairHit, i, j, 0, hits_[j]};
@@ -211,13 +202,14 @@ class EventDriven final : public Stepper {
   /// Queues the earlier of particle `i`'s cached wall or pair event and its next cell crossing.
   void schedule(int i) {
     const double vx = p_.vx[i], vy = p_.vy[i];
-    const double x = p_.x[i] + (now_ - t_[i]) * vx, y = p_.y[i] + (now_ - t_[i]) * vy;  // now
+    const double x = model::position_at(p_.x[i], vx, t_[i], now_);  // now
+    const double y = model::position_at(p_.y[i], vy, t_[i], now_);
     // No crossing out of the grid: the walls come first.
     const double lo_x = cx_[i] * cell_side_, lo_y = cy_[i] * cell_side_;
-    const double kx = exit_time(x, (vx > 0 && cx_[i] == cells_ - 1) || (vx < 0 && cx_[i] == 0) ? 0 : vx,
-                                lo_x, lo_x + cell_side_);
-    const double ky = exit_time(y, (vy > 0 && cy_[i] == cells_ - 1) || (vy < 0 && cy_[i] == 0) ? 0 : vy,
-                                lo_y, lo_y + cell_side_);
+    const double ux = (vx > 0 && cx_[i] == cells_ - 1) || (vx < 0 && cx_[i] == 0) ? 0 : vx;
+    const double uy = (vy > 0 && cy_[i] == cells_ - 1) || (vy < 0 && cy_[i] == 0) ? 0 : vy;
+    const double kx = model::axis_exit_time(x, ux, lo_x, lo_x + cell_side_);
+    const double ky = model::axis_exit_time(y, uy, lo_y, lo_y + cell_side_);
     const double k = now_ + std::min(kx, ky);
     queue_.set(k < cached_[i].t ? Event{k, kCross, i, -1, kx <= ky ? 1 : 2, 0} : cached_[i]);
   }
@@ -256,8 +248,7 @@ class EventDriven final : public Stepper {
         cross(e.i, e.axes);
       } else if (e.kind == kWallHit) {
         advance(e.i, now_);
-        if (e.axes & 1) p_.vx[e.i] = -p_.vx[e.i];
-        if (e.axes & 2) p_.vy[e.i] = -p_.vy[e.i];
+        model::reflect(p_.vx[e.i], p_.vy[e.i], (e.axes & 1) != 0, (e.axes & 2) != 0);
         ++p_.wc[e.i];
         ++hits_[e.i];
         last_[e.i] = -1;
@@ -276,13 +267,8 @@ class EventDriven final : public Stepper {
   void collide(int i, int j) {
     advance(i, now_);
     advance(j, now_);
-    const double dx = p_.x[i] - p_.x[j], dy = p_.y[i] - p_.y[j];
-    const double b = dx * (p_.vx[i] - p_.vx[j]) + dy * (p_.vy[i] - p_.vy[j]);
-    const double f = b / (dx * dx + dy * dy);
-    p_.vx[i] = p_.vx[i] - f * dx;
-    p_.vy[i] = p_.vy[i] - f * dy;
-    p_.vx[j] = p_.vx[j] + f * dx;
-    p_.vy[j] = p_.vy[j] + f * dy;
+    model::contact_response(p_.x[i], p_.y[i], p_.vx[i], p_.vy[i],
+                            p_.x[j], p_.y[j], p_.vx[j], p_.vy[j]);
     ++p_.pc[i];
     ++p_.pc[j];
     ++hits_[i];

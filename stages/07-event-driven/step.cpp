@@ -135,8 +135,8 @@ class EventDriven final : public Stepper {
   void read(Particles& out) override {
     out = p_;
     for (std::size_t i = 0; i < p_.size(); ++i) {
-      out.x[i] = p_.x[i] + (now_ - t_[i]) * p_.vx[i];
-      out.y[i] = p_.y[i] + (now_ - t_[i]) * p_.vy[i];
+      out.x[i] = model::position_at(p_.x[i], p_.vx[i], t_[i], now_);
+      out.y[i] = model::position_at(p_.y[i], p_.vy[i], t_[i], now_);
     }
   }
 
@@ -160,16 +160,9 @@ class EventDriven final : public Stepper {
   }
   /// Moves particle `i` along its straight path to time `t` (it is stored at its own time).
   void advance(int i, double t) {
-    p_.x[i] = p_.x[i] + (t - t_[i]) * p_.vx[i];
-    p_.y[i] = p_.y[i] + (t - t_[i]) * p_.vy[i];
+    p_.x[i] = model::position_at(p_.x[i], p_.vx[i], t_[i], t);
+    p_.y[i] = model::position_at(p_.y[i], p_.vy[i], t_[i], t);
     t_[i] = t;
-  }
-
-  /// Time from now until a centre at `pos` moving at `v` reaches `lo` or `hi` (+inf if v == 0).
-  static double exit_time(double pos, double v, double lo, double hi) {
-    if (v > 0) return std::max(0.0, (hi - pos) / v);
-    if (v < 0) return std::max(0.0, (pos - lo) / (0 - v));
-    return model::never();
   }
 
   /// Predicts particle `i`'s next event and queues it. Wall and pair times are computed from the
@@ -177,12 +170,11 @@ class EventDriven final : public Stepper {
   /// only collisions change the stored states, so cell crossings and stale events leave no trace
   /// in the rounding, and the cell size changes the speed, never the result.
   void predict(int i) {
-    const double vx = p_.vx[i], vy = p_.vy[i], ti = t_[i];
-    const double L = box_.L, r = box_.r;
     // Walls: the centre reaches r or L - r; both axes at the same time is a corner.
-    const double wx = exit_time(p_.x[i], vx, r, L - r), wy = exit_time(p_.y[i], vy, r, L - r);
-    Event best{std::max(now_, ti + std::min(wx, wy)), kWallHit, i, -1,
-               (wx <= wy ? 1 : 0) | (wy <= wx ? 2 : 0), 0};
+    const model::WallTimes w =
+        model::exit_wall_times(p_.x[i], p_.y[i], p_.vx[i], p_.vy[i], box_.L, box_.r);
+    Event best{std::max(now_, t_[i] + model::wall_time(w)), kWallHit, i, -1,
+               (w.tx <= w.ty ? 1 : 0) | (w.ty <= w.tx ? 2 : 0), 0};
     cached_[i] = scan(i, cx_[i] - 1, cx_[i] + 1, cy_[i] - 1, cy_[i] + 1, best);
     schedule(i);
   }
@@ -193,10 +185,10 @@ class EventDriven final : public Stepper {
     for (int gy = std::max(0, gy0); gy <= std::min(cells_ - 1, gy1); ++gy) {
       for (int gx = std::max(0, gx0); gx <= std::min(cells_ - 1, gx1); ++gx) {
         // EXERCISE 1: for every particle j != i of this cell (head_, next_), the contact time
-        // of the pair by model::contact_time(), from both positions at the later of their stored
-        // times t_[i], t_[j]; keep `best` the earliest (a kPairHit Event with hits_[j]). Skip the
-        // pair that has just collided when the time is 0 (last_), or rounding can make it collide
-        // again and again.
+        // of the pair by model::contact_time_from(), from both positions at the later of their
+        // stored times t_[i], t_[j]; keep `best` the earliest (a kPairHit Event with hits_[j]).
+        // Skip the pair that has just collided when the time is 0 (last_), or rounding can make
+        // it collide again and again.
         PLAB_EXERCISE(1, "predict the pair events of a particle");
       }
     }
@@ -206,13 +198,14 @@ class EventDriven final : public Stepper {
   /// Queues the earlier of particle `i`'s cached wall or pair event and its next cell crossing.
   void schedule(int i) {
     const double vx = p_.vx[i], vy = p_.vy[i];
-    const double x = p_.x[i] + (now_ - t_[i]) * vx, y = p_.y[i] + (now_ - t_[i]) * vy;  // now
+    const double x = model::position_at(p_.x[i], vx, t_[i], now_);  // now
+    const double y = model::position_at(p_.y[i], vy, t_[i], now_);
     // No crossing out of the grid: the walls come first.
     const double lo_x = cx_[i] * cell_side_, lo_y = cy_[i] * cell_side_;
-    const double kx = exit_time(x, (vx > 0 && cx_[i] == cells_ - 1) || (vx < 0 && cx_[i] == 0) ? 0 : vx,
-                                lo_x, lo_x + cell_side_);
-    const double ky = exit_time(y, (vy > 0 && cy_[i] == cells_ - 1) || (vy < 0 && cy_[i] == 0) ? 0 : vy,
-                                lo_y, lo_y + cell_side_);
+    const double ux = (vx > 0 && cx_[i] == cells_ - 1) || (vx < 0 && cx_[i] == 0) ? 0 : vx;
+    const double uy = (vy > 0 && cy_[i] == cells_ - 1) || (vy < 0 && cy_[i] == 0) ? 0 : vy;
+    const double kx = model::axis_exit_time(x, ux, lo_x, lo_x + cell_side_);
+    const double ky = model::axis_exit_time(y, uy, lo_y, lo_y + cell_side_);
     const double k = now_ + std::min(kx, ky);
     queue_.set(k < cached_[i].t ? Event{k, kCross, i, -1, kx <= ky ? 1 : 2, 0} : cached_[i]);
   }
@@ -250,8 +243,7 @@ class EventDriven final : public Stepper {
         cross(e.i, e.axes);
       } else if (e.kind == kWallHit) {
         advance(e.i, now_);
-        if (e.axes & 1) p_.vx[e.i] = -p_.vx[e.i];
-        if (e.axes & 2) p_.vy[e.i] = -p_.vy[e.i];
+        model::reflect(p_.vx[e.i], p_.vy[e.i], (e.axes & 1) != 0, (e.axes & 2) != 0);
         ++p_.wc[e.i];
         ++hits_[e.i];
         last_[e.i] = -1;
@@ -269,7 +261,8 @@ class EventDriven final : public Stepper {
   /// along the line of centres are exchanged, \f$ v_i \mathrel{-}= (b/d^2)\,d,\ v_j \mathrel{+}= (b/d^2)\,d \f$.
   void collide(int i, int j) {
     // EXERCISE 3: bring both to now, then exchange the velocity components along the line of
-    // centres: b = d . (v_i - v_j), f = b / |d|^2, v_i -= f d, v_j += f d.
+    // centres: b = d . (v_i - v_j), f = b / |d|^2, v_i -= f d, v_j += f d
+    // (model::contact_response() applies it; read it before you call it).
     PLAB_EXERCISE(3, "the elastic collision of two disks");
     ++p_.pc[i];
     ++p_.pc[j];

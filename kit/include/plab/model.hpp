@@ -189,6 +189,15 @@ PLAB_HD inline void wall_event(Real& x, Real& y, Real& vx, Real& vy, long long& 
   wc = wc + 1;
 }
 
+/// Reflects a velocity in the walls that were hit: \f$ v_x \leftarrow -v_x \f$ when `flip_x`,
+/// \f$ v_y \leftarrow -v_y \f$ when `flip_y` (both at a corner). A negation is exact, so any form of
+/// a wall hit that flips through this keeps the speed bit for bit.
+template <class Real>
+PLAB_HD inline void reflect(Real& vx, Real& vy, bool flip_x, bool flip_y) {
+  vx = flip_x ? -vx : vx;
+  vy = flip_y ? -vy : vy;
+}
+
 /// The branchless wall event (used by the CUDA stages): \f$ e = \min(t_x, t_y) \f$, reflect every
 /// axis whose time equals \f$e\f$, then move \f$ \min(1, t_{later}) - e \f$ with \f$ t_{later} = 1 \f$
 /// at a corner. Gives the same bits as wall_event(); the tests check it.
@@ -203,19 +212,27 @@ PLAB_HD inline void wall_event_branchless(Real& x, Real& y, Real& vx, Real& vy,
   const Real m = ((later < 1) ? later : Real(1)) - e;
   x = x + e * vx;
   y = y + e * vy;
-  vx = flip_x ? -vx : vx;
-  vy = flip_y ? -vy : vy;
+  reflect(vx, vy, flip_x, flip_y);
   x = x + m * vx;
   y = y + m * vy;
   wc = wc + 1;
 }
 
-/// Time along one axis to a wall after a pair collision (note the association `((L - r) - pos)`,
-/// which differs from axis_wall_time() and rounds differently: both are the original's).
+/// Time for a centre at `pos` moving at `v` along one axis to reach `lo` (moving down) or `hi`
+/// (moving up): \f$ t = (pos - lo)/(0 - v) \f$ if \f$v < 0\f$, else \f$ (hi - pos)/v \f$;
+/// \f$+\infty\f$ if \f$v = 0\f$. Negative when the centre is already past the bound it moves to.
+template <class Real>
+PLAB_HD inline Real axis_time_to(Real pos, Real v, Real lo, Real hi) {
+  if (v == 0) return never<Real>();
+  return (v < 0) ? (pos - lo) / (0 - v) : (hi - pos) / v;
+}
+
+/// Time along one axis to a wall after a pair collision: axis_time_to() the bounds \f$r\f$ and
+/// \f$L - r\f$, that is \f$ ((L - r) - pos)/v \f$ moving up (note the association, which differs
+/// from axis_wall_time() and rounds differently: both are the original's).
 template <class Real>
 PLAB_HD inline Real axis_rest_wall_time(Real pos, Real v, Real L, Real r) {
-  if (v == 0) return never<Real>();
-  return (v < 0) ? (pos - r) / (0 - v) : ((L - r) - pos) / v;
+  return axis_time_to(pos, v, r, L - r);
 }
 
 /// Moves a particle for the rest of the step after a collision at time `t`, stopping at a wall
@@ -278,6 +295,71 @@ PLAB_HD inline bool pair_event(Real& xi, Real& yi, Real& vxi, Real& vyi, long lo
   pci = pci + 1;
   pcj = pcj + 1;
   return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The continuous-time variant (stage 07, exact event-driven dynamics): no steps, every particle
+// stored at its own time, every collision applied at the moment of contact. Not model.md's stepped
+// model: the stepped stages never call these.
+// ---------------------------------------------------------------------------------------------
+
+/// Where a centre stored at `pos` at time `t0`, moving at `v`, is at time `t`:
+/// \f$ pos + (t - t_0)\,v \f$ (one axis; `t` may be earlier than `t0`).
+template <class Real>
+PLAB_HD inline Real position_at(Real pos, Real v, Real t0, Real t) {
+  return pos + (t - t0) * v;
+}
+
+/// Time from now until a centre at `pos` moving at `v` leaves `[lo, hi]` along one axis, never
+/// before now: \f$ \max(0, t) \f$ with \f$t\f$ from axis_time_to() (\f$+\infty\f$ if \f$v = 0\f$).
+/// Stage 07 takes it for the walls (exit_wall_times()) and for its cell crossings.
+template <class Real>
+PLAB_HD inline Real axis_exit_time(Real pos, Real v, Real lo, Real hi) {
+  const Real t = axis_time_to(pos, v, lo, hi);
+  return (t > 0) ? t : Real(0);
+}
+
+/// The wall times of a particle from its stored state, continuous-time variant: along each axis
+/// axis_exit_time() of \f$[r, L - r]\f$, i.e. \f$ \max(0, ((L - r) - pos)/v) \f$ moving up and
+/// \f$ \max(0, (pos - r)/(0 - v)) \f$ moving down (the association of axis_rest_wall_time(), not
+/// of wall_times()). The hit is at wall_time() of these; the axes whose time equals it reflect.
+template <class Real>
+PLAB_HD inline WallTimesOf<Real> exit_wall_times(Real x, Real y, Real vx, Real vy,
+                                                 Real L, Real r) {
+  return WallTimesOf<Real>{axis_exit_time(x, vx, r, L - r), axis_exit_time(y, vy, r, L - r)};
+}
+
+/// The contact time of two disks stored at their own times (particle `i` at time `ti`, `j` at
+/// `tj`), counted from the time origin `t0`: both centres are carried to `t0` by position_at(),
+/// and contact_time() takes the relative position
+/// \f$ d = (p_i + (t_0 - t_i) v_i) - (p_j + (t_0 - t_j) v_j) \f$ and velocity
+/// \f$ w = v_i - v_j \f$.
+/// \return the time after `t0` (0: touching and approaching now; +inf: never).
+template <class Real>
+PLAB_HD inline Real contact_time_from(Real t0, Real xi, Real yi, Real vxi, Real vyi, Real ti,
+                                      Real xj, Real yj, Real vxj, Real vyj, Real tj, Real r) {
+  const Real dx = position_at(xi, vxi, ti, t0) - position_at(xj, vxj, tj, t0);
+  const Real dy = position_at(yi, vyi, ti, t0) - position_at(yj, vyj, tj, t0);
+  return contact_time(dx, dy, vxi - vxj, vyi - vyj, r);
+}
+
+/// The elastic collision of two equal disks at contact, continuous-time variant: the velocity
+/// components along the line of centres \f$ d = p_i - p_j \f$ are exchanged, in one projection,
+/// \f[ f = \frac{d \cdot (v_i - v_j)}{|d|^2},\qquad
+///     v_i \leftarrow v_i - f\,d,\qquad v_j \leftarrow v_j + f\,d. \f]
+/// Not pair_event()'s form (unit normal and tangent, zeros stored as +0.0), which rounds
+/// differently: the exact stage's golden files depend on this one. Positions are not moved.
+template <class Real>
+PLAB_HD inline void contact_response(Real xi, Real yi, Real& vxi, Real& vyi,
+                                     Real xj, Real yj, Real& vxj, Real& vyj) {
+  const Real dx = xi - xj;
+  const Real dy = yi - yj;
+  const Real b = dx * (vxi - vxj) + dy * (vyi - vyj);
+  const Real f = b / (dx * dx + dy * dy);
+  vxi = vxi - f * dx;
+  vyi = vyi - f * dy;
+  vxj = vxj + f * dx;
+  vyj = vyj + f * dy;
 }
 
 }  // namespace plab::model
