@@ -16,87 +16,54 @@
 #include <memory>
 
 #include "launchers.cuh"
+#include "plab/cuda/stepper.hpp"
 #include "plab/stage.hpp"
 
 namespace plab {
 namespace {
 
-/// A run of stage 04: owns the device state and steps it.
-class CudaStepper final : public Stepper {
+/// A run of stage 04: owns the device state and steps it (the kit's cuda::DeviceStepper holds
+/// the particles, the flags and the timer, and reads the state back).
+class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
  public:
   CudaStepper(const Box& box, const Particles& p)
-      : device_(cuda::require_device()), box_(box), p_(p), n_(p_.size()), wall_(n_), count_(n_),
-        best_(n_), resolved_(n_), partner_(n_), ptime_(n_), flags_(2) {
-    grow_slots(8);
-    PLAB_CUDA_CHECK(cudaMemset(flags_.get(), 0, flags_.bytes()));
-  }
+      : DeviceStepper(cuda::require_device(), box, p, cuda::Queue::kDefaultStream), wall_(n_),
+        slots_(n_, 8), best_(n_), resolved_(n_), partner_(n_), ptime_(n_) {}
 
-  void step() override {
-    if (n_ == 0) return;
-    timer_.start(nullptr);
+ private:
+  void queue_step() override {
     // 1. every wall time and every pair event of the step (more slots if a particle needs them)
     launch::start_step(p_.view(), box_, arrays());
     launch::find_pairs(p_.view(), box_, arrays());
-    while (const int needed = read_flag(1)) {
-      grow_slots(needed);
+    while (const int needed = flags_.take(&kernels::Flags::overflow, main_)) {
+      slots_.grow(needed, main_);
       launch::find_pairs(p_.view(), box_, arrays());
     }
     // 2. mutual-earliest rounds, resolved on the device; the host only asks "anyone left?"
     do {
       launch::choose(n_, arrays());
       launch::accept(n_, arrays());
-    } while (read_flag(0));
+    } while (flags_.take(&kernels::Flags::unresolved, main_));
     // 3. every particle's event
     launch::apply(p_.view(), box_, arrays());
-    timer_.stop(nullptr);
   }
 
-  void read(Particles& p) override {
-    timer_.close();
-    p_.download(p);
+  [[nodiscard]] std::size_t arrays_bytes() const override {
+    return cuda::bytes_of(wall_, slots_, best_, resolved_, partner_, ptime_);
   }
 
-  [[nodiscard]] double own_seconds() const override { return timer_.seconds(); }
-  [[nodiscard]] std::string device() const override { return device_; }
-  [[nodiscard]] std::size_t device_bytes() const override {
-    return p_.bytes() + wall_.bytes() + count_.bytes() + other_.bytes() + time_.bytes() +
-           best_.bytes() + resolved_.bytes() + partner_.bytes() + ptime_.bytes() + flags_.bytes();
-  }
-
- private:
   /// The working arrays as the kernels see them.
   [[nodiscard]] kernels::StepArrays arrays() const {
-    return {wall_.get(),     count_.get(),   other_.get(),   time_.get(),  cap_,
-            best_.get(),     resolved_.get(), partner_.get(), ptime_.get(), flags_.get()};
-  }
-  /// Reads flags[k] (waiting for the queued kernels) and clears it.
-  int read_flag(int k) {
-    int value = 0;
-    PLAB_CUDA_CHECK(cudaMemcpy(&value, flags_.get() + k, sizeof value, cudaMemcpyDeviceToHost));
-    if (value) PLAB_CUDA_CHECK(cudaMemset(flags_.get() + k, 0, sizeof value));
-    return value;
-  }
-  /// At least `needed` slots per particle (a power of two).
-  void grow_slots(int needed) {
-    while (cap_ < needed) cap_ = cap_ ? 2 * cap_ : 1;
-    other_.resize(static_cast<std::size_t>(n_) * cap_);
-    time_.resize(static_cast<std::size_t>(n_) * cap_);
+    return {wall_.get(),     slots_.view(),  best_.get(), resolved_.get(),
+            partner_.get(),  ptime_.get(),   flags_.get()};
   }
 
-  std::string device_;
-  Box box_;
-  cuda::DeviceParticles p_;
-  int n_;
-  int cap_ = 0;
   cuda::DeviceArray<double> wall_;
-  cuda::DeviceArray<int> count_, other_;
-  cuda::DeviceArray<double> time_;
+  cuda::DeviceSlots<cuda::SlotLayout::kByParticle> slots_;
   cuda::DeviceArray<model::Event> best_;
   cuda::DeviceArray<char> resolved_;
   cuda::DeviceArray<int> partner_;
   cuda::DeviceArray<double> ptime_;
-  cuda::DeviceArray<int> flags_;
-  cuda::EventTimer timer_;
 };
 
 }  // namespace

@@ -4,7 +4,9 @@
 #pragma once
 
 #include "plab/cuda/particles.hpp"
+#include "plab/cuda/slots.cuh"
 #include "plab/model.hpp"
+#include "plab/plan.hpp"
 #include "plab/scene.hpp"
 
 namespace plab::kernels {
@@ -12,8 +14,6 @@ namespace plab::kernels {
 using cuda::ParticlesView;
 using model::Event;
 
-constexpr int kFree = -1;         //!< `partner[i]`: particle `i` moves freely (as plab::Plan)
-constexpr int kWall = -2;         //!< `partner[i]`: particle `i` hits a wall
 constexpr int kPairThreads = 128;  //!< threads per block of find_pairs (one per particle `i`)
 constexpr int kTile = 256;         //!< particles `j` per block of find_pairs (in shared memory)
 constexpr int kResolveThreads = 1024;  //!< the one block of resolve
@@ -25,17 +25,18 @@ struct Flags {
   long long steps_done;  //!< steps applied so far
 };
 
+/// Each particle's pair events of the step: slot `s` of particle `i` at `[s * n + i]`, so that
+/// neighbouring threads read neighbouring addresses (coalesced).
+using Slots = cuda::SlotsView<cuda::SlotLayout::kBySlot>;
+
 /// One step's working arrays on the device (pointers into memory the host class owns).
 struct StepArrays {
   double* wall;    //!< wall time of each particle
-  int* count;      //!< pair events found for each particle (can exceed `cap`)
-  int* other;      //!< the other particle of slot `s` of particle `i`, at `[s * n + i]` (coalesced)
-  double* time;    //!< the pair time of that slot
-  int cap;         //!< slots per particle
+  Slots slots;     //!< each particle's pair events of the step (count, other, time, cap)
   Event* best;     //!< each unresolved particle's earliest event in the current round
   char* resolved;  //!< 1 once a particle's event (or none) is decided
   int* contested;  //!< the particles with at least one pair event (they need rounds)
-  int* partner;    //!< the plan: kFree, kWall, or the other particle of its pair
+  int* partner;    //!< the plan: Plan::kFree, Plan::kWall, or the other particle of its pair
   double* ptime;   //!< the plan's pair time
   Flags* flags;    //!< see Flags
 };
@@ -49,16 +50,6 @@ __global__ void wall_times(ParticlesView p, Box box, StepArrays a) {
 
 // EXERCISE 1: find_pairs on a 2D grid: block (x, y) pairs x's 128 particles i with y's tile of 256
 // particles j (in shared memory), j > i only; each pair found goes to both particles' slots.
-/// Files the pair event (i, o) at time t under particle i (slots fill in any order: the event key
-/// orders them, so the result does not depend on it).
-__device__ inline void add_slot(const StepArrays& a, int n, int i, int o, double t) {
-  const int s = atomicAdd(&a.count[i], 1);
-  if (s < a.cap) {
-    a.other[s * n + i] = o;
-    a.time[s * n + i] = t;
-  }
-}
-
 /// The pair search on a 2D grid: block (x, y) pairs particles `i` of x's 128 with particles `j`
 /// of y's tile of 256, held in shared memory, and computes only `j > i` (blocks wholly below the
 /// diagonal return at once). A pair found goes to both particles' slots. Many more threads than
@@ -86,8 +77,8 @@ __global__ void find_pairs(ParticlesView p, Box box, StepArrays a) {
     const int k = j - j0;
     const double t = model::pair_time(xi, yi, vxi, vyi, sx[k], sy[k], svx[k], svy[k], box.r);
     if (model::in_step(t)) {
-      add_slot(a, p.n, i, j, t);
-      add_slot(a, p.n, j, i, t);
+      a.slots.add(i, j, t);
+      a.slots.add(j, i, t);
     }
   }
 }
@@ -104,10 +95,10 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
   __syncthreads();
   int over = 0;
   for (int i = threadIdx.x; i < n; i += blockDim.x) {
-    const int c = a.count[i];
-    a.partner[i] = (c == 0 && model::in_step(a.wall[i])) ? kWall : kFree;
+    const int c = a.slots.count[i];
+    a.partner[i] = (c == 0 && model::in_step(a.wall[i])) ? Plan::kWall : Plan::kFree;
     a.resolved[i] = (c == 0);
-    if (c > a.cap) over = max(over, c);
+    if (c > a.slots.cap) over = max(over, c);
     if (c > 0) a.contested[atomicAdd(&contested, 1)] = i;
   }
   if (__syncthreads_or(over)) {
@@ -121,10 +112,10 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
       const int i = a.contested[k];
       if (a.resolved[i]) continue;
       Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
-      for (int s = 0; s < a.count[i]; ++s) {
-        const int o = a.other[s * n + i];
+      for (int s = 0; s < a.slots.count[i]; ++s) {
+        const int o = a.slots.other_at(i, s);
         if (a.resolved[o]) continue;
-        const Event e = model::pair_event_key(a.time[s * n + i], i < o ? i : o, i < o ? o : i);
+        const Event e = model::pair_event_key(a.slots.time_at(i, s), i < o ? i : o, i < o ? o : i);
         if (model::key_less(e, b)) b = e;
       }
       a.best[i] = b;
@@ -139,7 +130,7 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
       if (!model::in_step(e.t)) {
         a.resolved[i] = 1;
       } else if (e.kind == model::kWall) {
-        a.partner[i] = kWall;
+        a.partner[i] = Plan::kWall;
         a.resolved[i] = 1;
       } else if (a.best[o].kind == model::kPair && a.best[o].lo == e.lo && a.best[o].hi == e.hi) {
         a.partner[i] = o;
@@ -154,24 +145,14 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
   if (threadIdx.x == 0) a.flags->steps_done += 1;
 }
 
-/// Applies the plan; `Branchless` picks model.md's branchless wall event (flip each axis whose
-/// time equals the earlier one) over the branchy one: the same bits, less divergence.
+/// Applies the plan (plab::apply_one()'s own code, on the device); `Branchless` picks model.md's
+/// branchless wall event (flip each axis whose time equals the earlier one) over the branchy
+/// one: the same bits, less divergence.
 template <bool Branchless>
 __global__ void apply(ParticlesView p, Box box, StepArrays a) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= p.n || a.flags->overflow) return;
-  const int j = a.partner[i];
-  if (j == kFree) {
-    model::free_move(p.x[i], p.y[i], p.vx[i], p.vy[i]);
-  } else if (j == kWall) {
-    if constexpr (Branchless)
-      model::wall_event_branchless(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], box.L, box.r);
-    else
-      model::wall_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], box.L, box.r);
-  } else if (i < j) {
-    model::pair_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.pc[i], p.x[j], p.y[j], p.vx[j], p.vy[j],
-                      p.pc[j], a.ptime[i], box.L, box.r);
-  }
+  apply_planned<Branchless>(p, a.partner, a.ptime, i, box.L, box.r);
 }
 
 }  // namespace plab::kernels

@@ -20,6 +20,7 @@
 #include <string>
 
 #include "launchers.cuh"
+#include "plab/cuda/stepper.hpp"
 #include "plab/stage.hpp"
 
 namespace plab {
@@ -43,43 +44,20 @@ struct Options {
   }
 };
 
-/// A run of stage 05: owns the device state and queues steps without waiting for them.
-class CudaStepper final : public Stepper {
+/// A run of stage 05: queues steps on its own stream without waiting for them (the kit's
+/// cuda::DeviceStepper holds the particles, the flags and the timer, and reads the state back).
+class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
  public:
   CudaStepper(const Box& box, const Particles& p)
-      : device_(cuda::require_device()), options_(Options::from_environment()), box_(box),
-        p_(p, main_), n_(p_.size()), wall_(n_), count_(n_), best_(n_), resolved_(n_),
-        contested_(n_), partner_(n_), ptime_(n_), flags_(1) {
-    PLAB_CUDA_CHECK(cudaMemsetAsync(flags_.get(), 0, flags_.bytes(), main_));
-    grow_slots(8);
-    main_.sync();
-  }
-
-  void step() override {
-    if (n_ == 0) return;
-    timer_.start(main_);
-    queue_step();
-    timer_.stop(main_);
-    ++asked_;
-  }
-
-  void read(Particles& p) override {
-    catch_up();
-    timer_.close();
-    p_.download(p, main_);
-  }
-
-  [[nodiscard]] double own_seconds() const override { return timer_.seconds(); }
-  [[nodiscard]] std::string device() const override { return device_; }
-  [[nodiscard]] std::size_t device_bytes() const override {
-    return p_.bytes() + wall_.bytes() + count_.bytes() + other_.bytes() + time_.bytes() +
-           best_.bytes() + resolved_.bytes() + partner_.bytes() + ptime_.bytes() + flags_.bytes() +
-           contested_.bytes();
+      : DeviceStepper(cuda::require_device(), box, p, cuda::Queue::kOwnStream),
+        options_(Options::from_environment()), wall_(n_), slots_(n_, 8), best_(n_),
+        resolved_(n_), contested_(n_), partner_(n_), ptime_(n_) {
+    sync();
   }
 
  private:
   /// Queues one step: the recorded graph, or its kernels one by one.
-  void queue_step() {
+  void queue_step() override {
     if (!options_.graph) return queue_kernels();
     // EXERCISE 3: record queue_kernels() once as a CUDA graph (again when the slots were
     // reallocated), then replay it: one launch per step instead of five.
@@ -95,7 +73,7 @@ class CudaStepper final : public Stepper {
     const cudaStream_t side = options_.streams ? static_cast<cudaStream_t>(side_) : main_;
     if (options_.streams) fork_.order(main_, side_);
     launch::wall_times(p_.view(), box_, arrays(), main_);
-    PLAB_CUDA_CHECK(cudaMemsetAsync(count_.get(), 0, count_.bytes(), side));
+    slots_.clear_counts(side);
     launch::find_pairs(p_.view(), box_, arrays(), side);
     if (options_.streams) join_.order(side_, main_);
     launch::resolve(n_, arrays(), main_);
@@ -104,56 +82,39 @@ class CudaStepper final : public Stepper {
 
   /// Waits for the queued steps; when one ran out of slots (the device then skipped it and every
   /// step after it), grows the slots and queues the skipped steps again.
-  void catch_up() {
+  void catch_up() override {
     for (;;) {
-      kernels::Flags f{};
-      PLAB_CUDA_CHECK(cudaMemcpyAsync(&f, flags_.get(), sizeof f, cudaMemcpyDeviceToHost, main_));
-      main_.sync();
+      const kernels::Flags f = flags_.read(main_);
       if (f.steps_done == asked_ || f.overflow == 0) return;
-      grow_slots(f.overflow);
-      PLAB_CUDA_CHECK(cudaMemsetAsync(&flags_.get()->overflow, 0, sizeof(int), main_));
+      slots_.grow(f.overflow, main_);
+      graph_stale_ = true;  // the recorded graph holds the old slots' addresses
+      flags_.clear(&kernels::Flags::overflow, main_);
       for (long long s = f.steps_done; s < asked_; ++s) queue_step();
       timer_.stop(main_);
     }
   }
 
+  [[nodiscard]] std::size_t arrays_bytes() const override {
+    return cuda::bytes_of(wall_, slots_, best_, resolved_, contested_, partner_, ptime_);
+  }
+
   /// The working arrays as the kernels see them.
   [[nodiscard]] kernels::StepArrays arrays() const {
-    return {wall_.get(),     count_.get(),     other_.get(),   time_.get(),
-            cap_,            best_.get(),      resolved_.get(), contested_.get(),
-            partner_.get(),  ptime_.get(),     flags_.get()};
+    return {wall_.get(),      slots_.view(),   best_.get(),  resolved_.get(),
+            contested_.get(), partner_.get(),  ptime_.get(), flags_.get()};
   }
 
-  /// At least `needed` slots per particle (a power of two). A recorded graph holds the old
-  /// arrays' addresses: it is recorded again before its next replay.
-  void grow_slots(int needed) {
-    main_.sync();
-    while (cap_ < needed) cap_ = cap_ ? 2 * cap_ : 1;
-    other_.resize(static_cast<std::size_t>(n_) * cap_);
-    time_.resize(static_cast<std::size_t>(n_) * cap_);
-    graph_stale_ = true;
-  }
-
-  std::string device_;
   Options options_;
-  cuda::Stream main_, side_;
+  cuda::Stream side_;
   cuda::Event fork_, join_;
-  Box box_;
-  cuda::DeviceParticles p_;
-  int n_;
-  int cap_ = 0;
-  long long asked_ = 0;  // steps queued so far
   cuda::DeviceArray<double> wall_;
-  cuda::DeviceArray<int> count_, other_;
-  cuda::DeviceArray<double> time_;
+  cuda::DeviceSlots<cuda::SlotLayout::kBySlot> slots_;
   cuda::DeviceArray<model::Event> best_;
   cuda::DeviceArray<char> resolved_;
   cuda::DeviceArray<int> contested_, partner_;
   cuda::DeviceArray<double> ptime_;
-  cuda::DeviceArray<kernels::Flags> flags_;
   cuda::Graph graph_;
   bool graph_stale_ = true;  // the graph must be recorded (again) before its next replay
-  cuda::EventTimer timer_;
 };
 
 }  // namespace

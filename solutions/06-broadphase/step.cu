@@ -19,55 +19,34 @@
 #include <vector>
 
 #include "launchers.cuh"
+#include "plab/cuda/stepper.hpp"
 #include "plab/stage.hpp"
 
 namespace plab {
 namespace {
 
-/// A run of stage 06 on the GPU.
-class CudaStepper final : public Stepper {
+/// A run of stage 06 on the GPU (the kit's cuda::DeviceStepper holds the particles, the flags
+/// and the timer, and reads the state back).
+class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
  public:
   CudaStepper(const Box& box, const Particles& p, std::string device)
-      : device_(std::move(device)), box_(box), p_(p, main_), n_(p_.size()), wall_(n_),
-        last_(n_), count_(n_), best_(n_), resolved_(n_), contested_(n_), partner_(n_), ptime_(n_),
-        flags_(1) {
-    PLAB_CUDA_CHECK(cudaMemsetAsync(flags_.get(), 0, flags_.bytes(), main_));
-    grow_slots(16);
+      : DeviceStepper(std::move(device), box, p, cuda::Queue::kOwnStream), wall_(n_), last_(n_),
+        slots_(n_, 16), best_(n_), resolved_(n_), contested_(n_), partner_(n_), ptime_(n_) {
     set_grid(p);
     if (n_ >= kGridResolveFrom) grid_blocks_ = launch::resolve_grid_blocks();
-    main_.sync();
+    sync();
   }
 
   void step() override {
-    if (n_ == 0) return;
-    timer_.start(main_);
-    queue_step();
-    timer_.stop(main_);
+    DeviceStepper::step();
     // A stop on the device (more slots, a new grid) idles every later step until the host looks:
     // look every kCheckEvery steps, so that at most that many are redone.
-    if (++asked_ % kCheckEvery == 0) catch_up();
-  }
-
-  void read(Particles& p) override {
-    catch_up();
-    timer_.close();
-    p_.download(p, main_);
-  }
-
-  [[nodiscard]] double own_seconds() const override { return timer_.seconds(); }
-  [[nodiscard]] std::string device() const override { return device_; }
-  [[nodiscard]] std::size_t device_bytes() const override {
-    return p_.bytes() + wall_.bytes() + last_.bytes() + count_.bytes() + other_.bytes() +
-           time_.bytes() + best_.bytes() + resolved_.bytes() + contested_.bytes() +
-           partner_.bytes() + ptime_.bytes() + filled_.bytes() + start_.bytes() +
-           bucket_.bytes() + rank_.bytes() + entry_id_.bytes() + entry_k_.bytes() +
-           entry_.bytes() +
-           temp_.bytes() + flags_.bytes();
+    if (n_ > 0 && asked_ % kCheckEvery == 0) catch_up();
   }
 
  private:
   /// One step: the recorded graph (recorded again after the arrays changed).
-  void queue_step() {
+  void queue_step() override {
     if (stale_) {
       graph_.record(main_, [this] { queue_kernels(); });
       stale_ = false;
@@ -93,14 +72,13 @@ class CudaStepper final : public Stepper {
   }
 
   /// Waits for the queued steps; redoes those a stop on the device skipped (more slots).
-  void catch_up() {
+  void catch_up() override {
     for (;;) {
-      kernels::Flags f{};
-      PLAB_CUDA_CHECK(cudaMemcpyAsync(&f, flags_.get(), sizeof f, cudaMemcpyDeviceToHost, main_));
-      main_.sync();
+      const kernels::Flags f = flags_.read(main_);
       if (f.steps_done == asked_ || f.overflow == 0) return;
-      grow_slots(2 * f.overflow);
-      PLAB_CUDA_CHECK(cudaMemsetAsync(flags_.get(), 0, sizeof(int), main_));  // the stop
+      slots_.grow(2 * f.overflow, main_);
+      stale_ = true;  // the recorded graph holds the old slots' addresses
+      flags_.clear(&kernels::Flags::overflow, main_);  // the stop
       for (long long s = f.steps_done; s < asked_; ++s) queue_step();
       timer_.stop(main_);
     }
@@ -109,7 +87,7 @@ class CudaStepper final : public Stepper {
   /// The grid for the state `p` (sweep::choose(), the fastest 10% search wider), and the
   /// arrays it needs.
   void set_grid(const Particles& p) {
-    main_.sync();
+    sync();
     std::vector<double> end(p.size()), scratch;
     for (std::size_t i = 0; i < p.size(); ++i)
       end[i] = sweep::path_end(model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box_.L, box_.r));
@@ -126,36 +104,25 @@ class CudaStepper final : public Stepper {
     stale_ = true;
   }
 
-  /// At least `needed` slots per particle (a power of two).
-  void grow_slots(int needed) {
-    main_.sync();
-    while (cap_ < needed) cap_ = cap_ ? 2 * cap_ : 1;
-    other_.resize(static_cast<std::size_t>(n_) * cap_);
-    time_.resize(static_cast<std::size_t>(n_) * cap_);
-    stale_ = true;
+  [[nodiscard]] std::size_t arrays_bytes() const override {
+    return cuda::bytes_of(wall_, last_, slots_, best_, resolved_, contested_, partner_, ptime_,
+                          filled_, start_, bucket_, rank_, entry_id_, entry_k_, entry_, temp_);
   }
 
   [[nodiscard]] kernels::StepArrays arrays() const {
-    return {wall_.get(),     last_.get(),     count_.get(),     other_.get(),    time_.get(),
-            cap_,            best_.get(),     resolved_.get(),  contested_.get(), partner_.get(),
-            ptime_.get(),    filled_.get(),   start_.get(),     bucket_.get(),   rank_.get(),
-            entry_id_.get(), entry_k_.get(),  entry_.get(),     flags_.get()};
+    return {wall_.get(),     last_.get(),     slots_.view(),   best_.get(),     resolved_.get(),
+            contested_.get(), partner_.get(), ptime_.get(),    filled_.get(),   start_.get(),
+            bucket_.get(),   rank_.get(),     entry_id_.get(), entry_k_.get(),  entry_.get(),
+            flags_.get()};
   }
 
   static constexpr long long kCheckEvery = 32;  //!< steps between two looks at the flags
   static constexpr int kGridResolveFrom = 50000;  //!< from this N the rounds use the whole GPU
   static constexpr double kAlpha = 0.5;  //!< slabs per sqrt(N) v_cut / L (measured best on an H100)
-  std::string device_;
-  cuda::Stream main_;
-  Box box_;
-  cuda::DeviceParticles p_;
-  int n_;
-  int cap_ = 0;
-  long long asked_ = 0;
   kernels::DeviceGrid grid_{};
   cuda::DeviceArray<double> wall_;
-  cuda::DeviceArray<int> last_, count_, other_;
-  cuda::DeviceArray<double> time_;
+  cuda::DeviceArray<int> last_;
+  cuda::DeviceSlots<cuda::SlotLayout::kBySlot> slots_;
   cuda::DeviceArray<model::Event> best_;
   cuda::DeviceArray<char> resolved_;
   cuda::DeviceArray<int> contested_, partner_;
@@ -163,11 +130,9 @@ class CudaStepper final : public Stepper {
   cuda::DeviceArray<int> filled_, start_, bucket_, rank_, entry_id_, entry_k_;
   cuda::DeviceArray<kernels::Entry> entry_;
   cuda::DeviceArray<unsigned char> temp_;
-  cuda::DeviceArray<kernels::Flags> flags_;
   cuda::Graph graph_;
   bool stale_ = true;
   int grid_blocks_ = 0;
-  cuda::EventTimer timer_;
 };
 
 }  // namespace

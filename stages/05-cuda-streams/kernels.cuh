@@ -4,7 +4,9 @@
 #pragma once
 
 #include "plab/cuda/particles.hpp"
+#include "plab/cuda/slots.cuh"
 #include "plab/model.hpp"
+#include "plab/plan.hpp"
 #include "plab/scene.hpp"
 
 namespace plab::kernels {
@@ -12,8 +14,6 @@ namespace plab::kernels {
 using cuda::ParticlesView;
 using model::Event;
 
-constexpr int kFree = -1;         //!< `partner[i]`: particle `i` moves freely (as plab::Plan)
-constexpr int kWall = -2;         //!< `partner[i]`: particle `i` hits a wall
 constexpr int kPairThreads = 128;  //!< threads per block of find_pairs (one per particle `i`)
 constexpr int kTile = 256;         //!< particles `j` per block of find_pairs (in shared memory)
 constexpr int kResolveThreads = 1024;  //!< the one block of resolve
@@ -25,17 +25,18 @@ struct Flags {
   long long steps_done;  //!< steps applied so far
 };
 
+/// Each particle's pair events of the step: slot `s` of particle `i` at `[s * n + i]`, so that
+/// neighbouring threads read neighbouring addresses (coalesced).
+using Slots = cuda::SlotsView<cuda::SlotLayout::kBySlot>;
+
 /// One step's working arrays on the device (pointers into memory the host class owns).
 struct StepArrays {
   double* wall;    //!< wall time of each particle
-  int* count;      //!< pair events found for each particle (can exceed `cap`)
-  int* other;      //!< the other particle of slot `s` of particle `i`, at `[s * n + i]` (coalesced)
-  double* time;    //!< the pair time of that slot
-  int cap;         //!< slots per particle
+  Slots slots;     //!< each particle's pair events of the step (count, other, time, cap)
   Event* best;     //!< each unresolved particle's earliest event in the current round
   char* resolved;  //!< 1 once a particle's event (or none) is decided
   int* contested;  //!< the particles with at least one pair event (they need rounds)
-  int* partner;    //!< the plan: kFree, kWall, or the other particle of its pair
+  int* partner;    //!< the plan: Plan::kFree, Plan::kWall, or the other particle of its pair
   double* ptime;   //!< the plan's pair time
   Flags* flags;    //!< see Flags
 };
@@ -51,36 +52,27 @@ __global__ void wall_times(ParticlesView p, Box box, StepArrays a) {
 // particles j (in shared memory), j > i only; each pair found goes to both particles' slots.
 // Hints: start from stage 04's find_pairs. Load the tile (x, y, vx, vy of j0 .. j0 + kTile - 1)
 // into __shared__ arrays with all the block's threads, then __syncthreads(). A block with no j > i
-// returns before the barrier (every thread of it alike). File a pair under particle i with
-// s = atomicAdd(&count[i], 1): slot s, if s < cap, is other[s * n + i] and time[s * n + i]; the
-// order of slots does not matter, as the event key orders them.
+// returns before the barrier (every thread of it alike). File a pair under both particles with
+// a.slots.add() (the kit's plab::cuda::SlotsView: atomicAdd on the particle's count, then its
+// slot if there is one); the order of slots does not matter, as the event key orders them.
 
 // EXERCISE 2: resolve, every round of a step in one block of kResolveThreads threads.
 // Hints: stage 04's choose and accept, with a block barrier (__syncthreads) between them and
 // __syncthreads_or(open) to decide on another round. First decide at once the particles with no
 // pair event (their wall, or nothing) and list the others (contested) with a __shared__ counter.
-// When a count exceeds cap, raise flags->overflow (atomicMax) and return without counting the
-// step; when flags->overflow is already set on entry, return at once. Thread 0 adds 1 to
+// Slot s of particle i is a.slots.other_at(i, s), a.slots.time_at(i, s), s < a.slots.count[i].
+// When a count exceeds a.slots.cap, raise flags->overflow (atomicMax) and return without counting
+// the step; when flags->overflow is already set on entry, return at once. Thread 0 adds 1 to
 // flags->steps_done at the end.
 
-/// Applies the plan; `Branchless` picks model.md's branchless wall event (flip each axis whose
-/// time equals the earlier one) over the branchy one: the same bits, less divergence.
+/// Applies the plan (plab::apply_one()'s own code, on the device); `Branchless` picks model.md's
+/// branchless wall event (flip each axis whose time equals the earlier one) over the branchy
+/// one: the same bits, less divergence.
 template <bool Branchless>
 __global__ void apply(ParticlesView p, Box box, StepArrays a) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= p.n || a.flags->overflow) return;
-  const int j = a.partner[i];
-  if (j == kFree) {
-    model::free_move(p.x[i], p.y[i], p.vx[i], p.vy[i]);
-  } else if (j == kWall) {
-    if constexpr (Branchless)
-      model::wall_event_branchless(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], box.L, box.r);
-    else
-      model::wall_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], box.L, box.r);
-  } else if (i < j) {
-    model::pair_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.pc[i], p.x[j], p.y[j], p.vx[j], p.vy[j],
-                      p.pc[j], a.ptime[i], box.L, box.r);
-  }
+  apply_planned<Branchless>(p, a.partner, a.ptime, i, box.L, box.r);
 }
 
 }  // namespace plab::kernels

@@ -7,7 +7,9 @@
 #include <cooperative_groups.h>
 
 #include "plab/cuda/particles.hpp"
+#include "plab/cuda/slots.cuh"
 #include "plab/model.hpp"
+#include "plab/plan.hpp"
 #include "plab/scene.hpp"
 #include "plab/sweep.hpp"
 
@@ -16,8 +18,6 @@ namespace plab::kernels {
 using cuda::ParticlesView;
 using model::Event;
 
-constexpr int kFree = -1;              //!< `partner[i]`: particle `i` moves freely
-constexpr int kWall = -2;              //!< `partner[i]`: particle `i` hits a wall
 constexpr int kResolveThreads = 1024;  //!< the one block of resolve
 
 /// What the host reads after a batch of steps.
@@ -41,18 +41,19 @@ struct alignas(32) Entry {
   double vx, vy;  //!< velocity
 };
 
+/// Each particle's pair events of the step: slot `s` of particle `i` at `[s * n + i]` (as
+/// stage 05).
+using Slots = cuda::SlotsView<cuda::SlotLayout::kBySlot>;
+
 /// One step's working arrays (pointers into memory the host class owns).
 struct StepArrays {
   double* wall;      //!< wall time of each particle
   int* last;         //!< the last slab each particle takes part in (sweep::last_slab())
-  int* count;        //!< pair events found for each particle (can exceed `cap`)
-  int* other;        //!< slot `s` of particle `i` at `[s * n + i]`: the other particle
-  double* time;      //!< ... and the pair time
-  int cap;           //!< slots per particle
+  Slots slots;       //!< each particle's pair events of the step (count, other, time, cap)
   Event* best;       //!< each unresolved particle's earliest event in the current round
   char* resolved;    //!< 1 once a particle's event (or none) is decided
   int* contested;    //!< the particles with at least one pair event
-  int* partner;      //!< the plan: kFree, kWall, or the other particle of its pair
+  int* partner;      //!< the plan: Plan::kFree, Plan::kWall, or the other particle of its pair
   double* ptime;     //!< the plan's pair time
   int* filled;       //!< K * cells + 1: entries counted into each bucket
   int* start;        //!< K * cells + 1: bucket b holds entries [start[b], start[b + 1])
@@ -70,7 +71,7 @@ __global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d)
   if (i >= p.n) return;
   a.wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
   a.last[i] = sweep::last_slab(sweep::path_end(a.wall[i]), d.g);
-  a.count[i] = 0;
+  a.slots.count[i] = 0;
   if (i == 0) {
     a.flags->contested = 0;
     a.flags->open[0] = a.flags->open[1] = a.flags->open[2] = 0;
@@ -91,15 +92,6 @@ __device__ inline void midpoint(const ParticlesView& p, int i, int k, const Devi
 // atomicAdd(&a.filled[bucket], 1), in a.rank[k * n + i]); after the host's exclusive scan of
 // `filled` into `start`, bin_scatter (entry start[bucket] + rank gets the particle, its slab,
 // midpoint position and velocity).
-
-/// Files the pair event (i, o) at time t under particle i (any order: the key orders them).
-__device__ inline void add_slot(const StepArrays& a, int n, int i, int o, double t) {
-  const int s = atomicAdd(&a.count[i], 1);
-  if (s < a.cap) {
-    a.other[s * n + i] = o;
-    a.time[s * n + i] = t;
-  }
-}
 
 /// Whether particles i and j pass the slab test in slab k (then slab k's search finds them).
 __device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, int k,
@@ -128,8 +120,8 @@ __device__ inline void test_entries(const ParticlesView& p, const Box& box, cons
     const double t = model::pair_time(p.x[lo], p.y[lo], p.vx[lo], p.vy[lo], p.x[hi], p.y[hi],
                                       p.vx[hi], p.vy[hi], box.r);
     if (model::in_step(t) && model::before_walls(t, a.wall[lo], a.wall[hi])) {
-      add_slot(a, p.n, lo, hi, t);
-      add_slot(a, p.n, hi, lo, t);
+      a.slots.add(lo, hi, t);
+      a.slots.add(hi, lo, t);
     }
   }
 }
@@ -144,10 +136,10 @@ __device__ inline void test_entries(const ParticlesView& p, const Box& box, cons
 /// unresolved partners (or `none`, which sorts after every real event).
 __device__ inline void choose_one(int i, int n, const StepArrays& a, const Event& none) {
   Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
-  for (int s = 0; s < a.count[i]; ++s) {
-    const int o = a.other[s * n + i];
+  for (int s = 0; s < a.slots.count[i]; ++s) {
+    const int o = a.slots.other_at(i, s);
     if (a.resolved[o]) continue;
-    const Event e = model::pair_event_key(a.time[s * n + i], i < o ? i : o, i < o ? o : i);
+    const Event e = model::pair_event_key(a.slots.time_at(i, s), i < o ? i : o, i < o ? o : i);
     if (model::key_less(e, b)) b = e;
   }
   a.best[i] = b;
@@ -161,7 +153,7 @@ __device__ inline bool accept_one(int i, const StepArrays& a) {
   if (!model::in_step(e.t)) {
     a.resolved[i] = 1;
   } else if (e.kind == model::kWall) {
-    a.partner[i] = kWall;
+    a.partner[i] = Plan::kWall;
     a.resolved[i] = 1;
   } else if (a.best[o].kind == model::kPair && a.best[o].lo == e.lo && a.best[o].hi == e.hi) {
     a.partner[i] = o;
@@ -182,10 +174,10 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
   __syncthreads();
   int over = 0;
   for (int i = threadIdx.x; i < n; i += blockDim.x) {
-    const int c = a.count[i];
-    a.partner[i] = (c == 0 && model::in_step(a.wall[i])) ? kWall : kFree;
+    const int c = a.slots.count[i];
+    a.partner[i] = (c == 0 && model::in_step(a.wall[i])) ? Plan::kWall : Plan::kFree;
     a.resolved[i] = (c == 0);
-    if (c > a.cap) over = max(over, c);
+    if (c > a.slots.cap) over = max(over, c);
     if (c > 0) a.contested[atomicAdd(&contested, 1)] = i;
   }
   if (__syncthreads_or(over)) {
@@ -218,10 +210,10 @@ __global__ void resolve_grid(int n, StepArrays a) {
   grid.sync();
   if (skipped) return;
   for (int i = me; i < n; i += stride) {
-    const int c = a.count[i];
-    a.partner[i] = (c == 0 && model::in_step(a.wall[i])) ? kWall : kFree;
+    const int c = a.slots.count[i];
+    a.partner[i] = (c == 0 && model::in_step(a.wall[i])) ? Plan::kWall : Plan::kFree;
     a.resolved[i] = (c == 0);
-    if (c > a.cap) atomicMax(&f->overflow, c);
+    if (c > a.slots.cap) atomicMax(&f->overflow, c);
     if (c > 0) a.contested[atomicAdd(&f->contested, 1)] = i;
   }
   grid.sync();
@@ -243,19 +235,12 @@ __global__ void resolve_grid(int n, StepArrays a) {
   if (me == 0) f->steps_done += 1;
 }
 
-/// Applies the plan (branchless walls); nothing when the step was skipped.
+/// Applies the plan (plab::apply_one()'s own code, on the device, with branchless walls);
+/// nothing when the step was skipped.
 __global__ void apply(ParticlesView p, Box box, StepArrays a) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= p.n || a.flags->overflow) return;
-  const int j = a.partner[i];
-  if (j == kFree) {
-    model::free_move(p.x[i], p.y[i], p.vx[i], p.vy[i]);
-  } else if (j == kWall) {
-    model::wall_event_branchless(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], box.L, box.r);
-  } else if (i < j) {
-    model::pair_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.pc[i], p.x[j], p.y[j], p.vx[j], p.vy[j],
-                      p.pc[j], a.ptime[i], box.L, box.r);
-  }
+  apply_planned<true>(p, a.partner, a.ptime, i, box.L, box.r);
 }
 
 }  // namespace plab::kernels

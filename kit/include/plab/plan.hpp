@@ -48,20 +48,50 @@ struct Plan {
   }
 };
 
+/// The fields of the particles as plain pointers, the form host+device code takes: a host
+/// ParticlesOf<Real>'s arrays here, plab::cuda::ParticlesView (the same six names) on the device.
+template <class Real>
+struct FieldPointers {
+  Real* x;         //!< centre x (length units)
+  Real* y;         //!< centre y (length units)
+  Real* vx;        //!< velocity x (length units per step)
+  Real* vy;        //!< velocity y (length units per step)
+  long long* pc;   //!< collisions with other particles so far
+  long long* wc;   //!< collisions with walls so far
+};
+
+/// Applies particle `i`'s planned event, the plan given as plain arrays (`partner[i]`:
+/// Plan::kFree, Plan::kWall or the other particle; `time[i]`: the pair time, read for a pair
+/// only): a free move, a wall event, or a pair event applied by its lower index, which writes
+/// both particles. Host and device: apply_one() calls it on the CPU, the CUDA stages' `apply`
+/// kernels on the GPU, so both run the same operations in the same order. `p`: any struct of
+/// field pointers named as FieldPointers. `Branchless` picks model::wall_event_branchless()
+/// (the same bits, less divergence on a GPU) over model::wall_event().
+template <bool Branchless = false, class Fields, class Real>
+PLAB_HD inline void apply_planned(const Fields& p, const int* partner, const double* time, int i,
+                                  Real L, Real r) {
+  const int j = partner[i];
+  if (j == Plan::kFree) {
+    model::free_move(p.x[i], p.y[i], p.vx[i], p.vy[i]);
+  } else if (j == Plan::kWall) {
+    if constexpr (Branchless)
+      model::wall_event_branchless(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], L, r);
+    else
+      model::wall_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], L, r);
+  } else if (i < j) {
+    model::pair_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.pc[i], p.x[j], p.y[j], p.vx[j], p.vy[j],
+                      p.pc[j], static_cast<Real>(time[i]), L, r);
+  }
+}
+
 /// Applies particle `i`'s planned event. A pair is applied by its lower index only, so calling
 /// this for every `i` in any order, or in parallel, writes each particle exactly once.
 template <class Real>
 inline void apply_one(const Box& box, ParticlesOf<Real>& p, const Plan& plan, int i) {
-  const int j = plan.partner[i];
-  const Real L = static_cast<Real>(box.L), r = static_cast<Real>(box.r);
-  if (j == Plan::kFree) {
-    model::free_move(p.x[i], p.y[i], p.vx[i], p.vy[i]);
-  } else if (j == Plan::kWall) {
-    model::wall_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], L, r);
-  } else if (i < j) {
-    model::pair_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.pc[i], p.x[j], p.y[j], p.vx[j], p.vy[j],
-                      p.pc[j], static_cast<Real>(plan.time[i]), L, r);
-  }
+  const FieldPointers<Real> f{p.x.data(), p.y.data(), p.vx.data(), p.vy.data(), p.pc.data(),
+                              p.wc.data()};
+  apply_planned(f, plan.partner.data(), plan.time.data(), i, static_cast<Real>(box.L),
+                static_cast<Real>(box.r));
 }
 
 /// Applies every planned event (sequentially).
