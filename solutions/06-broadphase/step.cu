@@ -1,7 +1,8 @@
 /// \file solutions/06-broadphase/step.cu
 /// \brief Stage 06 on the GPU: the broad phase of step.cpp as a counting sort on the device, the
 /// pair search over neighbouring buckets, stage 05's rounds and apply; one CUDA graph per step.
-/// plab::make_stepper() takes the GPU when there is one (PLAB_DEVICE=cpu forces step.cpp).
+/// plab::make_gpu_stepper(), which step.cpp's make_stepper() takes when there is a GPU
+/// (--device cpu forces step.cpp).
 //
 // =================================================================================================
 //  GOAL   step.cpp's idea with every phase on the device and no host round trip in a step:
@@ -12,8 +13,6 @@
 //         on the device, and the host redoes it with more slots.
 //  READ   handouts/06-broadphase.md     TEST   ./plab test --stage 06 (on a GPU machine)
 // =================================================================================================
-#include <cstdlib>
-#include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
@@ -25,12 +24,15 @@
 namespace plab {
 namespace {
 
+constexpr double kAlpha = 0.5;  //!< slabs per sqrt(N) v_cut / L (measured best on an H100)
+
 /// A run of stage 06 on the GPU (the kit's cuda::DeviceStepper holds the particles, the flags
 /// and the timer, and reads the state back).
 class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
  public:
-  CudaStepper(const Box& box, const Particles& p, std::string device)
-      : DeviceStepper(std::move(device), box, p, cuda::Queue::kOwnStream), wall_(n_), last_(n_),
+  CudaStepper(const Box& box, const Particles& p, std::string device, double alpha)
+      : DeviceStepper(std::move(device), box, p, cuda::Queue::kOwnStream), alpha_(alpha),
+        wall_(n_), last_(n_),
         slots_(n_, 16), best_(n_), resolved_(n_), contested_(n_), partner_(n_), ptime_(n_) {
     set_grid(p);
     if (n_ >= kGridResolveFrom) grid_blocks_ = launch::resolve_grid_blocks();
@@ -91,8 +93,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     std::vector<double> end(p.size()), scratch;
     for (std::size_t i = 0; i < p.size(); ++i)
       end[i] = sweep::path_end(model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box_.L, box_.r));
-    const char* alpha = std::getenv("PLAB_SWEEP_ALPHA");  // a tuning knob: slabs per sqrt(N) v/L
-    grid_.g = sweep::choose(box_, p, end, scratch, 0.9, alpha ? std::atof(alpha) : kAlpha);
+    grid_.g = sweep::choose(box_, p, end, scratch, 0.9, alpha_);
     grid_.cells = grid_.g.cells();
     const std::size_t per_slab = static_cast<std::size_t>(n_) * grid_.g.slabs;
     const int size = grid_.g.slabs * grid_.cells + 1;
@@ -118,7 +119,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
 
   static constexpr long long kCheckEvery = 32;  //!< steps between two looks at the flags
   static constexpr int kGridResolveFrom = 50000;  //!< from this N the rounds use the whole GPU
-  static constexpr double kAlpha = 0.5;  //!< slabs per sqrt(N) v_cut / L (measured best on an H100)
+  double alpha_;  //!< slabs per sqrt(N) v_cut / L (StageOptions::sweep_alpha, or kAlpha)
   kernels::DeviceGrid grid_{};
   cuda::DeviceArray<double> wall_;
   cuda::DeviceArray<int> last_;
@@ -137,11 +138,13 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
 
 }  // namespace
 
-std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p) {
-  const char* forced = std::getenv("PLAB_DEVICE");
-  if (!(forced && std::strcmp(forced, "cpu") == 0) && cuda::missing_device().empty())
-    return std::make_unique<CudaStepper>(box, p, cuda::require_device());
-  return std::make_unique<HostStepper>(step, box, p);
+/// Stage 06's GPU path (stage.hpp): a run on the GPU when one can be used; nullptr otherwise
+/// (step.cpp's make_stepper() then runs the CPU path), NoDevice when the run asked for the GPU.
+std::unique_ptr<Stepper> make_gpu_stepper(const Box& box, Particles& p,
+                                          const StageOptions& options) {
+  if (options.device == Device::kAuto && !cuda::missing_device().empty()) return nullptr;
+  return std::make_unique<CudaStepper>(box, p, cuda::require_device(),
+                                       options.sweep_alpha > 0 ? options.sweep_alpha : kAlpha);
 }
 
 }  // namespace plab

@@ -11,11 +11,9 @@
 //         3. the branchless wall event in apply;
 //         4. one step recorded once as a CUDA graph and replayed: no host synchronisation per
 //            step at all. Slots that run out are caught on the device and redone by the host.
-//         PLAB_CUDA_OFF=graph,streams,branchless turns changes off, to measure what each buys.
+//         --off graph,streams,branchless turns changes off, to measure what each buys.
 //  READ   handouts/05-cuda-streams.md   TEST   ./plab test --impl student --stage 05
 // =================================================================================================
-#include <cstdlib>
-#include <cstring>
 #include <memory>
 #include <string>
 
@@ -26,20 +24,18 @@
 namespace plab {
 namespace {
 
-/// Which of the stage's changes are on (all by default; see PLAB_CUDA_OFF above).
+/// Which of the stage's changes are on (all by default; see --off above).
 struct Options {
   bool graph = true;       //!< replay one recorded step instead of launching its kernels
   bool streams = true;     //!< wall times on a second stream, beside the pair search
   bool branchless = true;  //!< the branchless wall event
 
-  /// Reads PLAB_CUDA_OFF, a comma-separated list of the options to turn off.
-  static Options from_environment() {
+  /// The changes the run's StageOptions::off leaves on.
+  static Options from(const StageOptions& asked) {
     Options o;
-    const char* off = std::getenv("PLAB_CUDA_OFF");
-    const std::string list = off ? std::string(",") + off + "," : "";
-    o.graph = list.find(",graph,") == std::string::npos;
-    o.streams = list.find(",streams,") == std::string::npos;
-    o.branchless = list.find(",branchless,") == std::string::npos;
+    o.graph = !asked.is_off("graph");
+    o.streams = !asked.is_off("streams");
+    o.branchless = !asked.is_off("branchless");
     return o;
   }
 };
@@ -48,9 +44,9 @@ struct Options {
 /// cuda::DeviceStepper holds the particles, the flags and the timer, and reads the state back).
 class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
  public:
-  CudaStepper(const Box& box, const Particles& p)
+  CudaStepper(const Box& box, const Particles& p, const StageOptions& asked)
       : DeviceStepper(cuda::require_device(), box, p, cuda::Queue::kOwnStream),
-        options_(Options::from_environment()), wall_(n_), slots_(n_, 8), best_(n_),
+        options_(Options::from(asked)), wall_(n_), slots_(n_, 8), best_(n_),
         resolved_(n_), contested_(n_), partner_(n_), ptime_(n_) {
     sync();
   }
@@ -117,8 +113,9 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
 
 }  // namespace
 
-std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p) {
-  return std::make_unique<CudaStepper>(box, p);
+/// Stage 05's entry point (stage.hpp): a run on the GPU (NoDevice without one).
+std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions& options) {
+  return std::make_unique<CudaStepper>(box, p, options);
 }
 
 }  // namespace plab
