@@ -93,7 +93,6 @@ void finish_options(Options& o) {
   std::istringstream off(o.off);
   for (std::string item; std::getline(off, item, ',');)
     if (!item.empty()) o.stage.off.push_back(item);
-  if (o.stage.off.empty() && !info.switches.empty()) o.stage.off = env.off;
   if (o.stage.simd.empty() && !info.simd.empty()) o.stage.simd = env.simd;
   if (o.stage.sweep_alpha == 0) o.stage.sweep_alpha = env.sweep_alpha;
   o.stage.real = o.real == "float" ? Real::kFloat : Real::kDouble;
@@ -107,6 +106,11 @@ void finish_options(Options& o) {
       std::find(info.simd.begin(), info.simd.end(), o.stage.simd) == info.simd.end())
     throw std::runtime_error("stage " + info.id + " has no vector path called '" + o.stage.simd +
                              "' (its paths: " + listed(info.simd) + ")");
+  // PLAB_CUDA_OFF (a script's default, e.g. "none") keeps only the stage's own switches.
+  if (o.stage.off.empty())
+    for (const std::string& change : env.off)
+      if (std::find(info.switches.begin(), info.switches.end(), change) != info.switches.end())
+        o.stage.off.push_back(change);
 }
 
 }  // namespace plab::runner
