@@ -52,4 +52,26 @@ TEST(Diff, DigestLines) {
   EXPECT_TRUE(d->particle.empty());
 }
 
+TEST(CompareSteps, EachStepOfTheExpectedWordForWord) {
+  // Spacing does not matter; a wrong line costs its step only; short lines and lines that do not
+  // start with a whole number belong to no step (a student's output may hold anything).
+  std::string b = kA;
+  b.replace(b.find("1 1 5.00000000"), 14, "1  1 5.00000001");
+  b = "debug: starting\nx y z 1 2 3 4\n" + b;
+  auto m = plab::compare_steps(kA, b);
+  ASSERT_EQ(m.size(), 2u);
+  EXPECT_EQ(m[0].step, 0);
+  EXPECT_TRUE(m[0].equal);
+  EXPECT_EQ(m[1].step, 1);
+  EXPECT_FALSE(m[1].equal);
+  m = plab::compare_steps(kA, "");
+  ASSERT_EQ(m.size(), 2u);
+  EXPECT_FALSE(m[0].equal || m[1].equal);
+  const std::string extra = std::string(kA) + "0 2 1.00000000 2.00000000 3.00000000 4.00000000\n";
+  m = plab::compare_steps(kA, extra);  // a line more in step 0 (wherever it is) makes it wrong
+  EXPECT_FALSE(m[0].equal);
+  EXPECT_TRUE(m[1].equal);
+  EXPECT_TRUE(plab::compare_steps("", kA).empty());
+}
+
 }  // namespace

@@ -139,7 +139,7 @@ void expect_agree(const std::string& exact, const std::string& stepped, const st
   ASSERT_EQ(a.size(), b.size()) << what;
   double worst = 0;
   for (std::size_t k = 0; k < a.size(); ++k) {
-    const plab::Particles &p = a[k].second, &q = b[k].second;
+    const plab::Particles &p = a[k].particles, &q = b[k].particles;
     for (std::size_t i = 0; i < p.size(); ++i) {
       worst = std::max({worst, std::abs(p.x[i] - q.x[i]), std::abs(p.y[i] - q.y[i]),
                         std::abs(p.vx[i] - q.vx[i]), std::abs(p.vy[i] - q.vy[i])});
@@ -209,7 +209,7 @@ TEST(AgreesWithSteps, SparseSlowScenes) {
     const std::string exact = run_exact(s);
     long long pc = 0;
     const auto blocks = plab::parse_output(exact, "exact");
-    for (const long long c : blocks.back().second.pc) pc += c;
+    for (const long long c : blocks.back().particles.pc) pc += c;
     EXPECT_GT(pc, 0) << "seed " << seed << ": the scene should have pair collisions";
     expect_agree(exact, run_stepped(s), "sparse seed " + std::to_string(seed));
     ++compared;

@@ -9,14 +9,18 @@ CPU and, where there is a GPU, on the GPU (double). Errors, at equal physical ti
   overlap     the mean fraction of disks overlapping another at the printed times, and the deepest
   position    the mean distance from the exact positions after 1, 2 and 4 printed steps, in r
   energy      the largest relative change of the kinetic energy over the run
+Scenes and outputs are read by the kit's own reader (`plab read --json`, kit/pyplab/plabio.py).
 """
 import argparse
 import csv
 import json
 import math
 import os
-import subprocess
+import pathlib
 import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "pyplab"))
+import plabio  # noqa: E402  (the kit's formats and programs)
 
 SCENES = {
     "report": ("the 2019 report's scene: N = 10^4, L = 20000, r = 1, model.md's speeds",
@@ -28,19 +32,11 @@ SCENES = {
 }
 
 
-def read_output(path):
-    """Print-mode output: {step: (xs, ys)} and the final counters."""
-    blocks, pc = {}, 0
-    with open(path) as f:
-        for line in f:
-            t = line.split()
-            s = int(t[0])
-            xs, ys = blocks.setdefault(s, ([], []))
-            xs.append(float(t[2]))
-            ys.append(float(t[3]))
-            if len(t) > 6:
-                pc += int(t[6])
-    return blocks, pc // 2
+def read_output(plab, path):
+    """Print-mode output: {step: (xs, ys)} and the pair collisions (the final counters)."""
+    blocks = plab.read_output(path)["blocks"]
+    pc = sum(sum(b["pc"]) for b in blocks if b["counters"])
+    return {b["step"]: (b["x"], b["y"]) for b in blocks}, pc // 2
 
 
 def read_audit_log(path):
@@ -48,16 +44,16 @@ def read_audit_log(path):
         return [json.loads(line) for line in f]
 
 
-def run(program, scene, work, tag, extra, env=None):
+def run(plab, program, scene, work, tag, extra, env=None):
     out, rep, log = (os.path.join(work, f"{tag}.{x}") for x in ("out", "report.json", "audit.jsonl"))
-    p = subprocess.run([program, scene, "--quiet", "--mode", "print", "--out", out, "--report", rep,
-                        "--audit", os.path.join(work, f"{tag}.audit.json"), "--audit-log", log, *extra],
-                       capture_output=True, text=True, env=env)
+    p = plabio.run_stage(program, scene, "--quiet", "--mode", "print", "--out", out, "--report", rep,
+                         "--audit", os.path.join(work, f"{tag}.audit.json"), "--audit-log", log,
+                         *extra, env=env)
     if p.returncode != 0:
         raise RuntimeError(f"{tag}: exit {p.returncode}: {p.stderr.strip()[:300]}")
     with open(rep) as f:
         report = json.load(f)
-    blocks, pairs = read_output(out)
+    blocks, pairs = read_output(plab, out)
     os.remove(out)
     return {"seconds": report["step_seconds"], "device": report["device"], "blocks": blocks,
             "pairs": pairs, "log": read_audit_log(log)}
@@ -95,6 +91,7 @@ def main():
     ap.add_argument("--plot", help="draw time against error (PNG or SVG)")
     ap.add_argument("--figures", help="the folder of the handouts' figure code (for --plot)")
     args = ap.parse_args()
+    plab = plabio.Plab(args.plab)
     os.makedirs(args.work, exist_ok=True)
     names = args.scene or list(SCENES)
     for n in names:
@@ -114,20 +111,19 @@ def main():
             g = list(gen)
             if args.steps:
                 g[g.index("--steps") + 1] = str(args.steps)
-            subprocess.run([args.plab, "gen", *g, "--out", scene], check=True, stdout=subprocess.DEVNULL)
-        with open(scene) as f:
-            r = float(f.read().split()[2])
-        exact = run(args.exact, scene, args.work, f"{name}.exact", [])
+            plab.gen(scene, *g)
+        r = plab.read_scene(scene)["r"]
+        exact = run(plab, args.exact, scene, args.work, f"{name}.exact", [])
         variants = [("exact (stage 07)", exact, {"k": 0, "real": "double", "device": "cpu"})]
         gpu = None
         k = 1
         while k <= args.max_k:
             for real in ("double", "float"):
-                v = run(args.stepped, scene, args.work, f"{name}.{real}.{k}",
+                v = run(plab, args.stepped, scene, args.work, f"{name}.{real}.{k}",
                         ["--substeps", str(k), "--real", real], env=cpu_env)
                 variants.append((f"06 cpu {real} K={k}", v, {"k": k, "real": real, "device": "cpu"}))
             if gpu is None or gpu:
-                v = run(args.stepped, scene, args.work, f"{name}.gpu.{k}", ["--substeps", str(k)])
+                v = run(plab, args.stepped, scene, args.work, f"{name}.gpu.{k}", ["--substeps", str(k)])
                 gpu = v["device"] != "cpu"
                 if gpu:
                     variants.append((f"06 gpu double K={k}", v, {"k": k, "real": "double", "device": "gpu"}))

@@ -17,6 +17,7 @@ void add_accuracy(CLI::App& app); //!< `plab accuracy`: run time against error (
 void add_stress(CLI::App& app);   //!< `plab stress`: hostile scenes, invariants, pair-time ulps
 void add_gen(CLI::App& app);     //!< `plab gen`: write a reproducible random scene
 void add_diff(CLI::App& app);    //!< `plab diff`: where two outputs first differ
+void add_read(CLI::App& app);    //!< `plab read`: a scene, output or events file as JSON
 void add_golden(CLI::App& app);  //!< `plab golden`: regenerate or check the golden files
 void add_test(CLI::App& app);    //!< `plab test`: run the test suite with CTest
 void add_docs(CLI::App& app);    //!< `plab docs`: build the HTML docs with Doxygen

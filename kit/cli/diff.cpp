@@ -1,24 +1,42 @@
 /// \file cli/diff.cpp
-/// \brief `plab diff`: where two outputs first differ.
+/// \brief `plab diff`: where two outputs first differ (with --json, also step by step).
 #include "common.hpp"
 
 namespace plab::cli {
 
 void add_diff(CLI::App& app) {
   auto files = std::make_shared<std::vector<std::string>>();
+  auto json = std::make_shared<bool>(false);
   auto* c = app.add_subcommand("diff", "Compare two outputs (or digest files): exit 0 when equal, "
                                        "otherwise show the first differing step, particle and "
                                        "field, and count the differing lines.");
   c->add_option("files", *files, "EXPECTED ACTUAL")->required()->expected(2)
       ->check(CLI::ExistingFile);
-  c->callback([files] {
-    const auto d = first_difference(read_file((*files)[0]), read_file((*files)[1]));
-    if (!d) {
-      std::printf("equal\n");
+  c->add_flag("--json", *json,
+              "print JSON instead: equal, text (the report above), first (line, step, particle, "
+              "field, expected, actual, differing_lines; null when equal) and steps (for every "
+              "step EXPECTED prints, whether ACTUAL prints the same lines for it)");
+  c->callback([files, json] {
+    const std::string expected = read_file((*files)[0]);
+    const std::string actual = read_file((*files)[1]);
+    const auto d = first_difference(expected, actual);
+    g_status = d ? 1 : 0;
+    if (!*json) {
+      std::printf("%s\n", d ? d->describe().c_str() : "equal");
       return;
     }
-    std::printf("%s\n", d->describe().c_str());
-    g_status = 1;
+    nlohmann::ordered_json out;
+    out["equal"] = !d;
+    out["text"] = d ? d->describe() : "equal";
+    out["first"] = nullptr;
+    if (d)
+      out["first"] = {{"line", d->line}, {"step", d->step}, {"particle", d->particle},
+                      {"field", d->field}, {"expected", d->expected}, {"actual", d->actual},
+                      {"differing_lines", d->differing_lines}};
+    out["steps"] = nlohmann::ordered_json::array();
+    for (const StepMatch& m : compare_steps(expected, actual))
+      out["steps"].push_back({{"step", m.step}, {"equal", m.equal}});
+    std::printf("%s\n", out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
   });
 }
 

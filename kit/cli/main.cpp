@@ -1,5 +1,5 @@
 /// \file cli/main.cpp
-/// \brief `plab`: the kit's command line (run, gen, diff, golden, test, docs, demo, bench, render).
+/// \brief `plab`: the kit's command line (run, gen, diff, read, golden, test, docs, demo, bench, render).
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   plab::cli::add_built(app);
   plab::cli::add_gen(app);
   plab::cli::add_diff(app);
+  plab::cli::add_read(app);
   plab::cli::add_golden(app);
   plab::cli::add_test(app);
   plab::cli::add_docs(app);

@@ -37,7 +37,7 @@ void add_render(CLI::App& app) {
     std::vector<std::string> args{"python3", source_dir() + "/kit/render/render.py",
                                   "--box", fmt_double(scene.box.L), "--radius",
                                   fmt_double(scene.box.r), "--out", out, "--fps",
-                                  fmt_double(a->fps)};
+                                  fmt_double(a->fps), "--plab", bin_dir() + "/plab"};
     if (a->follow >= 0) args.insert(args.end(), {"--follow", std::to_string(a->follow)});
     std::string steps = a->steps;
     if (!a->diff.empty()) {

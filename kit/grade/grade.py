@@ -24,7 +24,9 @@ import traceback
 from xml.sax.saxutils import escape, quoteattr
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "pyplab"))
 import hidden as hidden_module  # noqa: E402  (the kit's own modules, beside this file)
+import plabio  # noqa: E402  (the kit's formats, read and compared by its C++ programs)
 import races  # noqa: E402
 import sandbox as isolation  # noqa: E402
 import upload  # noqa: E402
@@ -84,25 +86,26 @@ def atomic_write(path, text):
     os.replace(temp, path)
 
 
-def blocks(text):
-    """{step: [line fields]} of a print-mode output."""
-    found = {}
-    for line in text.splitlines():
-        parts = line.split()
-        if len(parts) >= 6:
-            found.setdefault(int(parts[0]), []).append(parts)
-    return found
-
-
 def implied(before, after):
-    """What a particle did in a step, from its velocities before and after (printed fields)."""
-    v0 = [float(v) for v in before[4:6]]
-    v1 = [float(v) for v in after[4:6]]
+    """What a particle did in a step, from its printed velocities (vx, vy) before and after."""
+    v0, v1 = list(before), list(after)
     if v0 == v1:
         return "moved freely (velocity unchanged)"
     if [abs(v) for v in v0] == [abs(v) for v in v1]:
         return "hit a wall (a velocity component flipped)"
     return f"changed velocity as in a pair collision ({v0[0]:.8f}, {v0[1]:.8f}) -> ({v1[0]:.8f}, {v1[1]:.8f})"
+
+
+def velocities(plab, path, step, i):
+    """Particle i's printed (vx, vy) in the block of `step` of an output, or None when the output
+    has no such block or particle, or is not an output at all (a student's may be anything)."""
+    try:
+        blocks = plab.read_output(path, steps=(step, step))["blocks"]
+    except plabio.FormatError:
+        return None
+    if not blocks or i >= len(blocks[0]["vx"]):
+        return None
+    return blocks[0]["vx"][i], blocks[0]["vy"][i]
 
 
 def readable_by_all(folder):
@@ -146,6 +149,7 @@ class Grader:
         self.private = self.scratch / "private"  # expected outputs, hidden scenes: never mounted
         self.private.mkdir(mode=0o700)
         self.plab = self.kit_build / "bin" / "plab"
+        self.kit_programs = plabio.Plab(self.plab)  # its leaf commands: gen, diff, read
         self.manifest = json.loads((self.kit / "datasets" / "manifest.json").read_text())
         given = a.seed if a.seed is not None else os.environ.pop("PLAB_GRADE_SEED", None)
         self.seed = int(given) if given is not None else secrets.randbelow(2**32)
@@ -393,9 +397,8 @@ class Grader:
         os.chmod(tsan, 0o755)
         h = self.rubric["correctness"]["hidden_scenes"][2]
         scene = folder / "races.in"
-        subprocess.run([str(g) for g in [self.plab, "gen", "--n", h["n"], "--l", h["L"], "--r",
-                                         h["r"], "--steps", h["steps"], "--seed", self.seed + 11,
-                                         "--out", scene]], check=True, capture_output=True)
+        self.kit_programs.gen(scene, "--n", h["n"], "--l", h["L"], "--r", h["r"], "--steps",
+                              h["steps"], "--seed", self.seed + 11)
         env = dict(races.tsan_env(threads=3), **st.env)
         sources = [f.name for f in (self.sandbox.box / "src" / "stages" /
                                     self.kit_folders[st.sid]).iterdir()]
@@ -453,15 +456,15 @@ class Grader:
         work = pathlib.Path(tempfile.mkdtemp(prefix="diff-", dir=self.private))
         (work / "expected.out").write_text(expected)
         (work / "actual.out").write_text(actual)
-        diff = subprocess.run([self.plab, "diff", work / "expected.out", work / "actual.out"],
-                              capture_output=True, text=True).stdout.strip()
-        lines = [diff]
-        m = re.search(r"step (\d+), particle (\d+)", diff)
+        diff = self.kit_programs.diff(work / "expected.out", work / "actual.out")
+        lines = [diff["text"]]
+        first = diff["first"] or {}
         reference = self.solution(st.reference)
-        if m:
-            k, i = int(m.group(1)), int(m.group(2))
-            exp_blocks, act_blocks = blocks(expected), blocks(actual)
-            if k >= 1 and k - 1 in exp_blocks and k in act_blocks and i < len(act_blocks[k]):
+        if re.fullmatch(r"\d+", first.get("step", "")) and re.fullmatch(r"\d+", first.get("particle", "")):
+            k, i = int(first["step"]), int(first["particle"])
+            before = velocities(self.kit_programs, work / "expected.out", k - 1, i) if k >= 1 else None
+            after = velocities(self.kit_programs, work / "actual.out", k, i) if before else None
+            if before and after:
                 ref = subprocess.run([reference, scene, "--explain", f"{k - 1}:{i}"],
                                      capture_output=True, text=True).stdout.strip()
                 partner = re.search(r"with (\d+)", ref)
@@ -472,7 +475,7 @@ class Grader:
                         capture_output=True, text=True).stdout.strip()
                 lines.append(f"In step {k - 1} (from the correct state at its start) the reference "
                              f"has:\n  {ref}")
-                lines.append(f"Yours: particle {i} {implied(exp_blocks[k - 1][i], act_blocks[k][i])}.")
+                lines.append(f"Yours: particle {i} {implied(before, after)}.")
         setup, scene_arg, expected_arg = how
         if setup:  # a hidden scene: regenerate it and its expected output with the solution
             setup += (f"./plab run --stage {st.reference} --impl solution hidden.in --out "
@@ -494,10 +497,8 @@ class Grader:
             self.results.add(test, 0, points, False, f"not run: {why}")
             return
         scene = folder / "one-step.in"
-        subprocess.run([str(g) for g in [self.plab, "gen", "--n", h["n"], "--l", h["L"], "--r",
-                                         h["r"], "--steps", h["steps"], "--seed",
-                                         (self.seed * 7 + int(st.sid)) % 2**32, "--out", scene]],
-                       check=True, capture_output=True)
+        self.kit_programs.gen(scene, "--n", h["n"], "--l", h["L"], "--r", h["r"], "--steps",
+                              h["steps"], "--seed", (self.seed * 7 + int(st.sid)) % 2**32)
         states = self.expected_for(st, scene, folder / "one-step.states")
         reference = self.solution(st.reference)
         ref = subprocess.run([reference, scene, "--step-from-each", folder / "one-step.states"],
@@ -508,10 +509,15 @@ class Grader:
                                max(limits["min_seconds"], 10 * limits["time_multiple"]),
                                max(limits["output_min_mb"] * 2**20, 4 * len(ref)), st,
                                stdin_text=states)
-        want = blocks(ref)
         text_out = run.read_output() if run.rc == 0 and not run.reason else None
-        got = blocks(text_out) if text_out else {}
-        right = [s for s in want if got.get(s) == want[s]]
+        # Step by step, word for word (plab diff --json; its output may be anything, and a step
+        # it printed wrong or not at all is a wrong step): one call per stage, not per test.
+        (folder / "one-step.expected").write_text(ref)
+        (folder / "one-step.actual").write_text(text_out or "")
+        steps = self.kit_programs.diff(folder / "one-step.expected",
+                                       folder / "one-step.actual")["steps"]
+        want = [m["step"] for m in steps]
+        right = [m["step"] for m in steps if m["equal"]]
         wrong = sorted(set(want) - set(right))
         score = points * len(right) / max(1, len(want))
         text = f"{len(right)} of {len(want)} steps right when each starts from the correct state"
@@ -530,9 +536,8 @@ class Grader:
             return
         s = perf["scene"]
         scene = self.private / f"perf-{st.key}.in"
-        subprocess.run([str(x) for x in [self.plab, "gen", "--n", s["n"], "--l", s["L"], "--r",
-                                         s["r"], "--steps", s["steps"], "--mode", "perf",
-                                         "--seed", 1, "--out", scene]], check=True)
+        self.kit_programs.gen(scene, "--n", s["n"], "--l", s["L"], "--r", s["r"], "--steps",
+                              s["steps"], "--mode", "perf", "--seed", 1)
         limits = self.rubric["limits"]
         own = self.solution(st.sid)
         kit_prog = own if own.exists() else self.solution(self.manifest["reference_stage"])

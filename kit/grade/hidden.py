@@ -17,6 +17,7 @@ meeting. After drawing a scene, each designed event is checked with the kit's re
 (`--explain STEP:i,...`): the scene is drawn again (from the same seed, next attempt) if any is not
 exactly as designed, so every returned scene really exercises its edge. Expected outputs are
 never made here: the grader computes them with the reference at grading time.
+The reference's events file is read by the kit's own reader (`plab read`, kit/pyplab/plabio.py).
 
   python3 kit/grade/hidden.py --seed S --stage NN --only hidden-ties --out hidden.in
 """
@@ -31,6 +32,8 @@ from fractions import Fraction
 
 HERE = pathlib.Path(__file__).resolve().parent
 KIT = HERE.parent.parent
+sys.path.insert(0, str(KIT / "kit" / "pyplab"))
+import plabio  # noqa: E402  (the kit's formats and programs)
 
 # Fractions of a step at which designed events happen: exact in binary.
 T_INSIDE = (Fraction(1, 4), Fraction(1, 2), Fraction(3, 4))
@@ -530,7 +533,7 @@ def family_seed(seed, stage, k):
     return (seed * 1000003 + int(stage) * 101 + k) % 2**32
 
 
-def make_family(seed, stage, k, family, reference, path):
+def make_family(seed, stage, k, family, reference, path, plab):
     """Writes one family scene to path, drawn from (seed, stage, k), verified by the reference."""
     problems = []
     for attempt in range(ATTEMPTS):
@@ -543,19 +546,19 @@ def make_family(seed, stage, k, family, reference, path):
         path.write_text(scene_text(L, r, steps, parts))
         problems = exact_in_doubles(L, r, parts, checks) + verify(reference, path, checks)
         if family == "hidden-lattice":
-            problems += dense_check(reference, path)
+            problems += dense_check(reference, path, plab)
         if not problems:
             return path
     raise RuntimeError(f"{family}: no scene with its designed events in {ATTEMPTS} attempts "
                        f"(seed {seed}, stage {stage}): {problems[:3]}")
 
 
-def dense_check(reference, path):
+def dense_check(reference, path, plab):
     """A dense lattice must have both wall and pair events in its first step."""
     ev = path.with_suffix(".events")
     subprocess.run([str(reference), str(path), "--quiet", "--steps", "1", "--out", "/dev/null",
                     "--events", str(ev)], check=True, capture_output=True)
-    kinds = {line.split()[2] for line in ev.read_text().splitlines() if line.strip()}
+    kinds = {e["kind"] for e in plabio.Plab(plab).read_events(ev)["events"]}
     ev.unlink()
     return [] if {"wall", "pair"} <= kinds else [f"step 0 has events {sorted(kinds)} only"]
 
@@ -576,9 +579,8 @@ def hidden_scenes(seed, stage, rubric, plab, out_dir, only=None):
         if only and h["name"] != only:
             continue
         scene = out_dir / f"{h['name']}.in"
-        gen = [plab, "gen", "--n", h["n"], "--l", h["L"], "--r", h["r"], "--steps", h["steps"],
-               "--seed", family_seed(seed, stage, k), "--out", scene]
-        subprocess.run([str(g) for g in gen], check=True, capture_output=True)
+        plabio.Plab(plab).gen(scene, "--n", h["n"], "--l", h["L"], "--r", h["r"], "--steps",
+                              h["steps"], "--seed", family_seed(seed, stage, k))
         scenes.append((h["name"], scene))
     clash = set(family_names(rubric)) & {h["name"] for h in corr["hidden_scenes"]}
     if clash:  # one file per name in out_dir, one name per test
@@ -591,7 +593,7 @@ def hidden_scenes(seed, stage, rubric, plab, out_dir, only=None):
         if only and family != only:
             continue
         scenes.append((family, make_family(seed, stage, base + k, family, reference,
-                                           out_dir / f"{family}.in")))
+                                           out_dir / f"{family}.in", plab)))
     return scenes
 
 

@@ -4,14 +4,16 @@ frame per step, the step's collisions marked. `plab render` runs a stage and cal
 also be run on any print-mode output (a golden file, a student's output).
 
   render.py --output FILE [--events FILE] --box L --radius R [--steps A:B] [--follow I]
-            [--out anim.gif|anim.mp4|frame.svg|frame.png]
+            [--out anim.gif|anim.mp4|frame.svg|frame.png] [--plab PLAB]
   render.py --output EXPECTED --output ACTUAL --mark STEP:PARTICLE:TEXT ...   (side by side)
 
 Frame k shows the state at the start of step k and marks the particles that collide during that
 step: orange for a wall, red for another particle. Without --events, collisions are read from the
 velocities of the next printed step (a flip of signs with equal magnitudes counts as a wall).
+The files are read by the kit's own reader (`plab read --json`, through kit/pyplab/plabio.py).
 """
 import argparse
+import pathlib
 import sys
 
 import matplotlib
@@ -23,6 +25,9 @@ from matplotlib import animation  # noqa: E402
 from matplotlib.collections import EllipseCollection  # noqa: E402
 from matplotlib.patches import Circle, Rectangle  # noqa: E402
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "pyplab"))
+import plabio  # noqa: E402  (the kit's formats, read by its C++ reader)
+
 COLOURS = {"none": "#4c72b0", "wall": "#ff9f1c", "pair": "#d62728", "follow": "#2ca02c"}
 
 
@@ -31,43 +36,34 @@ def fail(message):
     sys.exit(2)
 
 
-def read_frames(path, first, last):
+def read_frames(plab, path, first, last):
     """States of steps first..last (inclusive) from a print-mode output: {step: array[n, 4]}."""
-    rows = {}
     try:
-        with open(path) as f:
-            for number, line in enumerate(f, 1):
-                parts = line.split()
-                if len(parts) < 6:
-                    fail(f"{path}:{number}: expected 'step i x y vx vy', found {line.strip()!r}")
-                step = int(parts[0])
-                if step < first:
-                    continue
-                if step > last:
-                    break
-                rows.setdefault(step, []).append([float(v) for v in parts[2:6]])
-    except OSError as e:
-        fail(f"cannot read {path}: {e.strerror}")
-    except ValueError:
-        fail(f"{path}:{number}: expected numbers, found {line.strip()!r}")
+        blocks = plab.read_output(path, steps=(first, last))["blocks"]
+    except plabio.FormatError as e:
+        fail(str(e))
+    rows = {b["step"]: np.array([b["x"], b["y"], b["vx"], b["vy"]]).T for b in blocks}
     missing = [s for s in range(first, last + 1) if s not in rows]
     if len(missing) == last - first + 1:
         fail(f"{path} has no block for steps {first}..{last}")
     if missing:
         fail(f"{path} has no block for step {missing[0]} (a perf-mode output? render runs the "
              f"stage in print mode; for a file, use a print-mode output)")
-    return {s: np.array(v) for s, v in rows.items()}
+    return rows
 
 
-def read_events(path, first, last, n):
+def read_events(plab, path, first, last, n):
     """{step: array of kinds per particle} from the runner's --events file."""
     kinds = {s: np.zeros(n, dtype=int) for s in range(first, last + 1)}
-    with open(path) as f:
-        for line in f:
-            step, index, kind = line.split()
-            step = int(step)
-            if first <= step <= last:
-                kinds[step][int(index)] = 1 if kind == "wall" else 2
+    try:
+        events = plab.read_events(path, steps=(first, last))["events"]
+    except plabio.FormatError as e:
+        fail(str(e))
+    for e in events:
+        if e["particle"] >= n:
+            fail(f"{path}: particle {e['particle']} collides in step {e['step']}, but the output "
+                 f"has particles 0..{n - 1}")
+        kinds[e["step"]][e["particle"]] = 1 if e["kind"] == "wall" else 2
     return kinds
 
 
@@ -159,7 +155,10 @@ def main():
     ap.add_argument("--sample", type=int, default=20000, help="draw at most this many particles")
     ap.add_argument("--fps", type=float, default=4)
     ap.add_argument("--out", required=True, help=".gif or .mp4 (animation), .svg or .png (frame)")
+    ap.add_argument("--plab", help="the kit's plab program, whose `plab read` reads the files "
+                                   "(default: build/bin/plab of this kit)")
     a = ap.parse_args()
+    plab = plabio.Plab(a.plab)
 
     try:
         first, last = (int(v) for v in a.steps.split(":"))
@@ -177,7 +176,7 @@ def main():
         step, particle, text = a.mark.split(":", 2)
         mark = (int(step), int(particle), text)
 
-    outputs = [(path, read_frames(path, first, last)) for path in a.output]
+    outputs = [(path, read_frames(plab, path, first, last)) for path in a.output]
     n = len(outputs[0][1][first])
     if a.follow is not None and not 0 <= a.follow < n:
         fail(f"--follow {a.follow}: the scene has particles 0..{n - 1}")
@@ -185,7 +184,7 @@ def main():
     fig, axes = plt.subplots(1, len(outputs), figsize=(width, 5.8), squeeze=False)
     panels = []
     for k, (path, frames) in enumerate(outputs):
-        kinds = (read_events(a.events, first, last, n) if a.events and k == 0
+        kinds = (read_events(plab, a.events, first, last, n) if a.events and k == 0
                  else infer_events(frames, first, last))
         title = (a.label[k] + "\n") if k < len(a.label) else ""
         panels.append(Panel(axes[0][k], title, frames, kinds, a.box, a.radius, a.follow, a.sample))

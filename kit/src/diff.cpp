@@ -2,6 +2,8 @@
 /// \brief Line-by-line comparison of outputs, naming the first differing field.
 #include "plab/diff.hpp"
 
+#include <charconv>
+#include <map>
 #include <sstream>
 #include <vector>
 
@@ -38,7 +40,39 @@ const char* field_name(std::size_t k, std::size_t count) {
   return k < 8 ? names[k] : "extra field";
 }
 
+using StepLines = std::map<long long, std::vector<std::vector<std::string_view>>>;
+
+/// The lines of each step (see compare_steps()), and the steps in order of first appearance.
+StepLines lines_by_step(std::string_view text, std::vector<long long>* order) {
+  StepLines steps;
+  for (const std::string_view line : split_lines(text)) {
+    auto words = split_words(line);
+    if (words.size() < 6) continue;
+    std::string_view first = words[0];
+    if (first.size() > 1 && first.front() == '+') first.remove_prefix(1);
+    long long step = 0;
+    const auto [end, ec] = std::from_chars(first.data(), first.data() + first.size(), step);
+    if (ec != std::errc() || end != first.data() + first.size()) continue;
+    auto [at, fresh] = steps.try_emplace(step);
+    if (fresh && order) order->push_back(step);
+    at->second.push_back(std::move(words));
+  }
+  return steps;
+}
+
 }  // namespace
+
+std::vector<StepMatch> compare_steps(std::string_view expected, std::string_view actual) {
+  std::vector<long long> order;
+  const StepLines want = lines_by_step(expected, &order);
+  const StepLines got = lines_by_step(actual, nullptr);
+  std::vector<StepMatch> out;
+  for (const long long step : order) {
+    const auto it = got.find(step);
+    out.push_back(StepMatch{step, it != got.end() && it->second == want.at(step)});
+  }
+  return out;
+}
 
 std::optional<Difference> first_difference(std::string_view expected, std::string_view actual) {
   const auto e = split_lines(expected);

@@ -6,7 +6,6 @@
 #include <cstdlib>
 #include <sstream>
 
-#include "plab/errors.hpp"
 #include "plab/io.hpp"
 
 namespace plab {
@@ -47,44 +46,15 @@ std::string describe_events(const Box& box, const Particles& p, const std::vecto
   return s.str();
 }
 
-std::vector<std::pair<long long, Particles>> parse_output(const std::string& text,
-                                                          const std::string& file) {
-  std::vector<std::pair<long long, Particles>> blocks;
-  std::istringstream in(text);
-  std::string line;
-  long number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    std::istringstream f(line);
-    long long step = 0, index = 0, pc = 0, wc = 0;
-    double x = 0, y = 0, vx = 0, vy = 0;
-    if (!(f >> step >> index >> x >> y >> vx >> vy))
-      throw InputError(file, number, "a line 'step i x y vx vy'", "'" + line + "'");
-    if (!(f >> pc >> wc)) pc = wc = 0;
-    if (blocks.empty() || blocks.back().first != step) blocks.emplace_back(step, Particles{});
-    Particles& p = blocks.back().second;
-    if (index != static_cast<long long>(p.size()))
-      throw InputError(file, number, "particle " + std::to_string(p.size()) + " of step " +
-                                         std::to_string(step), "particle " + std::to_string(index));
-    p.x.push_back(x);
-    p.y.push_back(y);
-    p.vx.push_back(vx);
-    p.vy.push_back(vy);
-    p.pc.push_back(pc);
-    p.wc.push_back(wc);
-  }
-  return blocks;
-}
-
-void step_from_each(const Box& box, const std::vector<std::pair<long long, Particles>>& blocks,
+void step_from_each(const Box& box, const std::vector<OutputBlock>& blocks,
                     const MakeStepper& make, std::FILE* out) {
   OutputWriter writer(out);
   for (std::size_t k = 0; k + 1 < blocks.size(); ++k) {
-    Particles p = blocks[k].second;
+    Particles p = blocks[k].particles;
     const auto stage = make(box, p);
     stage->step();
     stage->read(p);
-    writer.block(blocks[k].first + 1, p, false);
+    writer.block(blocks[k].step + 1, p, false);
   }
   writer.flush();
 }

@@ -72,7 +72,9 @@ class Lexer {
 
 std::string quoted(std::string_view s) {
   constexpr std::size_t kMax = 40;
-  std::string q = "'" + std::string(s.substr(0, kMax)) + (s.size() > kMax ? "...'" : "'");
+  std::string q(1, '\'');  // appended piece by piece (GCC 12's -Wrestrict misfires on "'" + ...)
+  q.append(s.substr(0, kMax));
+  q.append(s.size() > kMax ? "...'" : "'");
   return q;
 }
 
@@ -190,6 +192,148 @@ Scene parse_scene(std::string_view text, const std::string& file) {
                      "end of file after " + std::to_string(count));
   }
   return s;
+}
+
+namespace {
+
+/// The lines of a text, each with its words (split on spaces, tabs and carriage returns).
+class Lines {
+ public:
+  explicit Lines(std::string_view text) : text_(text) {}
+
+  /// Reads the next line into `words`; false at the end of the text.
+  bool next(std::vector<std::string_view>& words) {
+    if (pos_ >= text_.size()) return false;
+    const std::size_t nl = text_.find('\n', pos_);
+    const std::string_view row = text_.substr(pos_, nl == std::string_view::npos ? nl : nl - pos_);
+    pos_ = nl == std::string_view::npos ? text_.size() : nl + 1;
+    ++number_;
+    words.clear();
+    for (std::size_t i = 0; i < row.size();) {
+      while (i < row.size() && (row[i] == ' ' || row[i] == '\t' || row[i] == '\r')) ++i;
+      const std::size_t start = i;
+      while (i < row.size() && row[i] != ' ' && row[i] != '\t' && row[i] != '\r') ++i;
+      if (i > start) words.push_back(row.substr(start, i - start));
+    }
+    return true;
+  }
+  /// The number of the line last read (1-based; 0 before the first).
+  [[nodiscard]] long number() const { return number_; }
+
+ private:
+  std::string_view text_;
+  std::size_t pos_ = 0;
+  long number_ = 0;
+};
+
+std::string word_count(std::size_t n) {
+  return n == 0 ? "an empty line" : std::to_string(n) + (n == 1 ? " word" : " words");
+}
+
+std::string n_particles(std::size_t n) {
+  return std::to_string(n) + (n == 1 ? " particle" : " particles");
+}
+
+}  // namespace
+
+std::vector<OutputBlock> parse_output(std::string_view text, const std::string& file) {
+  std::vector<OutputBlock> blocks;
+  std::size_t n = 0;  // particles per block, known once the first block is complete
+  Lines lines(text);
+  std::vector<std::string_view> w;
+  const auto fail = [&](const std::string& expected, const std::string& what) {
+    throw InputError(file, lines.number(), expected, what);
+  };
+  const auto found_word = [](std::string_view s) { return quoted(s); };
+  while (lines.next(w)) {
+    if (w.size() != 6 && w.size() != 8)
+      fail("a line 'step i x y vx vy' (6 numbers; 8 in the final block, with 'pc wc')",
+           word_count(w.size()));
+    long long step = 0;
+    long long index = 0;
+    if (!parse_whole(w[0], step) || step < 0)
+      fail("a step (a whole number >= 0)", found_word(w[0]));
+    if (!parse_whole(w[1], index) || index < 0)
+      fail("a particle index (a whole number >= 0)", found_word(w[1]));
+    const bool counters = w.size() == 8;
+    if (blocks.empty() || step != blocks.back().step) {
+      if (!blocks.empty()) {
+        const OutputBlock& last = blocks.back();
+        if (last.counters)
+          fail("end of file after the final block (step " + std::to_string(last.step) +
+                   ", with counters)", "step " + std::string(w[0]));
+        if (blocks.size() == 1) n = last.particles.size();
+        if (last.particles.size() < n)
+          fail("particle " + std::to_string(last.particles.size()) + " of step " +
+                   std::to_string(last.step) + " (every block has " + n_particles(n) + ")",
+               "step " + std::string(w[0]));
+        if (step < last.step)
+          fail("a step after " + std::to_string(last.step) + " (blocks in step order)",
+               "step " + std::string(w[0]));
+      }
+      blocks.push_back(OutputBlock{step, counters, {}});
+    }
+    OutputBlock& b = blocks.back();
+    const std::size_t at = b.particles.size();
+    if (blocks.size() > 1 && at == n)
+      fail("a step after " + std::to_string(step) + " (every block has " + n_particles(n) + ")",
+           "a particle " + std::string(w[1]) + " of step " + std::to_string(step));
+    if (index != static_cast<long long>(at))
+      fail("particle " + std::to_string(at) + " of step " + std::to_string(step) +
+               " (particles in index order)", "particle " + std::string(w[1]));
+    if (counters != b.counters)
+      fail(std::string("a line of ") + (b.counters ? "8" : "6") + " words like the block's first",
+           word_count(w.size()));
+    double v[4];
+    static const char* names[4] = {"x", "y", "vx", "vy"};
+    for (int k = 0; k < 4; ++k)
+      if (!parse_real(w[k + 2], v[k]))
+        fail(std::string("a finite number for ") + names[k], found_word(w[k + 2]));
+    long long c[2] = {0, 0};
+    for (int k = 0; counters && k < 2; ++k)
+      if (!parse_whole(w[k + 6], c[k]) || c[k] < 0)
+        fail(std::string("a counter ") + (k == 0 ? "pc" : "wc") + " (a whole number >= 0)",
+             found_word(w[k + 6]));
+    Particles& p = b.particles;
+    p.x.push_back(v[0]);
+    p.y.push_back(v[1]);
+    p.vx.push_back(v[2]);
+    p.vy.push_back(v[3]);
+    p.pc.push_back(c[0]);
+    p.wc.push_back(c[1]);
+  }
+  if (blocks.empty()) throw InputError(file, 1, "a line 'step i x y vx vy'", "end of file");
+  const OutputBlock& last = blocks.back();
+  if (blocks.size() > 1 && last.particles.size() < n)
+    throw InputError(file, lines.number(),
+                     n_particles(n) + " in step " + std::to_string(last.step),
+                     "end of file after " + n_particles(last.particles.size()));
+  return blocks;
+}
+
+std::vector<EventRecord> parse_events(std::string_view text, const std::string& file) {
+  std::vector<EventRecord> events;
+  Lines lines(text);
+  std::vector<std::string_view> w;
+  while (lines.next(w)) {
+    const long line = lines.number();
+    if (w.size() != 3)
+      throw InputError(file, line, "a line 'step i wall|pair' (3 words)", word_count(w.size()));
+    EventRecord e;
+    if (!parse_whole(w[0], e.step) || e.step < 0)
+      throw InputError(file, line, "a step (a whole number >= 0)", quoted(w[0]));
+    if (!parse_whole(w[1], e.particle) || e.particle < 0)
+      throw InputError(file, line, "a particle index (a whole number >= 0)", quoted(w[1]));
+    if (w[2] != "wall" && w[2] != "pair")
+      throw InputError(file, line, "the kind 'wall' or 'pair'", quoted(w[2]));
+    e.wall = w[2] == "wall";
+    if (!events.empty() && e.step < events.back().step)
+      throw InputError(file, line,
+                       "a step >= " + std::to_string(events.back().step) + " (events in step order)",
+                       quoted(w[0]));
+    events.push_back(e);
+  }
+  return events;
 }
 
 std::string read_file(const std::string& path) {

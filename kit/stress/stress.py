@@ -11,17 +11,22 @@ Started by `./plab stress` (which passes the stage programs). For each scene it 
   - counters: never falling, at most one event per particle per step, pair counters summing even;
   - every stage's digests identical to the first stage's.
 It prints a table and exits 1 on any violation. It also measures the pair-time formula itself
-(plab-pairtime-ulps) and can draw that distribution (--plot).
+(plab-pairtime-ulps) and can draw that distribution (--plot). Scenes are read and digests compared
+by the kit's own programs (`plab read --json`, `plab diff`, through kit/pyplab/plabio.py).
 """
 import argparse
 import csv
 import json
 import math
 import os
+import pathlib
 import random
 import subprocess
 import sys
 import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "pyplab"))
+import plabio  # noqa: E402  (the kit's formats and programs)
 
 OUTSIDE_ULPS = 4      # a centre may be this many ulps of L outside [r, L - r] (rounding of x + t v)
 COLLISION_ULPS = 16   # a collision may change the energy of its disks by this many ulps (model.md
@@ -127,6 +132,7 @@ def main():
     ap.add_argument("--plot", help="draw the pair-time error distribution (PNG or SVG)")
     ap.add_argument("--figures", help="the folder of the handouts' figure code (for --plot)")
     args = ap.parse_args()
+    plab = plabio.Plab(args.plab)
 
     os.makedirs(args.work, exist_ok=True)
     stages = [tuple(s.split("=", 1)) for s in args.stage]
@@ -142,13 +148,12 @@ def main():
             continue
         path = os.path.join(args.work, name + ".in")
         if isinstance(spec, list):
-            subprocess.run([args.plab, "gen", *spec, "--out", path], check=True, stdout=subprocess.DEVNULL)
+            plab.gen(path, *spec)
         else:
             with open(path, "w") as f:
                 f.write(spec)
-        with open(path) as f:
-            head = f.read().split()
-        n, steps = int(head[0]), int(head[3])
+        head = plab.read_scene(path)
+        n, steps = head["n"], head["steps"]
         digests, audits, ran, problems = {}, {}, [], []
         t0 = time.time()
         for sid, program in stages:
@@ -156,8 +161,8 @@ def main():
                 continue  # O(N^3) a step by design
             dig = os.path.join(args.work, f"{name}.{sid}.digest")
             aud = os.path.join(args.work, f"{name}.{sid}.audit.json")
-            p = subprocess.run([program, path, "--quiet", "--out", os.devnull, "--digest", dig,
-                                "--audit", aud], capture_output=True, text=True)
+            p = plabio.run_stage(program, path, "--quiet", "--out", os.devnull, "--digest", dig,
+                                 "--audit", aud)
             if p.returncode == 4:  # a CUDA stage without a GPU
                 continue
             if p.returncode != 0:
@@ -165,14 +170,13 @@ def main():
                 continue
             ran.append(sid)
             with open(dig) as f:
-                digests[sid] = f.read()
+                digests[sid] = (dig, f.read())
             with open(aud) as f:
                 audits[sid] = json.load(f)
         for sid in ran[1:]:
-            if digests[sid] != digests[ran[0]]:
-                lines = zip(digests[ran[0]].splitlines(), digests[sid].splitlines())
-                first = next((k for k, (a, b) in enumerate(lines) if a != b), "?")
-                problems.append(f"stage {sid} differs from stage {ran[0]} from step {first}")
+            if digests[sid][1] != digests[ran[0]][1]:
+                first = (plab.diff(digests[ran[0]][0], digests[sid][0])["first"] or {}).get("step")
+                problems.append(f"stage {sid} differs from stage {ran[0]} from step {first or '?'}")
         worst = {k: max((a[k] for a in audits.values()), default=0)
                  for k in ("nonfinite", "outside_ulps", "collision_ulps", "energy_drift", "deepest_overlap",
                            "counter_errors", "collisions_checked")}

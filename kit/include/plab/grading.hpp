@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "plab/driver.hpp"
+#include "plab/io.hpp"
 #include "plab/plan.hpp"
 #include "plab/scene.hpp"
 
@@ -23,15 +24,10 @@ Plan plan_step(const Box& box, const Particles& p);
 /// `particle 8: moves freely`.
 std::string describe_events(const Box& box, const Particles& p, const std::vector<int>& which);
 
-/// The blocks of a print-mode output, each as (step, state); counters are zero where the block
-/// does not print them. \throws InputError naming `file` and the line when the text is not an
-/// output.
-std::vector<std::pair<long long, Particles>> parse_output(const std::string& text,
-                                                          const std::string& file);
-
 /// For every block `k` of `blocks` but the last, starts a run from that state, advances it one step
 /// with the stage and writes the result as block `k + 1` (without counters).
-void step_from_each(const Box& box, const std::vector<std::pair<long long, Particles>>& blocks,
+/// (`blocks` is an output read by parse_output(), io.hpp.)
+void step_from_each(const Box& box, const std::vector<OutputBlock>& blocks,
                     const MakeStepper& make, std::FILE* out);
 
 }  // namespace plab

@@ -1,11 +1,14 @@
 /// \file io.hpp
-/// \brief Reading scene files (with precise errors) and writing model.md's output fast.
+/// \brief The kit's one reader and writer of its text formats: scene files, model.md's output
+/// and the runner's events file, read with line-precise errors; the output written fast.
+/// (Tools in other languages read these formats through `plab read --json`, never themselves.)
 #pragma once
 
 #include <cstdint>
 #include <cstdio>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "plab/scene.hpp"
 
@@ -27,6 +30,31 @@ Scene load_scene(const std::string& path, std::uint64_t seed);
 /// Writes a scene file with every particle line (reals with 17 significant digits, so reading
 /// it back gives the same bits).
 std::string format_scene(const Scene& scene);
+
+/// One block of an output: the state printed for one step.
+struct OutputBlock {
+  long long step = 0;     //!< the step whose start (or, for the final block, end) it shows
+  bool counters = false;  //!< true when its lines end in `pc wc` (the final block of a run)
+  Particles particles;    //!< the printed state (`pc`, `wc` zero without counters)
+};
+
+/// Reads model.md's output, print or perf mode (and the runner's `--step-from-each` output,
+/// whose blocks have no counters). Every line is `step i x y vx vy`, or with ` pc wc` in the last
+/// block; a block is the consecutive lines of one step, particles 0 to N-1 in order, the same N in
+/// every block, steps increasing; reals are any finite numbers (`-0.00000000` included).
+/// \throws InputError `FILE:LINE: expected ..., found ...` for anything else (an empty text too)
+std::vector<OutputBlock> parse_output(std::string_view text, const std::string& file);
+
+/// One line of the runner's events file (`--events`): particle `particle` collided in `step`.
+struct EventRecord {
+  long long step = 0;      //!< the step in which it collided
+  long long particle = 0;  //!< its index
+  bool wall = false;       //!< with a wall (true) or with another particle (false)
+};
+
+/// Reads an events file: lines `STEP INDEX wall|pair`, steps never decreasing (may be empty).
+/// \throws InputError `FILE:LINE: expected ..., found ...` for anything else
+std::vector<EventRecord> parse_events(std::string_view text, const std::string& file);
 
 /// Formats `v` as `%.8f` in the C locale, writing `-0.00000000` as `0.00000000`.
 /// Writes at most 32 characters to `out` and returns the end.
