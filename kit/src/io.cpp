@@ -365,7 +365,11 @@ std::string format_scene(const Scene& scene) {
   real(scene.box.L);
   out += "\n";
   real(scene.box.r);
-  out += "\n" + std::to_string(scene.steps) + "\n" + mode_name(scene.mode) + "\n";
+  out += '\n';
+  out += std::to_string(scene.steps);
+  out += '\n';
+  out += mode_name(scene.mode);
+  out += '\n';
   const Particles& p = scene.particles;
   for (std::size_t i = 0; i < p.size(); ++i) {
     out += std::to_string(i);
