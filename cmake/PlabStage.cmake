@@ -7,6 +7,8 @@
 #                 kit/src/no_gpu_path.cpp: the stage runs on the CPU)
 #   needs_gpu     a CUDA stage: skipped without nvcc
 #   needs_openmp  skipped without OpenMP
+#   needs_mpi     runs on several processes (mpirun): linked with MPI, skipped without it; the
+#                 runner calls its plab::stage_worker() first
 #   model         "stepped" (model.md) or "exact" (stage 07: its own tests and golden files)
 #   float_path, test_max_n, test_sizes, switches, simd: read by the runner and the tests
 # Adds:
@@ -79,8 +81,14 @@ function(plab_add_stage)
   plab_stage_json(${dir} test_sizes test_sizes small medium large)
   plab_stage_json(${dir} switches switches)
   plab_stage_json(${dir} simd simd)
+  plab_stage_json(${dir} needs_mpi needs_mpi FALSE)
   if(needs_gpu AND NOT PLAB_HAVE_CUDA)
     message(STATUS "stage ${id} (${impl}): skipped, no CUDA compiler")
+    return()
+  endif()
+  if(needs_mpi AND NOT MPI_CXX_FOUND)
+    message(WARNING "MPI not found (Debian: openmpi-bin libopenmpi-dev): stage ${id} (${impl}) is "
+                    "skipped")
     return()
   endif()
   if(needs_openmp AND NOT OpenMP_CXX_FOUND)
@@ -93,7 +101,11 @@ function(plab_add_stage)
   if(cuda_sources AND PLAB_HAVE_CUDA)
     set(gpu_path TRUE)
   endif()
-  foreach(flag IN ITEMS needs_gpu gpu_path float_path)
+  set(worker_cpp nullptr)
+  if(needs_mpi)
+    set(worker_cpp "&plab::stage_worker")
+  endif()
+  foreach(flag IN ITEMS needs_gpu gpu_path float_path needs_mpi)
     if(${flag})
       set(${flag}_cpp true)
     else()
@@ -117,6 +129,9 @@ function(plab_add_stage)
     target_link_libraries(${lib} PUBLIC plab::cuda)
   elseif(cuda_sources)
     target_sources(${lib} PRIVATE ${PROJECT_SOURCE_DIR}/kit/src/no_gpu_path.cpp)
+  endif()
+  if(needs_mpi)
+    target_link_libraries(${lib} PUBLIC MPI::MPI_CXX)
   endif()
 
   set(program plab-run-${id}-${impl})

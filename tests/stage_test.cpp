@@ -30,6 +30,8 @@ namespace plab::test {
 /// Written by tests/CMakeLists.txt for each stage's test program.
 extern const char* const kOtherId;
 extern const char* const kOtherProgram;
+/// This stage's own program (`plab-run-NN-IMPL`): a stage on several processes runs under mpirun.
+extern const char* const kThisProgram;
 }  // namespace plab::test
 
 /// A CUDA stage's tests skip, with the runtime's reason, where no GPU can be used.
@@ -316,6 +318,125 @@ TEST(Invariants, EnergyConservedFiniteCountersGrow) {
   for (std::size_t i = 0; i < p.size(); ++i) events += p.pc[i] + p.wc[i];
   EXPECT_NEAR(energy(), e0, 1e-9 * e0);
   EXPECT_GT(events, 100);
+}
+
+// -- A stage on several processes (stage.json `needs_mpi`: 08) ---------------------------------
+// The tests above run it in this process, on one rank. These start its program under mpirun on
+// 2, 3 and 4 ranks (more ranks than this machine's cores: oversubscribed) and compare the text.
+
+/// Runs this stage's program on `ranks` ranks on `scene_file`; returns its output ("" and a
+/// failure when it fails).
+std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::test::ScratchDir& dir,
+                         const std::string& what) {
+  if (geteuid() == 0) {  // OpenMPI refuses root unless told twice (containers, CI)
+    setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
+    setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  }
+  const std::string out = dir.file("ranks-" + std::to_string(ranks) + ".out");
+  const std::string command = "mpirun --oversubscribe -np " + std::to_string(ranks) + " " +
+                              plab::test::kThisProgram + " --quiet --out " + out + " " + scene_file;
+  plab::test::watch(this_name() + " on " + std::to_string(ranks) + " ranks, " + what, 0);
+  const int status = plab::test::run_watched(command);
+  EXPECT_EQ(status, 0) << command;
+  return status == 0 ? plab::read_file(out) : std::string();
+}
+
+/// Every small and medium dataset on 2, 3 and 4 ranks: its golden output.
+class Ranks : public testing::TestWithParam<std::tuple<plab::Dataset, int>> {};
+TEST_P(Ranks, GoldenOnRanks) {
+  const auto& [d, ranks] = GetParam();
+  const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
+  const plab::test::ScratchDir scratch;
+  const std::string output = run_on_ranks(m.scene_path(d), ranks, scratch, "scene " + d.name);
+  if (!output.empty())
+    expect_same(plab::read_file(m.golden_path(d)), output,
+                m.golden_path(d) + " (on " + std::to_string(ranks) + " ranks)");
+}
+INSTANTIATE_TEST_SUITE_P(
+    Datasets, Ranks,
+    testing::Combine(testing::ValuesIn(plab::stage_info().mpi ? datasets(false)
+                                                              : std::vector<plab::Dataset>{}),
+                     testing::Values(2, 3, 4)),
+    [](const auto& info) {
+      std::string s = std::get<0>(info.param).name + "_" + std::to_string(std::get<1>(info.param));
+      for (char& c : s)
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      return s;
+    });
+GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(Ranks);
+
+/// A scene that stresses the cut, on 1 to 4 ranks: the other stage's solution's text.
+void expect_same_on_ranks(const plab::Scene& scene, const std::string& how_made) {
+  if (!plab::stage_info().mpi) GTEST_SKIP() << this_name() << " runs on one process";
+  const std::string other = plab::test::kOtherProgram;
+  if (other.empty()) GTEST_SKIP() << "no other stage's solution is built to compare with";
+  const plab::test::ScratchDir scratch;
+  const std::string scene_file = scratch.file("scene.in");
+  {
+    std::FILE* f = std::fopen(scene_file.c_str(), "w");
+    const std::string text = plab::format_scene(scene);
+    std::fwrite(text.data(), 1, text.size(), f);
+    std::fclose(f);
+  }
+  const std::string reference = scratch.file("reference.out");
+  plab::test::watch(std::string("stage ") + kOtherId + "'s solution on " + how_made, 0);
+  ASSERT_EQ(plab::test::run_watched(other + " --quiet --out " + reference + " " + scene_file), 0);
+  const std::string expected = plab::read_file(reference);
+  for (int ranks = 1; ranks <= 4; ++ranks) {
+    const std::string output = run_on_ranks(scene_file, ranks, scratch, how_made);
+    if (output.empty()) return;
+    if (plab::first_difference(expected, output)) {
+      expect_same(expected, output, std::string("stage ") + kOtherId + " on " + how_made + " (" +
+                                        std::to_string(ranks) + " ranks)");
+      return;
+    }
+  }
+}
+
+/// Particles that start exactly on the borders of 2, 3 and 4 slabs (L = 24: x = 6, 8, 12, 16,
+/// 18), moving across them and meeting there.
+TEST(RanksScenes, ParticlesOnBorders) {
+  plab::Scene scene;
+  scene.box = {24, 0.5};
+  scene.steps = 30;
+  const double xs[] = {6, 8, 12, 16, 18};
+  for (int k = 0; k < 5; ++k)
+    for (int row = 0; row < 3; ++row) {
+      const std::size_t i = scene.particles.size();
+      scene.particles.resize(i + 1);
+      scene.particles.x[i] = xs[k];
+      scene.particles.y[i] = 4 + 7 * row;
+      scene.particles.vx[i] = (k + row) % 2 ? 0.75 : -0.5;
+      scene.particles.vy[i] = row == 1 ? 0.25 : 0;
+    }
+  expect_same_on_ranks(scene, "particles on the borders of the slabs");
+}
+
+/// A dense scene where many pairs straddle the borders.
+TEST(RanksScenes, DenseAcrossBorders) {
+  expect_same_on_ranks(plab::generate_scene({300, 60, 1, 20, plab::Mode::kPrint, 20195}),
+                       "a dense scene (plab gen --n 300 --l 60 --r 1 --steps 20 --seed 20195)");
+}
+
+/// Particles faster than a slab is wide: each step they cross several slabs, or the whole box.
+TEST(RanksScenes, FasterThanASlab) {
+  expect_same_on_ranks(
+      plab::generate_scene({60, 100, 1, 20, plab::Mode::kPrint, 20196, 60, 300}),
+      "fast particles (plab gen --n 60 --l 100 --r 1 --steps 20 --seed 20196 --speed 60:300)");
+}
+
+/// More ranks than particles, and slabs with no particle at all.
+TEST(RanksScenes, EmptySlabs) {
+  plab::Scene scene;
+  scene.box = {40, 1};
+  scene.steps = 40;
+  scene.particles.resize(3);
+  plab::Particles& p = scene.particles;
+  p.x = {3, 7, 5};
+  p.y = {20, 20, 30};
+  p.vx = {1, -1, 0.5};
+  p.vy = {0, 0, -1};
+  expect_same_on_ranks(scene, "3 particles in the first slab of 4");
 }
 
 }  // namespace

@@ -10,6 +10,9 @@
 
 int main(int argc, char** argv) {
   const plab::StageInfo& stage = plab::stage_info();
+  // A stage on several processes: every process but rank 0 serves rank 0's run and ends here.
+  if (stage.worker)
+    if (const int status = stage.worker(); status >= 0) return status;
   CLI::App app{"Runs stage " + stage.id + " (" + stage.impl +
                ") on a scene and writes model.md's output."};
   plab::runner::Options o;

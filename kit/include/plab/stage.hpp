@@ -54,6 +54,8 @@ struct StageInfo {
   std::vector<std::string> test_sizes;  //!< the dataset sizes its golden tests run
   std::vector<std::string> switches;    //!< changes that StageOptions::off can turn off (05)
   std::vector<std::string> simd;        //!< narrower vector paths its tests also run (06)
+  bool mpi = false;                     //!< runs on several processes started by mpirun (08)
+  int (*worker)() = nullptr;            //!< with `mpi`: plab::stage_worker()
 };
 
 /// This stage's declaration (defined in the library CMake builds for it).
@@ -100,6 +102,11 @@ struct StageOptions {
 /// \throws NoDevice when the stage needs a GPU and none can be used
 std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p,
                                       const StageOptions& options = {});
+
+/// A stage on several processes (`mpi` in its stage.json: 08) starts them here, first thing in
+/// the runner: returns -1 in the process that goes on as the runner (rank 0), or, in every
+/// other process, the exit status once it has served rank 0's run to its end.
+int stage_worker();
 
 /// Advances every particle by one step, as model.md says: a CPU stage's exercise.
 /// \param box the box and radius

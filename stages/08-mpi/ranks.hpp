@@ -1,0 +1,77 @@
+/// \file stages/08-mpi/ranks.hpp
+/// \brief Stage 08's given part: the decomposition of the box into slabs, this rank's particles
+/// (owned, then ghosts), the exchanges between ranks, and the driver on rank 0 that the other
+/// ranks serve. The stage's idea (halo, rounds across ranks, migration) is in step.cpp.
+#pragma once
+
+#include <mpi.h>
+
+#include <vector>
+
+#include "plab/stage.hpp"
+
+namespace plab::dist {
+
+/// The rank's view of the run: who it is and how the box is cut.
+struct Ranks {
+  MPI_Comm comm = MPI_COMM_WORLD;  //!< every rank of the run
+  int rank = 0;                    //!< this rank (0 reads, prints and drives)
+  int ranks = 1;                   //!< how many
+  double L = 0;                    //!< the box side: rank k owns the slab x in [k L/R, (k+1) L/R)
+
+  /// The rank that owns a particle whose centre is at `x` (centres outside the box, which
+  /// overlaps can make, go to the first or last slab).
+  [[nodiscard]] int owner_of(double x) const {
+    const int k = static_cast<int>(x / (L / ranks));
+    return k < 0 ? 0 : (k >= ranks ? ranks - 1 : k);
+  }
+  /// The lower and upper x of rank k's slab.
+  [[nodiscard]] double slab_lo(int k) const { return k * (L / ranks); }
+  [[nodiscard]] double slab_hi(int k) const { return (k + 1) * (L / ranks); }
+};
+
+/// One particle as it travels between ranks: its global index and its state.
+struct Record {
+  double x, y, vx, vy;  //!< centre and velocity
+  long long pc, wc;     //!< collision counters
+  int id;               //!< its index in the scene (the event keys and the output use it)
+  int pad = 0;          //!< (keeps the struct a multiple of 8 bytes)
+};
+
+/// This rank's particles: `owned` ones first (whose centre lies in its slab), then the ghosts,
+/// copies of other ranks' particles near its slab, received from `ghosts_from[q]` ..
+/// `ghosts_from[q + 1]` of rank q, in the order rank q listed them in `sent_to[q]`.
+struct Local {
+  Particles p;                            //!< state, per field
+  std::vector<int> id;                    //!< each particle's index in the scene
+  int owned = 0;                          //!< particles [0, owned) are this rank's
+  std::vector<std::vector<int>> sent_to;  //!< per rank: the owned particles it has as ghosts
+  std::vector<int> ghosts_from;           //!< per rank: where its ghosts start (R + 1 entries)
+
+  [[nodiscard]] int size() const { return static_cast<int>(id.size()); }
+  /// Particle k as a Record.
+  [[nodiscard]] Record record(int k) const {
+    return {p.x[k], p.y[k], p.vx[k], p.vy[k], p.pc[k], p.wc[k], id[k]};
+  }
+  /// Appends a Record.
+  void push(const Record& r);
+  /// Keeps the owned particles only (drops every ghost).
+  void drop_ghosts();
+};
+
+/// Sends out[q] to rank q, for every q, and returns what every rank sent to this one,
+/// concatenated in rank order; `from` (R + 1 entries) gets where each rank's part starts.
+/// `T` must be trivially copyable.
+template <class T>
+std::vector<T> all_to_all(const Ranks& r, const std::vector<std::vector<T>>& out,
+                        std::vector<int>* from = nullptr);
+
+/// The largest of `v` over every rank.
+double max_over_ranks(const Ranks& r, double v);
+/// Whether `v` is true on any rank.
+bool any_rank(const Ranks& r, bool v);
+
+/// One step of the distributed model (step.cpp: the stage's exercises).
+void step(const Box& box, const Ranks& r, Local& s);
+
+}  // namespace plab::dist

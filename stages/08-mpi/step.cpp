@@ -1,0 +1,134 @@
+/// \file stages/08-mpi/step.cpp
+/// \brief Stage 08, MPI: the box cut into slabs, one per rank; each rank steps the particles
+/// whose centre lies in its slab, with copies of its neighbours' particles within reach (the
+/// halo), chooses the events by stage 03's mutual-earliest rounds across ranks, and hands the
+/// particles that left its slab to their new owners. Same bits as stages 01-06 at any rank count.
+//
+// =================================================================================================
+//  GOAL   One step of model.md on R ranks, each holding only its slab's particles:
+//         1. the halo: every rank sends each other rank copies of its particles that could meet
+//            one of that rank's in this step (within h = 2 max|vx| + 2r of its slab, in x);
+//         2. candidates, local: walls of the owned particles, pairs with an owned particle;
+//         3. the rounds of stage 03 across ranks: each unresolved owned particle chooses its
+//            earliest event; the choices of the ghosts come from their owners; a pair is
+//            accepted when both chose it; the ghosts' "resolved" flags come back each round;
+//         4. apply (a pair with a ghost: both owners compute it, each keeps its own particle);
+//         5. migration: particles now in another rank's slab move there (any rank, any distance).
+//  READ   handouts/08-mpi.md             TEST   ./plab test --impl student --stage 08
+// =================================================================================================
+#include <cmath>
+#include <vector>
+
+#include "plab/candidates.hpp"
+#include "ranks.hpp"
+
+namespace plab::dist {
+
+namespace {
+
+/// Sends, for every rank q, value[k] of each owned particle k in s.sent_to[q], and writes what
+/// comes back into value[] of the ghosts, in the order their owners listed them.
+template <class T>
+[[maybe_unused]]
+void share_with_ghosts(const Ranks& r, const Local& s, std::vector<T>& value) {
+  std::vector<std::vector<T>> out(r.ranks);
+  for (int q = 0; q < r.ranks; ++q)
+    for (int k : s.sent_to[q]) out[q].push_back(value[k]);
+  const std::vector<T> in = all_to_all(r, out);
+  std::copy(in.begin(), in.end(), value.begin() + s.owned);
+}
+
+/// 1. The halo: copies of every particle that could meet one of a rank's own in this step.
+void share_halo(const Ranks& r, const Box& box, Local& s) {
+  // EXERCISE 1: the halo. The reach h = 2 max|vx| + 2r, the max over every rank
+  // (max_over_ranks()): two disks further apart than h in x cannot touch within the step (add a
+  // margin far above rounding: a ghost too many costs nothing, one too few changes the bits). For
+  // every owned particle k and every other rank q whose slab [slab_lo(q) - h, slab_hi(q) + h]
+  // holds its x: note k in s.sent_to[q] (assign R empty lists first) and send s.record(k) to q.
+  // all_to_all() the records with &s.ghosts_from, s.push() each one received, and shift
+  // s.ghosts_from by s.owned (the ghosts come after the owned particles).
+  (void)r, (void)box, (void)s;
+  PLAB_EXERCISE(1, "the halo: copies of the particles within reach of each rank's slab");
+}
+
+/// 2. The candidates of the owned particles: their walls, and their pairs with any particle
+/// here (each computed with the lower scene index first, as every stage does).
+void find_candidates(const Box& box, const Local& s, std::vector<double>& wall,
+                     CandidateLists& cand) {
+  const Particles& p = s.p;
+  std::vector<std::vector<FoundPair>> found(1);
+  wall.assign(s.size(), model::never());
+  for (int i = 0; i < s.owned; ++i) {
+    wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
+    for (int j = i + 1; j < s.size(); ++j) {
+      const bool ij = s.id[i] < s.id[j];
+      const int a = ij ? i : j, b = ij ? j : i;
+      const double t = model::pair_time(p.x[a], p.y[a], p.vx[a], p.vy[a], p.x[b], p.y[b],
+                                        p.vx[b], p.vy[b], box.r);
+      if (model::in_step(t)) found[0].push_back(FoundPair{t, i, j});
+    }
+  }
+  cand.build(s.size(), found);
+}
+
+/// 3. Stage 03's rounds across ranks. Returns each owned particle's event (walls and pairs
+/// keyed by scene indices; `t` = never for none), the same as model.md's greedy over every rank.
+std::vector<model::Event> choose_events(const Ranks& r, const Local& s,
+                                        const std::vector<double>& wall,
+                                        const CandidateLists& cand) {
+  // EXERCISE 2: stage 03's rounds across ranks, with events keyed by scene indices (s.id[]).
+  // Until no rank has an unresolved particle left (any_rank()): share the ghosts' `resolved`
+  // flags (share_with_ghosts()); each unresolved owned particle chooses its earliest event (its
+  // wall, or a candidate pair with an unresolved partner: pair_event_key(t, lower id, higher
+  // id)); share the ghosts' choices; accept a wall, no event, or a pair its partner chose too.
+  // Why is the result model.md's greedy over every rank? (handout 08)
+  (void)r, (void)s, (void)wall, (void)cand;
+  PLAB_EXERCISE(2, "the rounds across ranks");
+}
+
+/// 4. Applies each owned particle's event. A pair with a ghost is computed here too, on the
+/// ghost's copy, in the same order as its owner computes it: both keep the same bits.
+void apply_events(const Box& box, const std::vector<model::Event>& chosen,
+                  const CandidateLists& cand, Local& s) {
+  Particles& p = s.p;
+  for (int i = 0; i < s.owned; ++i) {
+    const model::Event& e = chosen[i];
+    if (!model::in_step(e.t)) {
+      model::free_move(p.x[i], p.y[i], p.vx[i], p.vy[i]);
+    } else if (e.kind == model::kWall) {
+      model::wall_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], box.L, box.r);
+    } else {
+      const int other_id = e.lo == s.id[i] ? e.hi : e.lo;
+      int o = -1;
+      for (int k = cand.start[i]; k < cand.start[i + 1] && o < 0; ++k)
+        if (s.id[cand.other[k]] == other_id) o = cand.other[k];
+      if (o < s.owned && s.id[o] < s.id[i]) continue;  // an owned pair: applied from its lower
+      const int a = s.id[i] < s.id[o] ? i : o, b = a == i ? o : i;
+      model::pair_event(p.x[a], p.y[a], p.vx[a], p.vy[a], p.pc[a], p.x[b], p.y[b], p.vx[b],
+                        p.vy[b], p.pc[b], e.t, box.L, box.r);
+    }
+  }
+}
+
+/// 5. Migration: every owned particle now in another rank's slab goes there; ghosts are dropped.
+void migrate(const Ranks& r, Local& s) {
+  // EXERCISE 3: migration. Every owned particle whose centre is now in another rank's slab
+  // (r.owner_of(x)) goes to that rank, however far; the ghosts are dropped. Build the kept
+  // particles and the records to send, all_to_all() them, push what arrives, and set `owned`.
+  (void)r, (void)s;
+  PLAB_EXERCISE(3, "migration: particles to their new owners");
+}
+
+}  // namespace
+
+void step(const Box& box, const Ranks& r, Local& s) {
+  share_halo(r, box, s);
+  std::vector<double> wall;
+  CandidateLists cand;
+  find_candidates(box, s, wall, cand);
+  const std::vector<model::Event> chosen = choose_events(r, s, wall, cand);
+  apply_events(box, chosen, cand, s);
+  migrate(r, s);
+}
+
+}  // namespace plab::dist
