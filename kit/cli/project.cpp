@@ -36,6 +36,34 @@ std::vector<StageDir> stages(const std::string& impl) {
   return found;
 }
 
+nlohmann::json stage_declares(const std::string& id, const std::string& impl,
+                              const std::string& key) {
+  for (const StageDir& s : stages(impl)) {
+    if (s.id != id) continue;
+    const fs::path file = fs::path(source_dir()) / (impl == "solution" ? "solutions" : "stages") /
+                          (s.id + "-" + s.name) / "stage.json";
+    std::ifstream in(file);
+    if (!in) return nullptr;
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+    return j.is_object() && j.contains(key) ? j[key] : nlohmann::json();
+  }
+  return nullptr;
+}
+
+std::vector<std::string> on_ranks(const std::string& id, const std::string& impl, int ranks,
+                                  std::vector<std::string> program_and_args) {
+  if (stage_declares(id, impl, "needs_mpi") != true)
+    throw std::runtime_error("stage " + id + " runs on one process: --ranks is for the stages "
+                             "that declare needs_mpi in their stage.json (08)");
+  if (geteuid() == 0) {  // OpenMPI refuses root unless told twice (containers, CI)
+    setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
+    setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  }
+  std::vector<std::string> args{"mpirun", "--oversubscribe", "-np", std::to_string(ranks)};
+  args.insert(args.end(), program_and_args.begin(), program_and_args.end());
+  return args;
+}
+
 std::string default_impl() {
   return fs::is_directory(fs::path(source_dir()) / "solutions") ? "solution" : "student";
 }

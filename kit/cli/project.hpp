@@ -2,6 +2,8 @@
 /// \brief Where things are (source tree, build tree, stage programs) and running other programs.
 #pragma once
 
+#include <nlohmann/json.hpp>
+
 #include <string>
 #include <vector>
 
@@ -21,6 +23,13 @@ struct StageDir {
 };
 /// The stages of one tree (`solution` or `student`), in order.
 std::vector<StageDir> stages(const std::string& impl);
+/// A key of a stage's `stage.json` (null when the stage or the key is missing).
+nlohmann::json stage_declares(const std::string& id, const std::string& impl, const std::string& key);
+/// `program` and its arguments started on `ranks` ranks by mpirun (oversubscribed: more ranks
+/// than cores are fine; as root, with OpenMPI's two confirmations). For a stage that declares
+/// `needs_mpi`; throws for any other.
+std::vector<std::string> on_ranks(const std::string& id, const std::string& impl, int ranks,
+                                  std::vector<std::string> program_and_args);
 /// `solution` when the kit has `solutions/` (the instructor's copy), `student` otherwise.
 std::string default_impl();
 /// The program that runs stage `id` of `impl` (it may not exist if the stage did not compile).

@@ -8,6 +8,7 @@ void add_run(CLI::App& app) {
   struct Args {
     std::string stage, impl, scene, out, digest, schedule, explain;
     int threads = 0;
+    int ranks = 0;
     double timeout = 0;
     std::uint64_t seed = kDefaultSeed;
     bool quiet = false;
@@ -20,6 +21,9 @@ void add_run(CLI::App& app) {
                 "solution (solutions/) or student (stages/); default: solution when solutions/ "
                 "exists, otherwise student");
   c->add_option("--threads", a->threads, "threads for stages that use them");
+  c->add_option("--ranks", a->ranks,
+                "processes for a stage that runs on several (08): mpirun starts them, more than "
+                "the cores if asked")->check(CLI::Range(1, 4096));
   c->add_option("--schedule", a->schedule, "OpenMP schedule: static, dynamic or guided[,CHUNK]");
   c->add_option("--out", a->out, "write the output to this file (only when the run succeeds)");
   c->add_option("--digest", a->digest, "write one state digest per step to this file");
@@ -46,6 +50,7 @@ void add_run(CLI::App& app) {
     if (a->quiet) args.emplace_back("--quiet");
     const std::string status = temp_path("run.status");
     args.insert(args.end(), {"--status", status});
+    if (a->ranks > 0) args = on_ranks(id, impl, a->ranks, args);
     g_status = run_stage_watched(args, {"stage " + id + " (" + impl + ") on " +
                                             fs::path(a->scene).filename().string(),
                                         a->timeout, status});
