@@ -4,6 +4,7 @@
 #pragma once
 
 #include "plab/cuda/particles.hpp"
+#include "plab/cuda/rounds.cuh"
 #include "plab/cuda/slots.cuh"
 #include "plab/model.hpp"
 #include "plab/plan.hpp"
@@ -11,6 +12,8 @@
 
 namespace plab::kernels {
 
+using cuda::accept_one;
+using cuda::choose_one;
 using cuda::ParticlesView;
 using model::Event;
 
@@ -85,8 +88,8 @@ __global__ void find_pairs(ParticlesView p, Box box, StepArrays a) {
 
 // EXERCISE 2: resolve, every round of a step in one block of kResolveThreads threads.
 /// Every round of the step in one block, so that the host never waits: particles without pair
-/// events are decided at once (their wall, or nothing); the others go through choose / accept
-/// rounds separated by block barriers. Skips the step (and counts nothing) when a particle has
+/// events are decided at once (their wall, or nothing); the others go through rounds of the
+/// kit's choose_one() / accept_one() (cuda/rounds.cuh) separated by block barriers. Skips the step (and counts nothing) when a particle has
 /// more pair events than slots; the host then grows the slots and runs the step again.
 __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) {
   __shared__ int contested;
@@ -108,38 +111,12 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
   const int m = contested;
   const Event none = model::pair_event_key(model::never(), n, n);
   for (;;) {
-    for (int k = threadIdx.x; k < m; k += blockDim.x) {  // choose
-      const int i = a.contested[k];
-      if (a.resolved[i]) continue;
-      Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
-      for (int s = 0; s < a.slots.count[i]; ++s) {
-        const int o = a.slots.other_at(i, s);
-        if (a.resolved[o]) continue;
-        const Event e = model::pair_event_key(a.slots.time_at(i, s), i < o ? i : o, i < o ? o : i);
-        if (model::key_less(e, b)) b = e;
-      }
-      a.best[i] = b;
-    }
+    for (int k = threadIdx.x; k < m; k += blockDim.x)  // choose
+      if (!a.resolved[a.contested[k]]) choose_one(a.contested[k], a, none);
     __syncthreads();
     int open = 0;
-    for (int k = threadIdx.x; k < m; k += blockDim.x) {  // accept
-      const int i = a.contested[k];
-      if (a.resolved[i]) continue;
-      const Event e = a.best[i];
-      const int o = (e.lo == i) ? e.hi : e.lo;
-      if (!model::in_step(e.t)) {
-        a.resolved[i] = 1;
-      } else if (e.kind == model::kWall) {
-        a.partner[i] = Plan::kWall;
-        a.resolved[i] = 1;
-      } else if (a.best[o].kind == model::kPair && a.best[o].lo == e.lo && a.best[o].hi == e.hi) {
-        a.partner[i] = o;
-        a.ptime[i] = e.t;
-        a.resolved[i] = 1;
-      } else {
-        open = 1;
-      }
-    }
+    for (int k = threadIdx.x; k < m; k += blockDim.x)  // accept
+      if (!a.resolved[a.contested[k]] && !accept_one(a.contested[k], a)) open = 1;
     if (!__syncthreads_or(open)) break;
   }
   if (threadIdx.x == 0) a.flags->steps_done += 1;

@@ -7,6 +7,7 @@
 #include <cooperative_groups.h>
 
 #include "plab/cuda/particles.hpp"
+#include "plab/cuda/rounds.cuh"
 #include "plab/cuda/slots.cuh"
 #include "plab/model.hpp"
 #include "plab/plan.hpp"
@@ -15,6 +16,9 @@
 
 namespace plab::kernels {
 
+using cuda::accept_one;
+using cuda::choose_one;
+using cuda::start_one;
 using cuda::ParticlesView;
 using model::Event;
 
@@ -172,70 +176,10 @@ __global__ void find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d)
   }
 }
 
-/// A round's first half for particle i: its earliest event among its wall and its pairs with
-/// unresolved partners (or `none`, which sorts after every real event).
-__device__ inline void choose_one(int i, int n, const StepArrays& a, const Event& none) {
-  Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
-  for (int s = 0; s < a.slots.count[i]; ++s) {
-    const int o = a.slots.other_at(i, s);
-    if (a.resolved[o]) continue;
-    const Event e = model::pair_event_key(a.slots.time_at(i, s), i < o ? i : o, i < o ? o : i);
-    if (model::key_less(e, b)) b = e;
-  }
-  a.best[i] = b;
-}
-
-/// A round's second half for particle i: accepts a wall, no event, or a pair both chose, writing
-/// only particle i. Returns false when i is left for the next round.
-__device__ inline bool accept_one(int i, const StepArrays& a) {
-  const Event e = a.best[i];
-  const int o = (e.lo == i) ? e.hi : e.lo;
-  if (!model::in_step(e.t)) {
-    a.resolved[i] = 1;
-  } else if (e.kind == model::kWall) {
-    a.partner[i] = Plan::kWall;
-    a.resolved[i] = 1;
-  } else if (a.best[o].kind == model::kPair && a.best[o].lo == e.lo && a.best[o].hi == e.hi) {
-    a.partner[i] = o;
-    a.ptime[i] = e.t;
-    a.resolved[i] = 1;
-  } else {
-    return false;
-  }
-  return true;
-}
-
-/// Every round of the step in one block (stage 05's resolve over the sparse candidates); skips
-/// the step when slots ran out.
+/// Every round of the step in one block (stage 05's resolve over the sparse candidates, from the
+/// kit: cuda::resolve_block()); skips the step when slots ran out.
 __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) {
-  __shared__ int contested;
-  if (a.flags->overflow) return;
-  if (threadIdx.x == 0) contested = 0;
-  __syncthreads();
-  int over = 0;
-  for (int i = threadIdx.x; i < n; i += blockDim.x) {
-    const int c = a.slots.count[i];
-    a.partner[i] = (c == 0 && model::in_step(a.wall[i])) ? Plan::kWall : Plan::kFree;
-    a.resolved[i] = (c == 0);
-    if (c > a.slots.cap) over = max(over, c);
-    if (c > 0) a.contested[atomicAdd(&contested, 1)] = i;
-  }
-  if (__syncthreads_or(over)) {
-    if (over) atomicMax(&a.flags->overflow, over);
-    return;
-  }
-  const int m = contested;
-  const Event none = model::pair_event_key(model::never(), n, n);
-  for (;;) {
-    for (int q = threadIdx.x; q < m; q += blockDim.x)  // choose
-      if (!a.resolved[a.contested[q]]) choose_one(a.contested[q], n, a, none);
-    __syncthreads();
-    int open = 0;
-    for (int q = threadIdx.x; q < m; q += blockDim.x)  // accept
-      if (!a.resolved[a.contested[q]] && !accept_one(a.contested[q], a)) open = 1;
-    if (!__syncthreads_or(open)) break;
-  }
-  if (threadIdx.x == 0) a.flags->steps_done += 1;
+  cuda::resolve_block(n, a);
 }
 
 /// resolve() for large N: the same rounds over the whole grid (a cooperative launch, every block
@@ -250,9 +194,7 @@ __global__ void resolve_grid(int n, StepArrays a) {
   grid.sync();
   if (skipped) return;
   for (int i = me; i < n; i += stride) {
-    const int c = a.slots.count[i];
-    a.partner[i] = (c == 0 && model::in_step(a.wall[i])) ? Plan::kWall : Plan::kFree;
-    a.resolved[i] = (c == 0);
+    const int c = start_one(i, a);
     if (c > a.slots.cap) atomicMax(&f->overflow, c);
     if (c > 0) a.contested[atomicAdd(&f->contested, 1)] = i;
   }
@@ -265,7 +207,7 @@ __global__ void resolve_grid(int n, StepArrays a) {
     // clearing (r + 1) % 3 now cannot meet a slow reader of round r - 1's flag.
     if (me == 0) f->open[(round + 1) % 3] = 0;
     for (int q = me; q < m; q += stride)  // choose
-      if (!a.resolved[a.contested[q]]) choose_one(a.contested[q], n, a, none);
+      if (!a.resolved[a.contested[q]]) choose_one(a.contested[q], a, none);
     grid.sync();
     for (int q = me; q < m; q += stride)  // accept
       if (!a.resolved[a.contested[q]] && !accept_one(a.contested[q], a)) f->open[round % 3] = 1;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "plab/cuda/particles.hpp"
+#include "plab/cuda/rounds.cuh"
 #include "plab/cuda/slots.cuh"
 #include "plab/model.hpp"
 #include "plab/plan.hpp"
@@ -11,6 +12,8 @@
 
 namespace plab::kernels {
 
+using cuda::accept_one;
+using cuda::choose_one;
 using cuda::ParticlesView;
 using model::Event;
 
@@ -57,10 +60,12 @@ __global__ void wall_times(ParticlesView p, Box box, StepArrays a) {
 // slot if there is one); the order of slots does not matter, as the event key orders them.
 
 // EXERCISE 2: resolve, every round of a step in one block of kResolveThreads threads.
-// Hints: stage 04's choose and accept, with a block barrier (__syncthreads) between them and
-// __syncthreads_or(open) to decide on another round. First decide at once the particles with no
-// pair event (their wall, or nothing) and list the others (contested) with a __shared__ counter.
-// Slot s of particle i is a.slots.other_at(i, s), a.slots.time_at(i, s), s < a.slots.count[i].
+// Hints: a particle's part of a round (stage 04's choose and accept, per particle) is the kit's
+// choose_one(i, a, none) and accept_one(i, a) (plab/cuda/rounds.cuh; "none" is
+// model::pair_event_key(model::never(), n, n)): write the block's loop around them, with a block
+// barrier (__syncthreads) between choose and accept and __syncthreads_or(open) to decide on
+// another round. First decide at once the particles with no pair event (their wall, or nothing)
+// and list the others (contested) with a __shared__ counter; the rounds run over those only.
 // When a count exceeds a.slots.cap, raise flags->overflow (atomicMax) and return without counting
 // the step; when flags->overflow is already set on entry, return at once. Thread 0 adds 1 to
 // flags->steps_done at the end.

@@ -1,0 +1,126 @@
+/// \file cuda/rounds.cuh
+/// \brief The "mutual earliest" rounds on the device, for the GPU stages that run them without
+/// teaching them: one particle's part of a round (handout 03's rounds, stage 04's choose and
+/// accept kernels: choose_one(), accept_one(), and start_one() before the first round), used by
+/// stage 05's resolve and stage 06; and every round of a step in one block (stage 05's resolve:
+/// resolve_block()), used by stage 06.
+///
+/// A round, for every unresolved particle \f$i\f$ at once:
+/// - **choose**: \f$b_i = \min_{\prec} \big(\{w_i\} \cup \{(t_{ik}, \min(i,o_k), \max(i,o_k)) :
+///   o_k \text{ unresolved}\}\big)\f$ over its wall event \f$w_i\f$ (if its wall time is in the
+///   step, else "none", which sorts after every real event) and its slots \f$k\f$, where
+///   \f$\prec\f$ is plab::model::key_less();
+/// - **accept** (after a barrier): \f$i\f$ is resolved when \f$b_i\f$ is none (it moves freely),
+///   a wall (it hits it), or a pair whose other particle \f$o\f$ chose the same pair,
+///   \f$b_o = b_i\f$ (both take it); otherwise \f$i\f$ is left for the next round.
+///
+/// Each call writes only particle \f$i\f$'s entries, so one thread per particle needs no atomics;
+/// the caller separates the two halves by a barrier (a kernel boundary, `__syncthreads()`, a grid
+/// sync). The comparisons are stage 04's, in the same order: the same plan, bit for bit.
+///
+/// `Arrays` is the stage's struct of step arrays (passed to kernels by value); these functions
+/// read and write its members by name:
+/// - `double* wall`: each particle's wall time (steps);
+/// - `SlotsView<Layout> slots`: each particle's pair events of the step (slots.cuh);
+/// - `model::Event* best`: each unresolved particle's choice in the current round;
+/// - `char* resolved`: 1 once a particle's event (or none) is decided;
+/// - `int* partner`, `double* ptime`: the plan (Plan::kFree, Plan::kWall or the other particle,
+///   and the pair time);
+/// - resolve_block() only: `int* contested` (room for every particle), and `flags`, a pointer to
+///   the stage's flags with `int overflow` and `long long steps_done`.
+#pragma once
+
+#include "plab/cuda/slots.cuh"
+#include "plab/model.hpp"
+#include "plab/plan.hpp"
+
+namespace plab::cuda {
+
+/// Before the first round, for every particle `i`: one with no pair event is decided at once
+/// (resolved, with its wall when the wall time is in the step, else nothing); one with pair
+/// events is left unresolved, with no plan yet. Returns its count of pair events (it takes part
+/// in the rounds when the count is above 0; a count above `a.slots.cap` means the slots ran out).
+template <class Arrays>
+__device__ inline int start_one(int i, const Arrays& a) {
+  const int c = a.slots.count[i];
+  a.partner[i] = (c == 0 && model::in_step(a.wall[i])) ? Plan::kWall : Plan::kFree;
+  a.resolved[i] = (c == 0);
+  return c;
+}
+
+/// A round's first half for unresolved particle `i`: `a.best[i]` = its earliest event among its
+/// wall (when in the step) and its pairs with unresolved partners, or `none`
+/// (`model::pair_event_key(model::never(), n, n)`) when it has neither.
+template <class Arrays>
+__device__ inline void choose_one(int i, const Arrays& a, const model::Event& none) {
+  model::Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
+  for (int s = 0; s < a.slots.count[i]; ++s) {
+    const int o = a.slots.other_at(i, s);
+    if (a.resolved[o]) continue;
+    const model::Event e =
+        model::pair_event_key(a.slots.time_at(i, s), i < o ? i : o, i < o ? o : i);
+    if (model::key_less(e, b)) b = e;
+  }
+  a.best[i] = b;
+}
+
+/// A round's second half for unresolved particle `i` (every choose_one() of the round done):
+/// accepts its choice when it is none, a wall, or a pair the other particle chose too, writing
+/// only particle `i`'s plan entry and `resolved[i]`. Returns false when `i` is left for the next
+/// round.
+template <class Arrays>
+__device__ inline bool accept_one(int i, const Arrays& a) {
+  const model::Event e = a.best[i];
+  const int o = (e.lo == i) ? e.hi : e.lo;
+  if (!model::in_step(e.t)) {
+    a.resolved[i] = 1;
+  } else if (e.kind == model::kWall) {
+    a.partner[i] = Plan::kWall;
+    a.resolved[i] = 1;
+  } else if (a.best[o].kind == model::kPair && a.best[o].lo == e.lo && a.best[o].hi == e.hi) {
+    a.partner[i] = o;
+    a.ptime[i] = e.t;
+    a.resolved[i] = 1;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+/// Every round of a step in the calling block (stage 05's resolve; launch one block): the
+/// particles with pair events are listed in `a.contested` (through a `__shared__` counter) and go
+/// through rounds of choose_one() and accept_one() separated by block barriers, until a round
+/// leaves no one open. Does nothing when `a.flags->overflow` is set on entry (an earlier step
+/// waits for more slots); skips the step (raising `overflow` to the largest count) when a
+/// particle has more pair events than slots; else adds 1 to `a.flags->steps_done`.
+template <class Arrays>
+__device__ inline void resolve_block(int n, const Arrays& a) {
+  __shared__ int contested;
+  if (a.flags->overflow) return;
+  if (threadIdx.x == 0) contested = 0;
+  __syncthreads();
+  int over = 0;
+  for (int i = threadIdx.x; i < n; i += blockDim.x) {
+    const int c = start_one(i, a);
+    if (c > a.slots.cap) over = max(over, c);
+    if (c > 0) a.contested[atomicAdd(&contested, 1)] = i;
+  }
+  if (__syncthreads_or(over)) {
+    if (over) atomicMax(&a.flags->overflow, over);
+    return;
+  }
+  const int m = contested;
+  const model::Event none = model::pair_event_key(model::never(), n, n);
+  for (;;) {
+    for (int q = threadIdx.x; q < m; q += blockDim.x)  // choose
+      if (!a.resolved[a.contested[q]]) choose_one(a.contested[q], a, none);
+    __syncthreads();
+    int open = 0;
+    for (int q = threadIdx.x; q < m; q += blockDim.x)  // accept
+      if (!a.resolved[a.contested[q]] && !accept_one(a.contested[q], a)) open = 1;
+    if (!__syncthreads_or(open)) break;
+  }
+  if (threadIdx.x == 0) a.flags->steps_done += 1;
+}
+
+}  // namespace plab::cuda
