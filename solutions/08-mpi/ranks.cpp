@@ -194,6 +194,7 @@ std::vector<T> all_to_all(const Ranks& r, const std::vector<std::vector<T>>& out
   return in;
 }
 
+/// \cond
 template std::vector<Record> all_to_all(const Ranks&, const std::vector<std::vector<Record>>&,
                                       std::vector<int>*);
 template std::vector<model::Event> all_to_all(const Ranks&,
@@ -201,6 +202,7 @@ template std::vector<model::Event> all_to_all(const Ranks&,
                                             std::vector<int>*);
 template std::vector<char> all_to_all(const Ranks&, const std::vector<std::vector<char>>&,
                                     std::vector<int>*);
+/// \endcond
 
 double max_over_ranks(const Ranks& r, double v) {
   double m = v;

@@ -25,15 +25,20 @@ struct Ranks {
     const int k = static_cast<int>(x / (L / ranks));
     return k < 0 ? 0 : (k >= ranks ? ranks - 1 : k);
   }
-  /// The lower and upper x of rank k's slab.
+  /// The lower x of rank k's slab.
   [[nodiscard]] double slab_lo(int k) const { return k * (L / ranks); }
+  /// The upper x of rank k's slab.
   [[nodiscard]] double slab_hi(int k) const { return (k + 1) * (L / ranks); }
 };
 
 /// One particle as it travels between ranks: its global index and its state.
 struct Record {
-  double x, y, vx, vy;  //!< centre and velocity
-  long long pc, wc;     //!< collision counters
+  double x;     //!< centre x
+  double y;     //!< centre y
+  double vx;    //!< velocity x
+  double vy;    //!< velocity y
+  long long pc; //!< collisions with other particles so far
+  long long wc; //!< collisions with walls so far
   int id;               //!< its index in the scene (the event keys and the output use it)
   int pad = 0;          //!< (keeps the struct a multiple of 8 bytes)
 };
@@ -48,6 +53,7 @@ struct Local {
   std::vector<std::vector<int>> sent_to;  //!< per rank: the owned particles it has as ghosts
   std::vector<int> ghosts_from;           //!< per rank: where its ghosts start (R + 1 entries)
 
+  /// Particles here, owned and ghosts.
   [[nodiscard]] int size() const { return static_cast<int>(id.size()); }
   /// Particle k as a Record.
   [[nodiscard]] Record record(int k) const {
