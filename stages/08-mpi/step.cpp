@@ -8,7 +8,8 @@
 //  GOAL   One step of model.md on R ranks, each holding only its slab's particles:
 //         1. the halo: every rank sends each other rank copies of its particles that could meet
 //            one of that rank's in this step (within h = 2 max|vx| + 2r of its slab, in x);
-//         2. candidates, local: walls of the owned particles, pairs with an owned particle;
+//         2. candidates, local (given): walls of the owned particles, pairs with an owned one,
+//            tested only within 3 x 3 cells of the reach;
 //         3. the rounds of stage 03 across ranks: each unresolved owned particle chooses its
 //            earliest event; the choices of the ghosts come from their owners; a pair is
 //            accepted when both chose it; the ghosts' "resolved" flags come back each round;
@@ -16,6 +17,7 @@
 //         5. migration: particles now in another rank's slab move there (any rank, any distance).
 //  READ   handouts/08-mpi.md             TEST   ./plab test --impl student --stage 08
 // =================================================================================================
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -38,37 +40,77 @@ void share_with_ghosts(const Ranks& r, const Local& s, std::vector<T>& value) {
   std::copy(in.begin(), in.end(), value.begin() + s.owned);
 }
 
+/// How far apart in x and in y two disks can start and still touch within the step: each
+/// moves at most max|v| along an axis, the largest over every rank (max_over_ranks()), so
+/// 2 max|v| + 2r, with a margin far above rounding (a pair tested too many costs nothing, one
+/// missed changes the bits).
+struct Reach {
+  double x;  //!< in x: the halo's width
+  double y;  //!< in y
+};
+Reach reach_of(const Ranks& r, const Box& box, const Local& s) {
+  double vx = 0, vy = 0;
+  for (int k = 0; k < s.owned; ++k) {
+    vx = std::fmax(vx, std::fabs(s.p.vx[k]));
+    vy = std::fmax(vy, std::fabs(s.p.vy[k]));
+  }
+  const auto with_margin = [&](double v) { return (2 * v + 2 * box.r) * (1 + 1e-9) + 1e-9 * box.L; };
+  return {with_margin(max_over_ranks(r, vx)), with_margin(max_over_ranks(r, vy))};
+}
+
 /// 1. The halo: copies of every particle that could meet one of a rank's own in this step.
-void share_halo(const Ranks& r, const Box& box, Local& s) {
-  // EXERCISE 1: the halo. The reach h = 2 max|vx| + 2r, the max over every rank
-  // (max_over_ranks()): two disks further apart than h in x cannot touch within the step (add a
-  // margin far above rounding: a ghost too many costs nothing, one too few changes the bits). For
-  // every owned particle k and every other rank q whose slab [slab_lo(q) - h, slab_hi(q) + h]
+void share_halo(const Ranks& r, const Reach& reach, Local& s) {
+  // EXERCISE 1: the halo. Two disks further apart in x than h = reach.x cannot touch within
+  // the step (reach_of() says why). For every owned particle k and every other rank q whose slab [slab_lo(q) - h, slab_hi(q) + h]
   // holds its x: note k in s.sent_to[q] (assign R empty lists first) and send s.record(k) to q.
   // all_to_all() the records with &s.ghosts_from, s.push() each one received, and shift
   // s.ghosts_from by s.owned (the ghosts come after the owned particles).
-  (void)r, (void)box, (void)s;
+  (void)r, (void)reach, (void)s;
   PLAB_EXERCISE(1, "the halo: copies of the particles within reach of each rank's slab");
 }
 
 /// 2. The candidates of the owned particles: their walls, and their pairs with any particle
-/// here (each computed with the lower scene index first, as every stage does).
-void find_candidates(const Box& box, const Local& s, std::vector<double>& wall,
-                     CandidateLists& cand) {
+/// here (each computed with the lower scene index first, as every stage does). Only the pairs
+/// within `reach` in x and in y can meet: the particles are sorted into square cells of the
+/// larger reach, and each owned particle is tested against the 3 x 3 cells around its own.
+void find_candidates(const Box& box, const Local& s, const Reach& reach,
+                     std::vector<double>& wall, CandidateLists& cand) {
   const Particles& p = s.p;
+  const int n = s.size();
   std::vector<std::vector<FoundPair>> found(1);
-  wall.assign(s.size(), model::never());
+  wall.assign(n, model::never());
+  if (n == 0) return cand.build(0, found);
+  double x0 = p.x[0], x1 = p.x[0], y0 = p.y[0], y1 = p.y[0];
+  for (int k = 1; k < n; ++k) {
+    x0 = std::fmin(x0, p.x[k]), x1 = std::fmax(x1, p.x[k]);
+    y0 = std::fmin(y0, p.y[k]), y1 = std::fmax(y1, p.y[k]);
+  }
+  double w = std::fmax(reach.x, reach.y);
+  while (((x1 - x0) / w + 1) * ((y1 - y0) / w + 1) > 4.0 * n + 16) w *= 2;  // cells <= 4n
+  const int nx = static_cast<int>((x1 - x0) / w) + 1, ny = static_cast<int>((y1 - y0) / w) + 1;
+  const auto cell_x = [&](int k) { return static_cast<int>((p.x[k] - x0) / w); };
+  const auto cell_y = [&](int k) { return static_cast<int>((p.y[k] - y0) / w); };
+  std::vector<int> start(static_cast<std::size_t>(nx) * ny + 1, 0), sorted(n);
+  for (int k = 0; k < n; ++k) ++start[cell_y(k) * nx + cell_x(k) + 1];
+  for (std::size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (int k = 0; k < n; ++k) sorted[fill[cell_y(k) * nx + cell_x(k)]++] = k;
   for (int i = 0; i < s.owned; ++i) {
     wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
-    for (int j = i + 1; j < s.size(); ++j) {
-      const bool ij = s.id[i] < s.id[j];
-      const int a = ij ? i : j, b = ij ? j : i;
-      const double t = model::pair_time(p.x[a], p.y[a], p.vx[a], p.vy[a], p.x[b], p.y[b],
-                                        p.vx[b], p.vy[b], box.r);
-      if (model::in_step(t)) found[0].push_back(FoundPair{t, i, j});
-    }
+    const int cx = cell_x(i), cy = cell_y(i);
+    for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, ny - 1); ++y)
+      for (int x = std::max(cx - 1, 0); x <= std::min(cx + 1, nx - 1); ++x)
+        for (int e = start[y * nx + x]; e < start[y * nx + x + 1]; ++e) {
+          const int j = sorted[e];
+          if (j <= i) continue;  // each owned pair once; every ghost is after the owned
+          const bool ij = s.id[i] < s.id[j];
+          const int a = ij ? i : j, b = ij ? j : i;
+          const double t = model::pair_time(p.x[a], p.y[a], p.vx[a], p.vy[a], p.x[b], p.y[b],
+                                            p.vx[b], p.vy[b], box.r);
+          if (model::in_step(t)) found[0].push_back(FoundPair{t, i, j});
+        }
   }
-  cand.build(s.size(), found);
+  cand.build(n, found);
 }
 
 /// 3. Stage 03's rounds across ranks. Returns each owned particle's event (walls and pairs
@@ -122,10 +164,11 @@ void migrate(const Ranks& r, Local& s) {
 }  // namespace
 
 void step(const Box& box, const Ranks& r, Local& s) {
-  share_halo(r, box, s);
+  const Reach reach = reach_of(r, box, s);
+  share_halo(r, reach, s);
   std::vector<double> wall;
   CandidateLists cand;
-  find_candidates(box, s, wall, cand);
+  find_candidates(box, s, reach, wall, cand);
   const std::vector<model::Event> chosen = choose_events(r, s, wall, cand);
   apply_events(box, chosen, cand, s);
   migrate(r, s);
