@@ -8,6 +8,7 @@ void add_bench(CLI::App& app) {
   struct Args {
     std::vector<std::string> stages, schedules{"dynamic,16"};
     std::vector<int> threads{1};
+    std::vector<int> ranks;
     std::vector<long long> n{1000, 2000, 4000};
     long long steps = 500;
     int runs = 3;
@@ -23,6 +24,10 @@ void add_bench(CLI::App& app) {
   c->add_option("--stage", a->stages, "stages, e.g. 02,03")->required()->delimiter(',');
   c->add_option("--threads", a->threads, "thread counts, e.g. 1,2")->delimiter(',')
       ->capture_default_str();
+  c->add_option("--ranks", a->ranks,
+                "rank counts for a stage on several processes (08), e.g. 1,2,4: mpirun starts "
+                "them (one thread each); adds bytes sent per step and the share of time in "
+                "exchanges")->delimiter(',')->check(CLI::Range(1, 4096));
   c->add_option("--n", a->n, "particle counts")->delimiter(',')->capture_default_str();
   c->add_option("--steps", a->steps, "steps S")->capture_default_str();
   c->add_option("--runs", a->runs, "timed runs per configuration")->capture_default_str()
@@ -43,7 +48,14 @@ void add_bench(CLI::App& app) {
     std::string csv =
         "stage,impl,n,steps,threads,schedule,runs,median_s,min_s,max_s,speedup,step_median_s,"
         "step_min_s,step_max_s,timer,device,device_bytes\n";
-    std::printf("%-5s %6s %5s %7s %-11s %10s %9s %8s %10s %9s  %s\n", "stage", "N", "S", "threads",
+    const bool by_ranks = !a->ranks.empty();
+    if (by_ranks) {
+      a->threads = a->ranks;  // the loop below runs over rank counts, one thread each
+      csv.pop_back();
+      csv += ",ranks,bytes_per_step,comm_share\n";
+    }
+    std::printf("%-5s %6s %5s %7s %-11s %10s %9s %8s %10s %9s  %s\n", "stage", "N", "S",
+                by_ranks ? "ranks" : "threads",
                 "schedule", "median s", "spread", "speedup", "in steps", "ms/step", "device");
     const std::string report = temp_path("bench-report.json");
     for (const long long n : a->n) {
@@ -74,9 +86,11 @@ void add_bench(CLI::App& app) {
                 std::fprintf(stderr, "\r  stage %s N=%lld threads=%d run %d/%d ", id.c_str(), n,
                              threads, k + 1, a->runs);
               const auto t0 = std::chrono::steady_clock::now();
-              const int rc = run_program({program, scene, "--quiet", "--out", "/dev/null",
-                                          "--threads", std::to_string(threads), "--schedule",
-                                          schedule, "--report", report});
+              std::vector<std::string> args{program, scene, "--quiet", "--out", "/dev/null",
+                                            "--threads", by_ranks ? "1" : std::to_string(threads),
+                                            "--schedule", schedule, "--report", report};
+              if (by_ranks) args = on_ranks(id, impl, threads, args);
+              const int rc = run_program(args);
               if (rc != 0)
                 throw std::runtime_error("stage " + id + " failed (exit " + std::to_string(rc) +
                                          ") on " + scene);
@@ -102,6 +116,13 @@ void add_bench(CLI::App& app) {
                         gpu ? "-" : schedule.c_str(), median, 100 * spread, speedup, step_median,
                         a->steps ? 1e3 * step_median / a->steps : 0.0, device.c_str(),
                         timer.c_str());
+            const double bytes = last.value("bytes_sent", 0.0);
+            const double comm = last.value("comm_seconds", 0.0);
+            const double steps = a->steps ? static_cast<double>(a->steps) : 1.0;
+            if (by_ranks)
+              std::printf("      %.3g bytes sent per step, %.0f%% of the time in steps in "
+                          "exchanges (the busiest rank)\n",
+                          bytes / steps, step_median > 0 ? 100 * comm / step_median : 0.0);
             std::fflush(stdout);
             char row[512];
             std::snprintf(row, sizeof row,
@@ -111,6 +132,11 @@ void add_bench(CLI::App& app) {
                           steps_t.back(), timer.c_str(), device.c_str(),
                           last.value("device_bytes", std::size_t{0}));
             csv += row;
+            if (by_ranks) {
+              csv.pop_back();
+              csv += "," + std::to_string(threads) + "," + std::to_string(bytes / steps) + "," +
+                     std::to_string(step_median > 0 ? comm / step_median : 0.0) + "\n";
+            }
             if (gpu) break;  // threads and schedules are CPU settings
           }
         }
@@ -119,7 +145,7 @@ void add_bench(CLI::App& app) {
     if (!a->csv.empty()) write_text(a->csv, csv);
     std::printf("median s: whole-process wall seconds (start-up, scene reading and, on a GPU, "
                 "context creation included; output to /dev/null); spread = (max - min) / median "
-                "over %d runs; speedup: over the first thread count; in steps: the median of the "
+                "over %d runs; speedup: over the first thread (or rank) count; in steps: the median of the "
                 "stage's own time in steps (host clock on the CPU, CUDA events on a GPU)\n",
                 a->runs);
   });

@@ -21,7 +21,9 @@ void report(const Options& o, const Scene& scene, const RunStats& stats) {
         {"device_bytes", stats.device_bytes},
         {"total_seconds", stats.total_seconds},
         {"pair_events", stats.pair_events}, {"wall_events", stats.wall_events},
-        {"substeps", o.substeps},         {"real", o.real}};
+        {"substeps", o.substeps},         {"real", o.real},
+        {"ranks", stats.traffic.ranks},   {"bytes_sent", stats.traffic.bytes_sent},
+        {"comm_seconds", stats.traffic.comm_seconds}};
     const std::string text = j.dump(2) + "\n";
     std::fputs(text.c_str(), file.get());
     file.commit();
@@ -34,6 +36,10 @@ void report(const Options& o, const Scene& scene, const RunStats& stats) {
                scene.steps, get_threads(), stats.step_seconds,
                scene.steps ? 1e3 * stats.step_seconds / scene.steps : 0.0, stats.timer.c_str(),
                stats.total_seconds, stats.pair_events, stats.wall_events);
+  if (stats.traffic.ranks > 1)
+    std::fprintf(stderr, "stage %s (%s) on %d ranks: %.3g bytes sent, %.3f s in exchanges (the "
+                 "busiest rank)\n", info.id.c_str(), info.impl.c_str(), stats.traffic.ranks,
+                 stats.traffic.bytes_sent, stats.traffic.comm_seconds);
   if (stats.device_bytes)
     std::fprintf(stderr, "stage %s (%s): %.2f MB of device memory held\n", info.id.c_str(),
                  info.impl.c_str(), stats.device_bytes / 1e6);

@@ -7,6 +7,7 @@
 
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <type_traits>
@@ -16,7 +17,25 @@ namespace plab::dist {
 namespace {
 
 /// What rank 0 asks of the others.
-enum Command : int { kStart, kStep, kRead, kStop, kExit };
+enum Command : int { kStart, kStep, kRead, kTraffic, kStop, kExit };
+
+/// This process's messages so far: bytes it sent, seconds in exchanges and reductions.
+Stepper::Traffic traffic_here;
+
+/// Counts the time from its making to its end as time in messages.
+class InMessages {
+ public:
+  InMessages() : t0_(std::chrono::steady_clock::now()) {}
+  ~InMessages() {
+    traffic_here.comm_seconds +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+  }
+  InMessages(const InMessages&) = delete;
+  InMessages& operator=(const InMessages&) = delete;
+
+ private:
+  std::chrono::steady_clock::time_point t0_;
+};
 
 /// The ranks of this process (set by start_mpi()).
 Ranks the_ranks;
@@ -94,14 +113,16 @@ void gather(const Ranks& r, const Local& s, Particles* all_on_0) {
 
 /// One run's state on any rank: what the commands act on.
 struct Run {
-  Box box;
-  Local s;
+  Box box;                   //!< the box and radius
+  Local s;                   //!< this rank's particles
+  Stepper::Traffic traffic;  //!< on rank 0, after kTraffic: every rank's messages
 };
 
 /// Acts on one command (every rank, in the same order).
 void act(int command, const Ranks& r, Run& run, Particles* all) {
   switch (command) {
     case kStart: {
+      traffic_here = {};
       double head[2] = {run.box.L, run.box.r};
       MPI_Bcast(head, 2, MPI_DOUBLE, 0, r.comm);
       run.box = {head[0], head[1]};
@@ -115,6 +136,13 @@ void act(int command, const Ranks& r, Run& run, Particles* all) {
     case kRead:
       gather(r, run.s, all);
       break;
+    case kTraffic: {  // the sum of the bytes, the most seconds, on rank 0
+      double bytes = 0, seconds = 0;
+      MPI_Reduce(&traffic_here.bytes_sent, &bytes, 1, MPI_DOUBLE, MPI_SUM, 0, r.comm);
+      MPI_Reduce(&traffic_here.comm_seconds, &seconds, 1, MPI_DOUBLE, MPI_MAX, 0, r.comm);
+      run.traffic = {bytes, seconds, r.ranks};
+      break;
+    }
     default:
       break;
   }
@@ -133,6 +161,10 @@ class DistStepper final : public Stepper {
   }
   void step() override { command(kStep, nullptr); }
   void read(Particles& p) override { command(kRead, &p); }
+  Traffic traffic() override {
+    command(kTraffic, nullptr);
+    return run_.traffic;
+  }
 
  private:
   void command(int c, Particles* all) {
@@ -169,6 +201,7 @@ template <class T>
 std::vector<T> all_to_all(const Ranks& r, const std::vector<std::vector<T>>& out,
                         std::vector<int>* from) {
   static_assert(std::is_trivially_copyable_v<T>);
+  const InMessages timed;
   const int n = r.ranks;
   std::vector<int> send_bytes(n), recv_bytes(n), send_at(n), recv_at(n);
   std::vector<char> send;
@@ -178,6 +211,7 @@ std::vector<T> all_to_all(const Ranks& r, const std::vector<std::vector<T>>& out
     const char* data = reinterpret_cast<const char*>(out[q].data());
     send.insert(send.end(), data, data + send_bytes[q]);
   }
+  traffic_here.bytes_sent += static_cast<double>(send.size() - send_bytes[r.rank]);
   MPI_Alltoall(send_bytes.data(), 1, MPI_INT, recv_bytes.data(), 1, MPI_INT, r.comm);
   int total = 0;
   for (int q = 0; q < n; ++q) {
@@ -205,12 +239,14 @@ template std::vector<char> all_to_all(const Ranks&, const std::vector<std::vecto
 /// \endcond
 
 double max_over_ranks(const Ranks& r, double v) {
+  const InMessages timed;
   double m = v;
   MPI_Allreduce(&v, &m, 1, MPI_DOUBLE, MPI_MAX, r.comm);
   return m;
 }
 
 bool any_rank(const Ranks& r, bool v) {
+  const InMessages timed;
   int mine = v ? 1 : 0, any = 0;
   MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_LOR, r.comm);
   return any != 0;

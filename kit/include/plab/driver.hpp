@@ -27,6 +27,7 @@ struct RunStats {
   double total_seconds = 0;    //!< the whole simulation, printing included
   long long pair_events = 0;   //!< pair collisions counted over the run
   long long wall_events = 0;   //!< wall collisions counted over the run
+  Stepper::Traffic traffic;    //!< a stage on several processes: its messages
 };
 
 /// Options of a run.

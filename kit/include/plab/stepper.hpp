@@ -29,6 +29,15 @@ class Stepper {
   [[nodiscard]] virtual std::string device() const { return "cpu"; }
   /// Bytes of device memory the stage holds now (0 for CPU stages).
   [[nodiscard]] virtual std::size_t device_bytes() const { return 0; }
+  /// What a stage on several processes measured about its messages so far (the others: none).
+  struct Traffic {
+    double bytes_sent = 0;    //!< bytes every rank sent to the others, summed over the ranks
+    double comm_seconds = 0;  //!< seconds in exchanges and reductions (waits included), on
+                              //!< the rank that spent the most
+    int ranks = 1;            //!< processes
+  };
+  /// This run's Traffic (a stage on several processes asks every rank: call it after the steps).
+  virtual Traffic traffic() { return {}; }
 };
 
 /// A stage's step function (see stage.hpp).
