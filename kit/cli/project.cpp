@@ -59,7 +59,8 @@ std::vector<std::string> on_ranks(const std::string& id, const std::string& impl
     setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
     setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
   }
-  std::vector<std::string> args{"mpirun", "--oversubscribe", "-np", std::to_string(ranks)};
+  std::vector<std::string> args{"mpirun", "--quiet", "--oversubscribe", "-np",
+                                std::to_string(ranks)};
   args.insert(args.end(), program_and_args.begin(), program_and_args.end());
   return args;
 }
