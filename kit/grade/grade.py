@@ -135,6 +135,7 @@ class Stage:
         self.reference = conf.get("reference", manifest["reference_stage"])
         self.exact = conf.get("golden") == "exact"
         self.env = {"PLAB_DEVICE": conf["device"]} if "device" in conf else {}
+        self.ranks = int(conf.get("ranks", 1))  # a stage on several processes: mpirun starts them
         self.title = f"stage {key}"
 
 
@@ -289,6 +290,9 @@ class Grader:
         if stdin_text is not None:  # read through a pipe, never a file the program could reopen
             argv = ["/plab/stage", "/plab/scene.in", *[a if a != "STDIN" else "/dev/stdin"
                                                        for a in args]]
+        if st.ranks > 1:  # every rank in the same sandbox, under the same limits
+            argv = [shutil.which("mpirun") or "mpirun", "--quiet", "--oversubscribe", "-np",
+                    str(st.ranks), *argv]
         log = pathlib.Path(tempfile.mkdtemp(prefix="log-", dir=self.private))
         return self.sandbox.run(argv, ro, {"/plab/out": out}, "/plab/out", seconds, cap,
                                 gpu=st.gpu, env=env or st.env, log_dir=log, stdin_text=stdin_text,
