@@ -35,7 +35,8 @@
 
 /// Marks an exercise a student has not written yet: stops the run with a message naming it.
 /// Replace the whole line with your code.
-#define PLAB_EXERCISE(n, what) throw ::plab::NotDone(PLAB_STAGE_ID, (n), (what))
+#define PLAB_EXERCISE(n, what) \
+  throw ::plab::NotDone(PLAB_STAGE_ID, (n), (what))
 
 namespace plab {
 
