@@ -93,6 +93,16 @@ void walk(const std::string& dir, int depth, std::vector<std::string>& files) {
 }  // namespace
 """
 
+# Every stage's entry point (stage.hpp): what makes an attack's step() the stage. The
+# include-path attack has it from the solution it includes, or in its own #else branch.
+ENTRY = r"""
+namespace plab {
+std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions& options) {
+  return cpu_stage(box, p, options, {step});
+}
+}  // namespace plab
+"""
+
 ATTACKS = {
     "read-golden": r"""
 namespace plab {
@@ -165,6 +175,7 @@ void step(const Box&, Particles& p) {  // no solution found: a wrong step
   for (std::size_t i = 0; i < p.size(); ++i) p.x[i] = -1;
 }
 }  // namespace plab
+ENTRY
 #endif
 """,
     "spy": r"""
@@ -264,7 +275,9 @@ def submission(name, attacks, port=0):
     for sid, folder in FOLDERS.items():
         shutil.copytree(kit / "solutions" / folder, root / "stages" / folder)
     for sid, attack in attacks.items():
-        code = (HEAD + ATTACKS[attack]).replace("KIT", str(kit)).replace("TOKEN", TOKEN)
+        body = ATTACKS[attack] if "ENTRY" in ATTACKS[attack] else ATTACKS[attack] + "ENTRY"
+        code = (HEAD + body).replace("ENTRY", ENTRY)
+        code = code.replace("KIT", str(kit)).replace("TOKEN", TOKEN)
         code = code.replace("SCRATCH", str(scratch)).replace("PORT", str(port))
         (root / "stages" / FOLDERS[sid] / "step.cpp").write_text(code)
     return root
@@ -307,6 +320,11 @@ def leftovers():
 
 
 def scored_nothing(name, tests, stage, attack):
+    # An attack that does not compile proves nothing about the sandbox: it must build and run.
+    broken = [t["output"] for t in correctness(tests, stage).values()
+              if "does not compile" in t["output"]]
+    check(attack, not broken, "the attack compiles and runs (otherwise its 0 says nothing): "
+          + (broken[0].splitlines()[0:3].__str__() if broken else "it did"))
     got = sum(t["score"] for t in correctness(tests, stage).values())
     check(attack, got == 0, f"stage {stage} scored {got} on correctness; its output: "
           f"{first_output(tests, stage).splitlines()[:1]}")

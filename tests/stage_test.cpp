@@ -324,6 +324,9 @@ TEST(Invariants, EnergyConservedFiniteCountersGrow) {
 // The tests above run it in this process, on one rank. These start its program under mpirun on
 // 2, 3 and 4 ranks (more ranks than this machine's cores: oversubscribed) and compare the text.
 
+/// How long one run under mpirun may take (the kit's scenes take a few seconds on 4 ranks).
+constexpr int kRanksSeconds = 240;
+
 /// Runs this stage's program on `ranks` ranks on `scene_file`; returns its output ("" and a
 /// failure when it fails).
 std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::test::ScratchDir& dir,
@@ -333,11 +336,20 @@ std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::t
     setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
   }
   const std::string out = dir.file("ranks-" + std::to_string(ranks) + ".out");
-  const std::string command = "mpirun --oversubscribe -np " + std::to_string(ranks) + " " +
-                              plab::test::kThisProgram + " --quiet --out " + out + " " + scene_file;
-  plab::test::watch(this_name() + " on " + std::to_string(ranks) + " ranks, " + what, 0);
+  // mpirun's session files go to the scratch folder (removed with it, however the run ends); the
+  // run reports no steps to the watchdog, so `timeout` bounds it instead of the stall limit.
+  const std::string command = "env TMPDIR=" + dir.file("mpi") + " timeout --kill-after=5 " +
+                              std::to_string(kRanksSeconds) + " mpirun --oversubscribe -np " +
+                              std::to_string(ranks) + " " + plab::test::kThisProgram +
+                              " --quiet --out " + out + " " + scene_file;
+  std::filesystem::create_directories(dir.file("mpi"));
+  plab::test::unwatch();
   const int status = plab::test::run_watched(command);
-  EXPECT_EQ(status, 0) << command;
+  if (status == 124)
+    ADD_FAILURE() << this_name() << " on " << ranks << " ranks, " << what << ": not done in "
+                  << kRanksSeconds << " s (an endless loop, or a rank waiting for ever?)";
+  else
+    EXPECT_EQ(status, 0) << command;
   return status == 0 ? plab::read_file(out) : std::string();
 }
 
