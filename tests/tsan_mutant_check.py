@@ -64,8 +64,10 @@ def main():
         args[args.index(str(step))] = str(mutant_cpp)
         subprocess.run(args, cwd=compile_entry["directory"], check=True)
         program = scratch / "plab-run-03-mutant"
-        link = link.replace(stage_lib, str(obj)).replace("-o bin/plab-run-03-solution",
-                                                         "-o " + shlex.quote(str(program)))
+        # The mutant's object before the stage's library: the library still gives what the mutant
+        # does not define (stage_info(), which CMake writes from stage.json).
+        link = link.replace(stage_lib, str(obj) + " " + stage_lib).replace(
+            "-o bin/plab-run-03-solution", "-o " + shlex.quote(str(program)))
         subprocess.run(["sh", "-c", link], cwd=binary_dir, check=True)
 
         env = dict(os.environ)
