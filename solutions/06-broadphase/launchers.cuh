@@ -24,12 +24,13 @@ inline void start_step(const cuda::ParticlesView& p, const Box& box, const kerne
 
 inline void bin_count(const cuda::ParticlesView& p, const kernels::StepArrays& a,
                       const kernels::DeviceGrid& d, cudaStream_t s) {
-  kernels::bin_count<<<dim3(blocks(p.n), d.g.slabs), kThreads, 0, s>>>(p, a, d);
+  kernels::bin_count<<<dim3(blocks(p.n), d.slabs), kThreads, 0, s>>>(p, a, d);
   PLAB_CUDA_CHECK_LAUNCH("bin_count");
 }
 
 /// start[b] becomes the number of entries in buckets before b (CUB's exclusive scan of `filled`;
-/// `temp` of `temp_bytes` from scan_bytes()).
+/// `temp` of `temp_bytes` from scan_bytes()). Also where each particle's candidates start, from
+/// their counts.
 inline void scan(const int* filled, int* start, int size, void* temp, std::size_t temp_bytes,
                  cudaStream_t s) {
   PLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(temp, temp_bytes, filled, start, size, s));
@@ -45,15 +46,26 @@ inline std::size_t scan_bytes(int size) {
 
 inline void bin_scatter(const cuda::ParticlesView& p, const kernels::StepArrays& a,
                         const kernels::DeviceGrid& d, cudaStream_t s) {
-  kernels::bin_scatter<<<dim3(blocks(p.n), d.g.slabs), kThreads, 0, s>>>(p, a, d);
+  kernels::bin_scatter<<<dim3(blocks(p.n), d.slabs), kThreads, 0, s>>>(p, a, d);
   PLAB_CUDA_CHECK_LAUNCH("bin_scatter");
 }
 
 inline void find_pairs(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
                        const kernels::DeviceGrid& d, cudaStream_t s) {
-  const long long most = static_cast<long long>(p.n) * d.g.slabs;  // entries this step, at most
+  const long long most = static_cast<long long>(p.n) * d.slabs;  // entries this pass, at most
   kernels::find_pairs<<<blocks(most), kThreads, 0, s>>>(p, box, a, d);
   PLAB_CUDA_CHECK_LAUNCH("find_pairs");
+}
+
+/// One thread per pair the list can hold.
+inline void place_pairs(const kernels::StepArrays& a, cudaStream_t s) {
+  kernels::place_pairs<<<blocks(a.slots.capacity), kThreads, 0, s>>>(a);
+  PLAB_CUDA_CHECK_LAUNCH("place_pairs");
+}
+
+inline void start_rounds(int n, const kernels::StepArrays& a, cudaStream_t s) {
+  kernels::start_rounds<<<blocks(n), kThreads, 0, s>>>(n, a);
+  PLAB_CUDA_CHECK_LAUNCH("start_rounds");
 }
 
 inline void resolve(int n, const kernels::StepArrays& a, cudaStream_t s) {

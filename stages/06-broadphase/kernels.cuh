@@ -1,14 +1,15 @@
 /// \file stages/06-broadphase/kernels.cuh
 /// \brief Stage 06's kernels (device code only): the space-time grid built by a counting sort on
-/// the GPU (atomics, a CUB scan), the pair search over neighbouring buckets, then stage 05's
-/// one-block rounds and branchless apply over the sparse candidates.
+/// the GPU (atomics, a CUB scan), a few slabs at a time, the pair search over neighbouring
+/// buckets filing compact candidates (cuda/candidates.cuh), then stage 05's rounds and branchless
+/// apply over them.
 #pragma once
 
 #include <cooperative_groups.h>
 
 #include "plab/cuda/particles.hpp"
 #include "plab/cuda/rounds.cuh"
-#include "plab/cuda/slots.cuh"
+#include "plab/cuda/candidates.cuh"
 #include "plab/model.hpp"
 #include "plab/plan.hpp"
 #include "plab/scene.hpp"
@@ -26,16 +27,23 @@ constexpr int kResolveThreads = 1024;  //!< the one block of resolve
 
 /// What the host reads after a batch of steps.
 struct Flags {
-  int overflow;          //!< largest slot count needed, when a step ran out of slots (else 0)
+  int overflow;          //!< pairs a step needed, when they did not fit the list (else 0)
   long long steps_done;  //!< steps applied so far
-  int contested;         //!< resolve_grid: particles with pair events this step
+  int pairs;             //!< pairs filed this step (CompactView::file())
+  int contested;         //!< particles with pair events this step (listed by start_rounds)
   int open[3];           //!< resolve_grid: someone left unresolved in round r (at r % 3)
 };
 
-/// The grid of the batch, as the kernels see it.
+/// The grid of the batch and the slabs of one pass of the counting sort, as the kernels see it.
+/// A pass sorts and searches slabs [first, first + slabs) together: slab k's cells are buckets
+/// [(k - first) * cells, (k - first + 1) * cells), and its entries are counted at
+/// [(k - first) * n + i]. Large scenes take a few slabs a pass, so that the entries of one pass
+/// (not of the whole step) are what the memory holds.
 struct DeviceGrid {
   sweep::Grid g;  //!< slabs, cells, v_cut
-  int cells;      //!< g.cells(): slab k's cells are buckets [k * cells, (k + 1) * cells)
+  int cells;      //!< g.cells()
+  int first;      //!< the pass's first slab
+  int slabs;      //!< the pass's number of slabs
 };
 
 /// What the pair search reads of an entry, in one 32-byte sector (the scatter writes it at a
@@ -45,25 +53,24 @@ struct alignas(32) Entry {
   double vx, vy;  //!< velocity
 };
 
-/// Each particle's pair events of the step: slot `s` of particle `i` at `[s * n + i]` (as
-/// stage 05).
-using Slots = cuda::SlotsView<cuda::SlotLayout::kBySlot>;
+/// Each particle's pair events of the step, compact (cuda/candidates.cuh).
+using Slots = cuda::CompactView;
 
 /// One step's working arrays (pointers into memory the host class owns).
 struct StepArrays {
   double* wall;      //!< wall time of each particle
   int* last;         //!< the last slab each particle takes part in (sweep::last_slab())
-  Slots slots;       //!< each particle's pair events of the step (count, other, time, cap)
+  Slots slots;       //!< each particle's pair events of the step (count, list, rows)
   Event* best;       //!< each unresolved particle's earliest event in the current round
   char* resolved;    //!< 1 once a particle's event (or none) is decided
   int* contested;    //!< the particles with at least one pair event
   int* partner;      //!< the plan: Plan::kFree, Plan::kWall, or the other particle of its pair
   double* ptime;     //!< the plan's pair time
-  int* filled;       //!< K * cells + 1: entries counted into each bucket
-  int* start;        //!< K * cells + 1: bucket b holds entries [start[b], start[b + 1])
-  int* bucket;       //!< per (slab, particle) at [k * n + i]: its bucket
-  int* rank;         //!< ... and its place in the bucket
-  int* entry_id;     //!< per entry (at most K * N): the particle
+  int* filled;       //!< a pass's slabs * cells + 1: entries counted into each bucket
+  int* start;        //!< the same: bucket b holds entries [start[b], start[b + 1])
+  int* rank;         //!< per (slab of the pass, particle) at [(k - first) * n + i]: its place in
+                     //!< its bucket
+  int* entry_id;     //!< per entry (at most slabs of a pass * N): the particle
   int* entry_k;      //!< ... its slab
   Entry* entry;      //!< ... its midpoint position and velocity
   Flags* flags;      //!< see Flags
@@ -77,6 +84,7 @@ __global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d)
   a.last[i] = sweep::last_slab(sweep::path_end(a.wall[i]), d.g);
   a.slots.count[i] = 0;
   if (i == 0) {
+    a.flags->pairs = 0;
     a.flags->contested = 0;
     a.flags->open[0] = a.flags->open[1] = a.flags->open[2] = 0;
   }
@@ -90,12 +98,19 @@ __device__ inline void midpoint(const ParticlesView& p, int i, int k, const Devi
   my = p.y[i] + tm * p.vy[i];
 }
 
+/// Particle i's bucket in slab k of the pass (its midpoint position's cell).
+__device__ inline int bucket_of(const ParticlesView& p, int i, int k, const DeviceGrid& d,
+                                double& mx, double& my) {
+  midpoint(p, i, k, d, mx, my);
+  return (k - d.first) * d.cells + sweep::cell_of(mx, my, d.g);
+}
+
 // EXERCISE 4: the broad phase on the GPU, as step.cpp's EXERCISE 1 with one thread per
-// (particle, slab), blockIdx.y the slab: bin_count (a particle with a.last[i] >= k finds its bucket
-// k * d.cells + cell from its midpoint(), keeps it in a.bucket[k * n + i] and its place,
-// atomicAdd(&a.filled[bucket], 1), in a.rank[k * n + i]); after the host's exclusive scan of
-// `filled` into `start`, bin_scatter (entry start[bucket] + rank gets the particle, its slab,
-// midpoint position and velocity).
+// (particle, slab of the pass): blockIdx.y is the slab's place in the pass, k = d.first +
+// blockIdx.y. bin_count (a particle with a.last[i] >= k finds its bucket with bucket_of() and
+// keeps its place, atomicAdd(&a.filled[bucket], 1), in a.rank[blockIdx.y * n + i]); after the
+// host's exclusive scan of `filled` into `start`, bin_scatter (the same bucket again, and entry
+// start[bucket] + rank gets the particle, its slab k, midpoint position and velocity).
 
 /// Whether particles i and j pass the slab test in slab k (then slab k's search finds them).
 __device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, int k,
@@ -106,10 +121,9 @@ __device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, in
   return sweep::close_in_slab(xi - xj, yi - yj, p.vx[i] - p.vx[j], p.vy[i] - p.vy[j], d.g);
 }
 
-/// Entry e against entries [from, to) of its slab: the pairs that pass sweep::close_in_slab()
-/// get model.md's pair time, unless slab k - 1 found them already (a pair listed twice is
-/// harmless to the rounds, but it fills slots), and are filed when the pair comes before both
-/// particles' walls.
+/// Entry e against entries [from, to) of its slab: the pairs that pass sweep::close_in_slab() get model.md's pair time,
+/// unless slab k - 1 found them already (a pair filed twice is harmless to the rounds, but it
+/// takes room), and are filed when the pair comes before both particles' walls.
 __device__ inline void test_entries(const ParticlesView& p, const Box& box, const StepArrays& a,
                                     const DeviceGrid& d, int e, int from, int to) {
   const int i = a.entry_id[e], k = a.entry_k[e];
@@ -123,23 +137,44 @@ __device__ inline void test_entries(const ParticlesView& p, const Box& box, cons
     const int lo = i < j ? i : j, hi = i < j ? j : i;
     const double t = model::pair_time(p.x[lo], p.y[lo], p.vx[lo], p.vy[lo], p.x[hi], p.y[hi],
                                       p.vx[hi], p.vy[hi], box.r);
-    if (model::in_step(t) && model::before_walls(t, a.wall[lo], a.wall[hi])) {
-      a.slots.add(lo, hi, t);
-      a.slots.add(hi, lo, t);
-    }
+    if (model::in_step(t) && model::before_walls(t, a.wall[lo], a.wall[hi]))
+      a.slots.file(lo, hi, t, &a.flags->pairs);
   }
 }
 
-// EXERCISE 4: find_pairs, one thread per entry e < a.start[slabs * cells] (the entries of this
-// step): as step.cpp's search (slab k's cells start at a.start + k * d.cells), with
-// sweep::search_of(), sweep::columns_within(), sweep::rows_within() and test_entries(): a slow
-// entry over the later entries of its row up to the last column within reach, then the columns
-// within reach of the next row; a fast entry over every row within reach.
+// EXERCISE 4: find_pairs, one thread per entry e < a.start[d.slabs * d.cells] (the entries of
+// this pass): as step.cpp's search (slab k's cells start at a.start + (k - d.first) * d.cells),
+// with sweep::search_of(), sweep::columns_within(), sweep::rows_within() and test_entries(): a
+// slow entry over the later entries of its row up to the last column within reach, then the
+// columns within reach of the next row; a fast entry over every row within reach.
 
-/// Every round of the step in one block (stage 05's resolve over the sparse candidates, from the
-/// kit: cuda::resolve_block()); skips the step when slots ran out.
+/// After the passes: lays the filed pairs into each particle's row (CompactView::place(), once
+/// `end` is the exclusive scan of the counts); when the list had no room for them all, stops
+/// the batch instead (`overflow` = the pairs the step needs; the host grows the list).
+__global__ void place_pairs(StepArrays a) {
+  const int q = blockIdx.x * blockDim.x + threadIdx.x;
+  const int filed = a.flags->pairs;
+  if (filed > a.slots.capacity) {
+    if (q == 0) atomicMax(&a.flags->overflow, filed);
+    return;
+  }
+  if (q < filed && !a.flags->overflow) a.slots.place(q);
+}
+
+/// Before the rounds, on the whole GPU: each particle's start (cuda::start_one(): decided at once
+/// when it has no pair event) and the list of those with pair events, `a.contested` (as many as
+/// `flags->contested`).
+__global__ void start_rounds(int n, StepArrays a) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n || a.flags->overflow) return;
+  if (start_one(i, a) > 0) a.contested[atomicAdd(&a.flags->contested, 1)] = i;
+}
+
+/// Every round of the step in one block over the particles start_rounds listed (stage 05's
+/// rounds, from the kit: cuda::rounds_block()); nothing when the step was stopped.
 __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) {
-  cuda::resolve_block(n, a);
+  if (a.flags->overflow) return;
+  cuda::rounds_block(n, a.flags->contested, a);
 }
 
 /// resolve() for large N: the same rounds over the whole grid (a cooperative launch, every block
@@ -150,16 +185,7 @@ __global__ void resolve_grid(int n, StepArrays a) {
   Flags* f = a.flags;
   const int stride = gridDim.x * blockDim.x;
   const int me = blockIdx.x * blockDim.x + threadIdx.x;
-  const bool skipped = f->overflow;  // read before anyone writes them below
-  grid.sync();
-  if (skipped) return;
-  for (int i = me; i < n; i += stride) {
-    const int c = start_one(i, a);
-    if (c > a.slots.cap) atomicMax(&f->overflow, c);
-    if (c > 0) a.contested[atomicAdd(&f->contested, 1)] = i;
-  }
-  grid.sync();
-  if (f->overflow) return;
+  if (f->overflow) return;  // written before this kernel: every block returns alike
   const int m = f->contested;
   const Event none = model::pair_event_key(model::never(), n, n);
   for (int round = 0;; ++round) {

@@ -26,12 +26,14 @@ inline void start_step(const cuda::ParticlesView& p, const Box& box, const kerne
 inline void bin_count([[maybe_unused]] const cuda::ParticlesView& p,
                       [[maybe_unused]] const kernels::StepArrays& a,
                       [[maybe_unused]] const kernels::DeviceGrid& d, [[maybe_unused]] cudaStream_t s) {
-  // EXERCISE 4: launch kernels::bin_count on a grid of (N / kThreads) x slabs blocks.
+  // EXERCISE 4: launch kernels::bin_count on a grid of (N / kThreads) x (the pass's d.slabs)
+  // blocks.
   PLAB_EXERCISE(4, "the broad phase on the GPU: kernels bin_count, bin_scatter, find_pairs");
 }
 
 /// start[b] becomes the number of entries in buckets before b (CUB's exclusive scan of `filled`;
-/// `temp` of `temp_bytes` from scan_bytes()).
+/// `temp` of `temp_bytes` from scan_bytes()). Also where each particle's candidates start, from
+/// their counts.
 inline void scan(const int* filled, int* start, int size, void* temp, std::size_t temp_bytes,
                  cudaStream_t s) {
   PLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(temp, temp_bytes, filled, start, size, s));
@@ -57,8 +59,19 @@ inline void find_pairs([[maybe_unused]] const cuda::ParticlesView& p,
                        [[maybe_unused]] const Box& box, [[maybe_unused]] const kernels::StepArrays& a,
                        [[maybe_unused]] const kernels::DeviceGrid& d,
                        [[maybe_unused]] cudaStream_t s) {
-  // EXERCISE 4: launch kernels::find_pairs, one thread per possible entry (N x slabs of them).
+  // EXERCISE 4: launch kernels::find_pairs, one thread per possible entry (N x d.slabs of them).
   PLAB_EXERCISE(4, "the broad phase on the GPU: kernels bin_count, bin_scatter, find_pairs");
+}
+
+/// One thread per pair the list can hold.
+inline void place_pairs(const kernels::StepArrays& a, cudaStream_t s) {
+  kernels::place_pairs<<<blocks(a.slots.capacity), kThreads, 0, s>>>(a);
+  PLAB_CUDA_CHECK_LAUNCH("place_pairs");
+}
+
+inline void start_rounds(int n, const kernels::StepArrays& a, cudaStream_t s) {
+  kernels::start_rounds<<<blocks(n), kThreads, 0, s>>>(n, a);
+  PLAB_CUDA_CHECK_LAUNCH("start_rounds");
 }
 
 inline void resolve(int n, const kernels::StepArrays& a, cudaStream_t s) {

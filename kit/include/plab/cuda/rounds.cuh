@@ -2,8 +2,9 @@
 /// \brief The "mutual earliest" rounds on the device, for the GPU stages that run them without
 /// teaching them: one particle's part of a round (handout 03's rounds, stage 04's choose and
 /// accept kernels: choose_one(), accept_one(), and start_one() before the first round), used by
-/// stage 05's resolve and stage 06; and every round of a step in one block (stage 05's resolve:
-/// resolve_block()), used by stage 06.
+/// stage 05's resolve and stage 06; and every round of a step in one block over a list of
+/// contested particles (rounds_block(), which stage 06 calls after a grid-wide start), or with
+/// the start in the same block (stage 05's resolve: resolve_block()).
 ///
 /// A round, for every unresolved particle \f$i\f$ at once:
 /// - **choose**: \f$b_i = \min_{\prec} \big(\{w_i\} \cup \{(t_{ik}, \min(i,o_k), \max(i,o_k)) :
@@ -26,8 +27,9 @@
 /// - `char* resolved`: 1 once a particle's event (or none) is decided;
 /// - `int* partner`, `double* ptime`: the plan (Plan::kFree, Plan::kWall or the other particle,
 ///   and the pair time);
-/// - resolve_block() only: `int* contested` (room for every particle), and `flags`, a pointer to
-///   the stage's flags with `int overflow` and `long long steps_done`.
+/// - rounds_block() and resolve_block() only: `int* contested` (room for every particle: the
+///   particles the rounds still have to decide), and `flags`, a pointer to the stage's flags with
+///   `int overflow` and `long long steps_done`.
 #pragma once
 
 #include "plab/cuda/slots.cuh"
@@ -87,12 +89,30 @@ __device__ inline bool accept_one(int i, const Arrays& a) {
   return true;
 }
 
+/// Every round of a step in the calling block over the `m` particles listed in `a.contested`
+/// (each with pair events and none decided yet; launch one block): rounds of choose_one() and
+/// accept_one() separated by block barriers, until a round leaves no one open; then adds 1 to
+/// `a.flags->steps_done`.
+template <class Arrays>
+__device__ inline void rounds_block(int n, int m, const Arrays& a) {
+  const model::Event none = model::pair_event_key(model::never(), n, n);
+  for (;;) {
+    for (int q = threadIdx.x; q < m; q += blockDim.x)  // choose
+      if (!a.resolved[a.contested[q]]) choose_one(a.contested[q], a, none);
+    __syncthreads();
+    int open = 0;
+    for (int q = threadIdx.x; q < m; q += blockDim.x)  // accept
+      if (!a.resolved[a.contested[q]] && !accept_one(a.contested[q], a)) open = 1;
+    if (!__syncthreads_or(open)) break;
+  }
+  if (threadIdx.x == 0) a.flags->steps_done += 1;
+}
+
 /// Every round of a step in the calling block (stage 05's resolve; launch one block): the
 /// particles with pair events are listed in `a.contested` (through a `__shared__` counter) and go
-/// through rounds of choose_one() and accept_one() separated by block barriers, until a round
-/// leaves no one open. Does nothing when `a.flags->overflow` is set on entry (an earlier step
+/// through rounds_block(). Does nothing when `a.flags->overflow` is set on entry (an earlier step
 /// waits for more slots); skips the step (raising `overflow` to the largest count) when a
-/// particle has more pair events than slots; else adds 1 to `a.flags->steps_done`.
+/// particle has more pair events than slots.
 template <class Arrays>
 __device__ inline void resolve_block(int n, const Arrays& a) {
   __shared__ int contested;
@@ -109,18 +129,7 @@ __device__ inline void resolve_block(int n, const Arrays& a) {
     if (over) atomicMax(&a.flags->overflow, over);
     return;
   }
-  const int m = contested;
-  const model::Event none = model::pair_event_key(model::never(), n, n);
-  for (;;) {
-    for (int q = threadIdx.x; q < m; q += blockDim.x)  // choose
-      if (!a.resolved[a.contested[q]]) choose_one(a.contested[q], a, none);
-    __syncthreads();
-    int open = 0;
-    for (int q = threadIdx.x; q < m; q += blockDim.x)  // accept
-      if (!a.resolved[a.contested[q]] && !accept_one(a.contested[q], a)) open = 1;
-    if (!__syncthreads_or(open)) break;
-  }
-  if (threadIdx.x == 0) a.flags->steps_done += 1;
+  rounds_block(n, contested, a);
 }
 
 }  // namespace plab::cuda

@@ -1,0 +1,121 @@
+/// \file cuda/candidates.cuh
+/// \brief Each particle's candidate pair events of a step, stored compactly (stage 06 on): the
+/// search appends each pair it finds to one list and counts it under both particles; an
+/// exclusive scan of the counts and one pass over the list then lay every particle's events side
+/// by side (compressed rows). The memory follows the pairs the scene has, not a fixed number of
+/// slots per particle (cuda/slots.cuh, stages 04 and 05), which matters at 10^7 particles and
+/// more: a few bytes a particle instead of 16 slots of 12 bytes. Device code (CompactView) and its
+/// host owner (DeviceCandidates).
+///
+/// A step, on the device:
+/// 1. the counts set to 0 (clear the `count` array), and the list's length (a counter the
+///    stage keeps, for instance in its flags) too;
+/// 2. the search calls CompactView::file() for each pair it keeps: the pair goes to the list
+///    (when there is room) and both counts go up;
+/// 3. `end` = the exclusive scan of `count` (where each particle's events start);
+/// 4. CompactView::place() for every pair of the list: each moves `end[lo]` and `end[hi]` on by
+///    one, so that afterwards `end[i]` is one past particle `i`'s last event, which starts at
+///    `end[i] - count[i]`.
+///
+/// When the list had no room for every pair, the host grows it (DeviceCandidates::grow()) and
+/// the step is done again. Events land in any order; the rounds do not depend on it (the event
+/// key orders candidates completely), and a pair filed twice is harmless.
+#pragma once
+
+#include <climits>
+#include <cstddef>
+
+#include "plab/cuda/check.hpp"
+#include "plab/model.hpp"  // PLAB_HD
+
+namespace plab::cuda {
+
+/// One pair event of a step as the search files it.
+struct Pair {
+  int lo;    //!< lower particle index
+  int hi;    //!< higher particle index
+  double t;  //!< pair time (steps)
+};
+
+/// What the kernels receive (inside the stage's arrays): the list, the counts, and the compressed
+/// rows. It reads like cuda::SlotsView for the rounds (cuda/rounds.cuh): `count[i]`,
+/// other_at(), time_at() and `cap` (no particle ever runs out: the list does, as a whole).
+struct CompactView {
+  int* count;      //!< pair events of each particle
+  int* end;        //!< after place(): one past particle `i`'s last event in `other` and `time`
+  Pair* list;      //!< the pairs filed this step, in any order
+  int capacity;    //!< room in `list` (and for twice as many events in `other` and `time`)
+  int* other;      //!< the other particle of each event, particle by particle
+  double* time;    //!< the pair time of each event
+  static constexpr int cap = INT_MAX;  //!< no per-particle limit (rounds.cuh reads it)
+
+  /// The other particle of particle `i`'s event `s` (after place()).
+  __device__ int other_at(int i, int s) const { return other[end[i] - count[i] + s]; }
+  /// The pair time of particle `i`'s event `s` (after place()).
+  __device__ double time_at(int i, int s) const { return time[end[i] - count[i] + s]; }
+
+  /// Files the pair event (lo, hi, t): counts it under both particles and puts it in the list
+  /// at the place `*length` gives (atomically: any thread may file), when there is room.
+  __device__ void file(int lo, int hi, double t, int* length) const {
+    const int q = atomicAdd(length, 1);
+    if (q < capacity) list[q] = Pair{lo, hi, t};
+    atomicAdd(&count[lo], 1);
+    atomicAdd(&count[hi], 1);
+  }
+  /// Lays pair `q` of the list into both particles' rows (after `end` became the exclusive scan
+  /// of `count`).
+  __device__ void place(int q) const {
+    const Pair e = list[q];
+    const int a = atomicAdd(&end[e.lo], 1), b = atomicAdd(&end[e.hi], 1);
+    other[a] = e.hi;
+    time[a] = e.t;
+    other[b] = e.lo;
+    time[b] = e.t;
+  }
+};
+
+/// The compact candidates in device memory: the counts and row ends for `n` particles, and a
+/// list with room for `capacity` pairs (and twice as many events in rows).
+class DeviceCandidates {
+ public:
+  /// Room for `n` particles and at least `capacity` pairs a step (contents uninitialised).
+  DeviceCandidates(int n, int capacity)
+      : count_(static_cast<std::size_t>(n)), end_(static_cast<std::size_t>(n)) {
+    allocate(capacity);
+  }
+  /// Room for at least `needed` pairs a step, once the work queued on `stream` (which may use
+  /// the arrays) is done. The list and the rows are allocated again: their addresses change (a
+  /// recorded graph that holds them must be recorded again).
+  void grow(int needed, cudaStream_t stream) {
+    PLAB_CUDA_CHECK(cudaStreamSynchronize(stream));
+    allocate(needed);
+  }
+  /// The view kernels take.
+  [[nodiscard]] CompactView view() const {
+    return {count_.get(), end_.get(), list_.get(), capacity_, other_.get(), time_.get()};
+  }
+  /// Room in the list, in pairs.
+  [[nodiscard]] int capacity() const { return capacity_; }
+  /// Bytes held on the device.
+  [[nodiscard]] std::size_t bytes() const {
+    return count_.bytes() + end_.bytes() + list_.bytes() + other_.bytes() + time_.bytes();
+  }
+
+ private:
+  /// Allocates the list and the rows for `capacity` pairs (at least one).
+  void allocate(int capacity) {
+    capacity_ = capacity > 0 ? capacity : 1;
+    list_.resize(static_cast<std::size_t>(capacity_));
+    other_.resize(2 * static_cast<std::size_t>(capacity_));
+    time_.resize(2 * static_cast<std::size_t>(capacity_));
+  }
+
+  int capacity_ = 0;             //!< CompactView::capacity
+  DeviceArray<int> count_;       //!< CompactView::count
+  DeviceArray<int> end_;         //!< CompactView::end
+  DeviceArray<Pair> list_;       //!< CompactView::list
+  DeviceArray<int> other_;       //!< CompactView::other, twice the capacity
+  DeviceArray<double> time_;     //!< CompactView::time, twice the capacity
+};
+
+}  // namespace plab::cuda
