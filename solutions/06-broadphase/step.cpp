@@ -95,6 +95,10 @@ struct Mine {
   std::vector<model::Event> found;        //!< pair candidates
   std::vector<int> next;                  //!< per row: where this thread's next entry goes
   int lo = 0, hi = 0;                     //!< the input entries this thread groups by row
+  int active = 0;                         //!< particles of its share that take part
+  double max2 = 0;                        //!< the largest squared speed among them
+  bool unordered = false;                 //!< whether one of them has a speed that is not a number
+  std::vector<double> sample;             //!< its part of the sample of squared speeds
 };
 
 /// The first of `count` items that thread `t` of `threads` takes (a static split).
@@ -385,14 +389,50 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
     const int t = omp_get_thread_num(), threads = omp_get_num_threads();
     Mine& my = mine[t];
     my.found.clear();
-#pragma omp for schedule(static)
-    for (int i = 0; i < n; ++i) {
+    // Wall times, and what the grid needs to know (sweep::choose(), by the team): how many take
+    // part, the fastest, and a sample of the speeds (every stride-th of those that take part).
+    const auto speed2 = [&](int i) {
+      return double(p.vx[i]) * double(p.vx[i]) + double(p.vy[i]) * double(p.vy[i]);
+    };
+    my.lo = share(n, t, threads);
+    my.hi = share(n, t + 1, threads);
+    my.active = 0;
+    my.max2 = 0;
+    my.unordered = false;
+    for (int i = my.lo; i < my.hi; ++i) {
       wall[i] = wall_candidate(box, p, i).t;
       end[i] = sweep::path_end(wall[i]);
+      if (!(end[i] > 0)) continue;  // takes no part
+      const double v2 = speed2(i);
+      my.unordered |= (v2 != v2);
+      my.max2 = std::max(my.max2, v2);
+      ++my.active;
     }
+#pragma omp barrier
+    my.sample.clear();
+    for (int u = 0, at = 0, stride = static_cast<int>(sweep::sample_stride(n)); u <= t; ++u) {
+      if (u < t) {
+        at += mine[u].active;
+        continue;
+      }
+      for (int i = my.lo; i < my.hi; ++i)
+        if (end[i] > 0 && at++ % stride == 0) my.sample.push_back(speed2(i));
+    }
+#pragma omp barrier
 #pragma omp single
     {
-      g = sweep::choose(box, p, end, scratch, kQuantile, kAlpha);
+      int active = 0;
+      double max2 = 0;
+      bool unordered = false;
+      scratch.clear();
+      for (const Mine& m : mine) {
+        if (&m - mine.data() >= threads) break;
+        active += m.active;
+        max2 = std::max(max2, m.max2);
+        unordered |= m.unordered;
+        scratch.insert(scratch.end(), m.sample.begin(), m.sample.end());
+      }
+      g = sweep::choose_from_sample(box, active, max2, unordered, scratch, kQuantile, kAlpha);
       s.start.resize(static_cast<std::size_t>(g.cells()) + 1);
       for (int u = 0; u < 2; ++u) {
         s.row_start[u].resize(g.rows + 1);

@@ -23,7 +23,8 @@ namespace plab {
 struct SparseSelection {
   std::vector<int> only;                           //!< per particle: its one partner, or none, or many
   std::vector<std::vector<model::Event>> contested;  //!< per thread: pairs that meet another pair
-  std::vector<model::Event> sorted;                //!< every contested pair, in key order
+  std::vector<std::pair<model::Event, int>> heads;  //!< the merge: each list's next pair
+  std::vector<std::size_t> next;                     //!< the merge: each list's next place
 };
 
 /// sparse_greedy_plan() by a team of threads: every thread of an OpenMP parallel region calls it
@@ -33,7 +34,8 @@ struct SparseSelection {
 /// candidates only. Every thread's parts in parallel: drop the pairs at or after a wall, then
 /// count each particle's partners (atomics that end in the same state in any order); accept each
 /// isolated pair (whose particles meet no other), at its earliest time; the contested rest are
-/// sorted and taken in key order by one thread; each particle left free takes its wall.
+/// sorted (each thread its own), merged and taken in key order by one thread; each particle left
+/// free takes its wall.
 /// `plan` must hold `wall.size()` particles; `work.contested` one list per thread.
 inline void sparse_greedy_plan_in_team(std::vector<model::Event>& mine,
                                        const std::vector<double>& wall, Plan& plan,
@@ -87,16 +89,30 @@ inline void sparse_greedy_plan_in_team(std::vector<model::Event>& mine,
            !time.compare_exchange_weak(seen, e.t, std::memory_order_relaxed)) {
     }
   }
+  std::sort(contested.begin(), contested.end(),  // each thread its own, in parallel
+            [](const model::Event& a, const model::Event& b) { return model::key_less(a, b); });
 #pragma omp barrier
 #pragma omp single
-  {
-    work.sorted.clear();
+  {  // the contested pairs of every thread in key order (a merge), each taken if both are free
+    using Head = std::pair<model::Event, int>;  // a list's next pair, and the list
+    const auto later = [](const Head& a, const Head& b) { return model::key_less(b.first, a.first); };
+    std::vector<Head>& heads = work.heads;
+    std::vector<std::size_t>& next = work.next;
+    heads.clear();
+    next.assign(threads, 0);
     for (int u = 0; u < threads; ++u)
-      work.sorted.insert(work.sorted.end(), work.contested[u].begin(), work.contested[u].end());
-    std::sort(work.sorted.begin(), work.sorted.end(),
-              [](const model::Event& a, const model::Event& b) { return model::key_less(a, b); });
-    for (const model::Event& e : work.sorted)
+      if (!work.contested[u].empty()) heads.emplace_back(work.contested[u][next[u]++], u);
+    std::make_heap(heads.begin(), heads.end(), later);
+    while (!heads.empty()) {
+      std::pop_heap(heads.begin(), heads.end(), later);
+      const auto [e, u] = heads.back();
+      heads.pop_back();
       if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
+      if (next[u] < work.contested[u].size()) {
+        heads.emplace_back(work.contested[u][next[u]++], u);
+        std::push_heap(heads.begin(), heads.end(), later);
+      }
+    }
   }
 #pragma omp for schedule(static)
   for (int i = 0; i < n; ++i) {
