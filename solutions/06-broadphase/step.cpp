@@ -6,15 +6,17 @@
 // =================================================================================================
 //  GOAL   Stage 03 tests N^2/2 pairs a step; at N = 10^4 in the report's box only about 2000 can
 //         meet. Find them, and few others, with plab::sweep (read sweep.hpp first):
-//         1. broad phase: for each time slab k (in parallel), sort the particles that take part
-//            into the grid's cells by their positions at the slab's midpoint (a counting sort),
-//            then test each against the same and the next cells (half of the 3 x 3
-//            neighbourhood; a fast particle: every cell within its search radius) with
-//            sweep::close_in_slab();
+//         1. broad phase: for each time slab k in turn, all threads together: sort the particles
+//            that take part into the grid's cells by their positions at the slab's midpoint (a
+//            counting sort by row, then by column within each row: sort_rows()), then test each
+//            against the rest of its row and the next row within its reach (a fast particle:
+//            every cell within its search radius) with sweep::close_in_slab() (search_cells());
 //         2. narrow phase: model.md's pair time for each pair that passed;
 //         3. model.md's greedy selection over the sparse candidates (a pair at or after either
-//            wall time is never accepted), then apply.
-//         Memory O(N + candidates + cells): no N x N anything.
+//            wall time is never accepted), by the team (plan_team.hpp), then apply.
+//         Memory O(N + candidates + cells), shared by the threads: no N x N anything, and no
+//         copy per thread. Slab k is sorted from slab k - 1's order, which is nearly right
+//         already, so the sort's writes stay close together (handout 06, "Many cores").
 //  READ   handouts/06-broadphase.md     TEST   ./plab test --impl student --stage 06
 // =================================================================================================
 #include <omp.h>
@@ -284,10 +286,10 @@ inline void test_range(const View& s, std::vector<std::pair<int, int>>& hits, in
   }
 }
 
-/// The search of entries [from, to) of the slab, entry by entry (sweep::search_of()): a slow entry against the later entries of its row up to the last column
-/// within its reach, then the columns within reach of the row above, two runs of entries in
-/// row-major order; a fast entry against every entry within its reach, one run per row. The
-/// entries that pass go to `hits`.
+/// The search of entries [from, to) of the slab, entry by entry (sweep::search_of()): a slow
+/// entry against the later entries of its row up to the last column within its reach, then the
+/// columns within reach of the row above, two runs of entries in row-major order; a fast entry
+/// against every entry within its reach, one run per row. The entries that pass go to `hits`.
 template <Isa kIsa>
 inline void search_cells(const View& s, std::vector<std::pair<int, int>>& hits, int from, int to,
                          const sweep::Grid& g) {
