@@ -75,9 +75,11 @@ struct Slab {
   std::vector<double> x, y;         //!< per entry of the slab: midpoint position (padded by kLanes)
   std::vector<int> start;           //!< cell c holds entries [start[c], start[c + 1])
   std::vector<int> row_start[2];    //!< row r of slab k holds entries [row_start[k % 2][r], ... [r + 1])
-  std::vector<int> counts[2];       //!< slab k's entries per thread and row: counts[k % 2][t * rows + r]
+  std::vector<int> counts[2];       //!< slab k's entries per thread and row (count_stride() a thread)
   std::vector<int> from;            //!< per entry, grouped by row: the input entry it comes from
   std::vector<int> order;           //!< every particle, in the cell order of the last step's slab 0
+  /// Room for `n` particles in grid `g` sorted by `threads` threads.
+  void reserve(int n, const sweep::Grid& g, int threads);
 };
 
 /// What the search of a slab reads: its entries in cell order, one array per field.
@@ -91,8 +93,9 @@ struct View {
   const int* row_start;        //!< row r holds entries [row_start[r], row_start[r + 1])
 };
 
-/// One thread's own working memory and results.
-struct Mine {
+/// One thread's own working memory and results (on cache lines of its own: the vectors' ends
+/// move with every pair found).
+struct alignas(128) Mine {
   std::vector<std::pair<int, int>> hits;  //!< entry pairs that passed close_in_slab()
   std::vector<model::Event> found;        //!< pair candidates
   std::vector<int> next;                  //!< per row: where this thread's next entry goes
@@ -102,6 +105,24 @@ struct Mine {
   bool unordered = false;                 //!< whether one of them has a speed that is not a number
   std::vector<double> sample;             //!< its part of the sample of squared speeds
 };
+
+/// Each thread's row of a table of counts per row (`rows + 1` of them), rounded up to whole cache
+/// lines so that no two threads write the same line.
+inline std::size_t count_stride(int rows) {
+  return (static_cast<std::size_t>(rows) + 1 + 31) / 32 * 32;
+}
+
+void Slab::reserve(int n, const sweep::Grid& g, int threads) {
+  for (Entries& e : set) e.reserve(n);
+  for (auto* v : {&x, &y}) v->resize(n + kLanes);
+  from.resize(n);
+  order.resize(n);
+  start.resize(static_cast<std::size_t>(g.cells()) + 1);
+  for (int u = 0; u < 2; ++u) {
+    row_start[u].resize(g.rows + 1);
+    counts[u].resize(static_cast<std::size_t>(threads) * count_stride(g.rows));
+  }
+}
 
 /// The first of `count` items that thread `t` of `threads` takes (a static split).
 inline int share(int count, int t, int threads) {
@@ -135,7 +156,7 @@ inline int place_rows(Slab& s, std::vector<int>& next, int k, const sweep::Grid&
     if (t == 0) s.row_start[k % 2][row] = at;
     for (int u = 0; u < threads; ++u) {
       if (u == t) next[row] = at;
-      at += counts[static_cast<std::size_t>(u) * (g.rows + 1) + row];
+      at += counts[static_cast<std::size_t>(u) * count_stride(g.rows) + row];
     }
   }
   return taking;
@@ -366,7 +387,7 @@ template <class Real>
 void step_in(const Box& box, ParticlesOf<Real>& p) {
   const int n = static_cast<int>(p.size());
   static std::vector<double> wall, end, scratch;  // working memory, kept between steps
-  static Slab s;
+  static Slab s;  // the slab of the whole team
   static std::vector<Mine> mine;
   static Plan plan;
   static SparseSelection selection;
@@ -377,9 +398,6 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
     s.order.resize(n);
     for (int i = 0; i < n; ++i) s.order[i] = i;
   }
-  for (Entries& e : s.set) e.reserve(n);
-  for (auto* v : {&s.x, &s.y}) v->resize(n + kLanes);
-  s.from.resize(n);
   mine.resize(omp_get_max_threads());
   plan.partner.resize(n);
   plan.time.resize(n);
@@ -435,18 +453,14 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
         scratch.insert(scratch.end(), m.sample.begin(), m.sample.end());
       }
       g = sweep::choose_from_sample(box, active, max2, unordered, scratch, kQuantile, kAlpha);
-      s.start.resize(static_cast<std::size_t>(g.cells()) + 1);
-      for (int u = 0; u < 2; ++u) {
-        s.row_start[u].resize(g.rows + 1);
-        s.counts[u].resize(static_cast<std::size_t>(threads) * (g.rows + 1));
-      }
+      s.reserve(n, g, threads);
       for (Mine& m : mine) m.next.resize(g.rows + 1);
     }
     // 1. Broad phase. Slab 0's input: every particle, in the order of the last step's slab 0
     // (close to this step's, so the sort's writes stay close together): the one pass that reads
     // the particles out of index order. Each thread takes a share and files it for slab 0.
     Entries& first = s.set[0];
-    int* count = &s.counts[0][static_cast<std::size_t>(t) * (g.rows + 1)];
+    int* count = &s.counts[0][static_cast<std::size_t>(t) * count_stride(g.rows)];
     std::fill(count, count + g.rows + 1, 0);
     my.lo = share(n, t, threads);
     my.hi = share(n, t + 1, threads);
@@ -481,7 +495,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
       const int r0 = row_at(t), r1 = row_at(t + 1);
       int* next_count = nullptr;
       if (k + 1 < g.slabs) {
-        next_count = &s.counts[(k + 1) % 2][static_cast<std::size_t>(t) * (g.rows + 1)];
+        next_count = &s.counts[(k + 1) % 2][static_cast<std::size_t>(t) * count_stride(g.rows)];
         std::fill(next_count, next_count + g.rows + 1, 0);
       }
       sort_rows(s, in, out, k, r0, r1, g, next_count);
@@ -490,8 +504,9 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
 #pragma omp barrier
       const int next_taking = k + 1 < g.slabs ? place_rows(s, my.next, k + 1, g, t, threads) : 0;
       // The search (each pair that passes, then the narrow phase at once), in chunks of entries
-      // taken as threads come free; then this thread groups slab k + 1's entries by row.
-      const View v{s.x.data(),      s.y.data(),     out.vx.data(),      out.vy.data(),
+      // taken as threads come free; then this thread groups slab k + 1's entries by row. No
+      // barrier between: the grouping touches nothing the search reads.
+      const View v{s.x.data(),       s.y.data(),     out.vx.data(),   out.vy.data(),
                    out.reach.data(), s.start.data(), row_start.data()};
 #pragma omp for schedule(dynamic, 1) nowait
       for (int from = 0; from < taking; from += kChunk) {
