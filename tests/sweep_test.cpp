@@ -3,12 +3,18 @@
 /// placed to meet at a chosen time, and grazing pairs whose closest approach is right at 2r.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include "plab/model.hpp"
 #include "plab/plan.hpp"
+#include "plab/plan_team.hpp"
 #include "plab/sweep.hpp"
 
 namespace {
@@ -193,6 +199,57 @@ TEST(Plan, SparseGreedyIsGreedy) {
     for (int i = 0; i < 40; ++i)
       if (want.partner[i] >= 0) {
         ASSERT_EQ(got.time[i], want.time[i]);
+      }
+  }
+}
+
+
+TEST(Plan, SparseGreedyInTeamIsSparseGreedy) {
+  // The team version (stage 06's CPU path) on the same kind of candidate sets, split over 1 to 5
+  // threads in a different order each time: always the serial plan.
+  std::mt19937_64 rng(11);
+  std::uniform_int_distribution<int> pick(0, 39);
+  std::uniform_int_distribution<int> step(0, 7);
+  for (int trial = 0; trial < 500; ++trial) {
+    std::vector<double> wall(40);
+    std::vector<plab::model::Event> pairs;
+    for (int i = 0; i < 40; ++i) wall[i] = step(rng) / 4.0;
+    for (int e = 0; e < 30; ++e) {
+      const int i = pick(rng), j = pick(rng);
+      if (i == j) continue;
+      const auto pair = plab::model::pair_event_key(step(rng) / 8.0, std::min(i, j), std::max(i, j));
+      pairs.push_back(pair);
+      if (e % 5 == 0) pairs.push_back(pair);  // found twice
+    }
+    std::vector<plab::model::Event> serial = pairs;
+    const plab::Plan want = plab::sparse_greedy_plan(serial, wall);
+#ifdef _OPENMP
+    const int threads = 1 + trial % 5;
+#else
+    const int threads = 1;
+#endif
+    std::shuffle(pairs.begin(), pairs.end(), rng);
+    std::vector<std::vector<plab::model::Event>> parts(threads);
+    for (std::size_t e = 0; e < pairs.size(); ++e) parts[e % threads].push_back(pairs[e]);
+    plab::Plan got;
+    got.partner.resize(wall.size());
+    got.time.resize(wall.size());
+    plab::SparseSelection work;
+    work.only.resize(wall.size());
+    work.contested.resize(threads);
+#pragma omp parallel num_threads(threads)
+    {
+#ifdef _OPENMP
+      const int t = omp_get_thread_num();
+#else
+      const int t = 0;
+#endif
+      plab::sparse_greedy_plan_in_team(parts[t], wall, got, work);
+    }
+    ASSERT_EQ(got.partner, want.partner) << "trial " << trial;
+    for (int i = 0; i < 40; ++i)
+      if (want.partner[i] >= 0) {
+        ASSERT_EQ(got.time[i], want.time[i]) << "trial " << trial << " particle " << i;
       }
   }
 }

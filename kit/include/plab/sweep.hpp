@@ -182,14 +182,36 @@ inline Grid choose_for(const Box& box, int active, double v_cut, double vmax, do
   return g;
 }
 
+/// The particles choose() samples: one of every sample_stride() that take part, in index order.
+inline std::size_t sample_stride(std::size_t n) { return std::max<std::size_t>(1, n / 1024); }
+
+/// The grid for `active` particles whose fastest squared speed is `max2`, from `sample` (the squared
+/// speeds of the particles sample_stride() picks, in any order; reordered here): `v_cut` at the
+/// `quantile` of the sample. `unordered`: a speed was not a number (no geometry to trust).
+inline Grid choose_from_sample(const Box& box, int active, double max2, bool unordered,
+                               std::vector<double>& sample, double quantile = 0.9,
+                               double alpha = 1.0) {
+  double cut2 = 0;
+  if (unordered) {
+    cut2 = max2 = HUGE_VAL;
+  } else if (!sample.empty()) {
+    const std::size_t m = sample.size();
+    auto at = sample.begin() + std::min<std::size_t>(m - 1, static_cast<std::size_t>(quantile * m));
+    std::nth_element(sample.begin(), at, sample.end());
+    cut2 = *at;
+  }
+  return choose_for(box, active, std::sqrt(cut2) * (1 + 1e-12), std::sqrt(max2) * (1 + 1e-12),
+                    box.L, alpha);
+}
+
 /// Chooses the grid for a state whose paths end at `end` (path_end() of each wall time): the
 /// particles that take part, the fastest of them, and `v_cut` at the `quantile` of their speeds
-/// (the rest are fast), estimated from at most about 1024 of them taken at even strides.
-/// `scratch` is working memory.
+/// (the rest are fast), estimated from at most about 1024 of them taken at even strides
+/// (choose_from_sample()). `scratch` is working memory.
 template <class Real>
 inline Grid choose(const Box& box, const ParticlesOf<Real>& p, const std::vector<double>& end,
                    std::vector<double>& scratch, double quantile = 0.9, double alpha = 1.0) {
-  const std::size_t n = p.size(), stride = std::max<std::size_t>(1, n / 1024);
+  const std::size_t n = p.size(), stride = sample_stride(n);
   scratch.clear();
   int active = 0;
   double max2 = 0;
@@ -201,17 +223,7 @@ inline Grid choose(const Box& box, const ParticlesOf<Real>& p, const std::vector
     max2 = std::max(max2, v2);
     if (active++ % stride == 0) scratch.push_back(v2);
   }
-  double cut2 = 0;
-  if (unordered) {
-    cut2 = max2 = HUGE_VAL;
-  } else if (!scratch.empty()) {
-    const std::size_t m = scratch.size();
-    auto at = scratch.begin() + std::min<std::size_t>(m - 1, static_cast<std::size_t>(quantile * m));
-    std::nth_element(scratch.begin(), at, scratch.end());
-    cut2 = *at;
-  }
-  return choose_for(box, active, std::sqrt(cut2) * (1 + 1e-12), std::sqrt(max2) * (1 + 1e-12),
-                    box.L, alpha);
+  return choose_from_sample(box, active, max2, unordered, scratch, quantile, alpha);
 }
 
 }  // namespace plab::sweep
