@@ -148,17 +148,23 @@ LocalGrid fit_grid(const Box& box, const Particles& p, const std::vector<double>
   return lg;
 }
 
+/// close_in_slab() is evaluated for this many entries at a time (a loop the compiler vectorises).
+constexpr int kLanes = 8;
+
 /// One time slab's entries, in cell order: the particles that take part, by the cell of their
-/// midpoint positions (shifted by the grid's origin).
+/// midpoint positions (shifted by the grid's origin); the arrays are padded by kLanes entries.
 struct Entries {
   std::vector<int> start;            //!< cell c holds entries [start[c], start[c + 1])
   std::vector<int> cell;             //!< per particle: its cell in this slab
   std::vector<int> id;               //!< per entry: the particle (local index)
   std::vector<double> x, y, vx, vy;  //!< per entry: shifted midpoint position, velocity
+  std::vector<sweep::Search> reach;  //!< per entry: what it searches (sweep::search_of())
 };
 
-/// Slab k's counting sort of the particles that take part (last[i] >= k).
-void bin(Entries& e, const Particles& p, const std::vector<int>& last, int k, const LocalGrid& lg) {
+/// Slab k's counting sort of the particles that take part in it (first[i] <= k <= last[i]).
+void bin(Entries& e, const Particles& p, const std::vector<int>& first,
+         const std::vector<int>& last, const std::vector<sweep::Search>& reach, int k,
+         const LocalGrid& lg) {
   const sweep::Grid& g = lg.g;
   const int n = static_cast<int>(p.size());
   const double tm = sweep::slab_mid(k, g);
@@ -166,18 +172,20 @@ void bin(Entries& e, const Particles& p, const std::vector<int>& last, int k, co
   e.cell.resize(n);
   int m = 0;
   for (int i = 0; i < n; ++i) {
-    if (last[i] < k) continue;
+    if (last[i] < k || first[i] > k) continue;
     e.cell[i] = sweep::cell_of((p.x[i] + tm * p.vx[i]) - lg.x0, (p.y[i] + tm * p.vy[i]) - lg.y0, g);
     ++e.start[e.cell[i] + 1];
     ++m;
   }
   for (int c = 0; c < g.cells(); ++c) e.start[c + 1] += e.start[c];
-  for (auto* v : {&e.x, &e.y, &e.vx, &e.vy}) v->resize(m);
+  for (auto* v : {&e.x, &e.y, &e.vx, &e.vy}) v->assign(m + kLanes, 0.0);
   e.id.resize(m);
+  e.reach.resize(m);
   for (int i = 0; i < n; ++i) {  // start[c] moves on to where cell c + 1 starts
-    if (last[i] < k) continue;
+    if (last[i] < k || first[i] > k) continue;
     const int at = e.start[e.cell[i]]++;
     e.id[at] = i;
+    e.reach[at] = reach[i];
     e.x[at] = (p.x[i] + tm * p.vx[i]) - lg.x0;
     e.y[at] = (p.y[i] + tm * p.vy[i]) - lg.y0;
     e.vx[at] = p.vx[i];
@@ -192,23 +200,31 @@ void bin(Entries& e, const Particles& p, const std::vector<int>& last, int k, co
 void test_range(const Entries& e, int a, int from, int to, int owned, const sweep::Grid& g,
                 std::vector<std::pair<int, int>>& hits) {
   const bool a_ghost = e.id[a] >= owned;
-  for (int b = from; b < to; ++b) {
-    if (b == a || (a_ghost && e.id[b] >= owned)) continue;
-    if (sweep::close_in_slab(e.x[a] - e.x[b], e.y[a] - e.y[b], e.vx[a] - e.vx[b],
-                             e.vy[a] - e.vy[b], g))
-      hits.emplace_back(e.id[a], e.id[b]);
+  const double xa = e.x[a], ya = e.y[a], vxa = e.vx[a], vya = e.vy[a];
+  for (int b0 = from; b0 < to; b0 += kLanes) {
+    unsigned char close[kLanes];
+    for (int u = 0; u < kLanes; ++u)  // vectorised; the padding past `to` is masked off below
+      close[u] = sweep::close_in_slab(xa - e.x[b0 + u], ya - e.y[b0 + u], vxa - e.vx[b0 + u],
+                                      vya - e.vy[b0 + u], g);
+    unsigned lanes = 0;
+    for (int u = 0; u < kLanes; ++u) lanes |= unsigned{close[u]} << u;
+    if (to - b0 < kLanes) lanes &= (1u << (to - b0)) - 1;
+    for (; lanes != 0; lanes &= lanes - 1) {
+      const int b = b0 + __builtin_ctz(lanes);
+      if (b != a && !(a_ghost && e.id[b] >= owned)) hits.emplace_back(e.id[a], e.id[b]);
+    }
   }
 }
 
 /// Slab k's search (stage 06's, sweep::search_of()): a slow entry against the later entries of
 /// its row up to the last column within its reach, then the columns within reach of the next row;
 /// a fast entry against every entry within its reach, one run per row.
-void search(const Entries& e, const std::vector<sweep::Search>& reach, int owned,
-            const sweep::Grid& g, std::vector<std::pair<int, int>>& hits) {
+void search(const Entries& e, int owned, const sweep::Grid& g,
+            std::vector<std::pair<int, int>>& hits) {
   const int columns = g.columns;
   for (int row = 0, a = 0; row < g.rows; ++row) {
     for (const int end = e.start[(row + 1) * columns]; a < end; ++a) {
-      const sweep::Search q = reach[e.id[a]];
+      const sweep::Search q = e.reach[a];
       int x0, x1;
       sweep::columns_within(e.x[a], q.d, g, x0, x1);
       if (!q.fast) {
@@ -226,12 +242,27 @@ void search(const Entries& e, const std::vector<sweep::Search>& reach, int owned
   }
 }
 
+/// The first time slab in which a ghost at `x` moving at `vx` can meet a particle of rank q:
+/// q's particles are within sc.vx t of [sc.lo[q], sc.hi[q]] at time t, and the gap between the
+/// ghost and that range, less 2r + 2m, closes at vx + sc.vx from the left (sc.vx - vx from the
+/// right). Slabs before the time it closes need not hold the ghost. (0 when unsure.)
+int first_slab(const Box& box, const Scene& sc, int q, double x, double vx, const sweep::Grid& g) {
+  const double c = 2 * box.r + 2 * sc.margin;
+  const double left = (sc.lo[q] - c) - x, right = x - (sc.hi[q] + c);
+  double t = 0;
+  if (left > 0) t = left / (vx + sc.vx);
+  else if (right > 0) t = right / (sc.vx - vx);
+  t *= 1 - 1e-9;
+  if (!(t > 0)) return 0;  // also not-a-number
+  return t >= 1 ? g.slabs : static_cast<int>(std::fmin(std::floor(t * g.slabs), g.slabs));
+}
+
 /// 2. The candidates of the owned particles: their walls, and their pairs with any particle
 /// here (each pair time computed with the lower scene index first, as every stage does), found
 /// by stage 06's space-time grid over the owned particles and the ghosts (sweep.hpp): every pair
 /// that can meet in the step before both walls is found, and few others.
-void find_candidates(const Box& box, const Local& s, std::vector<double>& wall,
-                     CandidateLists& cand) {
+void find_candidates(const Box& box, const Ranks& r, const Scene& sc, const Local& s,
+                     std::vector<double>& wall, CandidateLists& cand) {
   const Particles& p = s.p;
   const int n = s.size();
   std::vector<double> end(n), scratch;
@@ -241,17 +272,18 @@ void find_candidates(const Box& box, const Local& s, std::vector<double>& wall,
     end[i] = sweep::path_end(wall[i]);
   }
   const LocalGrid lg = fit_grid(box, p, end, scratch);
-  std::vector<int> last(n);
+  std::vector<int> first(n, 0), last(n);
   std::vector<sweep::Search> reach(n);
   for (int i = 0; i < n; ++i) {
     last[i] = sweep::last_slab(end[i], lg.g);
     reach[i] = sweep::search_of(p.vx[i], p.vy[i], lg.g);
+    if (i >= s.owned) first[i] = first_slab(box, sc, r.rank, p.x[i], p.vx[i], lg.g);
   }
   Entries e;
   std::vector<std::pair<int, int>> hits;
   for (int k = 0; k < lg.g.slabs; ++k) {
-    bin(e, p, last, k, lg);
-    search(e, reach, s.owned, lg.g, hits);
+    bin(e, p, first, last, reach, k, lg);
+    search(e, s.owned, lg.g, hits);
   }
   for (auto& [a, b] : hits)
     if (a > b) std::swap(a, b);
@@ -360,7 +392,7 @@ void step(const Box& box, const Ranks& r, Local& s) {
   share_halo(r, box, sc, s);
   std::vector<double> wall;
   CandidateLists cand;
-  find_candidates(box, s, wall, cand);
+  find_candidates(box, r, sc, s, wall, cand);
   const std::vector<model::Event> chosen = choose_events(r, s, wall, cand);
   apply_events(box, chosen, cand, s);
   migrate(r, s);
