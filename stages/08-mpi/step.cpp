@@ -50,6 +50,7 @@ struct Scene {
   double margin = 0;               //!< the rounding margin m (sweep.hpp's, for the fastest speed)
   std::vector<double> lo;          //!< per rank: the least x of its owned particles (+inf: none)
   std::vector<double> hi;          //!< per rank: the greatest x of its owned particles
+  double n = 0;                    //!< particles in the scene
 };
 
 /// The Scene, from every rank's owned particles (two reductions and one exchange).
@@ -64,11 +65,12 @@ Scene scene_of(const Ranks& r, const Box& box, const Local& s) {
   }
   sc.vx = max_over_ranks(r, sc.vx);
   sc.margin = 1e-6 * (box.L + std::sqrt(max_over_ranks(r, v2)) + box.r);
-  const std::vector<std::vector<double>> mine(r.ranks, std::vector<double>{lo, hi});
+  const std::vector<std::vector<double>> mine(r.ranks, std::vector<double>{lo, hi, 1.0 * s.owned});
   const std::vector<double> all = all_to_all(r, mine);
   for (int q = 0; q < r.ranks; ++q) {
-    sc.lo.push_back(all[2 * q]);
-    sc.hi.push_back(all[2 * q + 1]);
+    sc.lo.push_back(all[3 * q]);
+    sc.hi.push_back(all[3 * q + 1]);
+    sc.n += all[3 * q + 2];
   }
   return sc;
 }
@@ -99,19 +101,25 @@ void share_halo(const Ranks& r, const Box& box, const Scene& sc, Local& s) {
   PLAB_EXERCISE(1, "the halo: copies of the particles within reach of each rank's slab");
 }
 
-/// The space-time grid of stage 06 (sweep::choose(): slabs, reach, margin, v_cut) fitted to the
-/// rectangle that the paths here cover, [x0, x0 + w) x [y0, y0 + h), instead of the whole box: a
-/// rank's particles lie in a slab and its halo, so square cells over the box would be too coarse.
-/// Cells are at least a slow particle's reach, no more than about 4n.
+constexpr double kAlpha = 0.3;  //!< time slabs per sqrt(density) v_cut: stage 06's measured best
+
+/// One rank's grid (fit_grid()): stage 06's, over coordinates shifted by its origin.
 struct LocalGrid {
   sweep::Grid g;  //!< the grid, over coordinates shifted by (x0, y0)
   double x0 = 0;  //!< the least x of the paths
   double y0 = 0;  //!< the least y of the paths
 };
 
-LocalGrid fit_grid(const Box& box, const Particles& p, const std::vector<double>& end,
-                   std::vector<double>& scratch) {
-  LocalGrid lg{sweep::choose(box, p, end, scratch, 0.9, 0.3)};
+/// The space-time grid of stage 06 (sweep::choose(): reach, margin, v_cut) fitted to the
+/// rectangle that the paths here cover, [x0, x0 + w) x [y0, y0 + h), instead of the whole box: a
+/// rank's particles lie in a slab and its halo. The time slabs are those stage 06 chooses for the
+/// whole scene, \f$K = \lceil \alpha \sqrt N\, v_{cut} / L \rceil\f$ with its \f$\alpha =
+/// 0.3\f$ (they follow the density, \f$\sqrt{N / L^2}\f$, which a rank shares with the scene,
+/// not its own count of particles), with this rank's \f$v_{cut}\f$. Cells are at least a slow
+/// particle's reach, about 4n of them.
+LocalGrid fit_grid(const Box& box, const Scene& sc, const Particles& p,
+                   const std::vector<double>& end, std::vector<double>& scratch) {
+  LocalGrid lg{sweep::choose(box, p, end, scratch, 0.9, kAlpha)};
   sweep::Grid& g = lg.g;
   if (!std::isfinite(g.cell)) return lg;  // no geometry to trust: one cell
   double x0 = HUGE_VAL, x1 = -HUGE_VAL, y0 = HUGE_VAL, y1 = -HUGE_VAL;
@@ -124,8 +132,11 @@ LocalGrid fit_grid(const Box& box, const Particles& p, const std::vector<double>
     y0 = std::fmin(y0, std::fmin(p.y[i], ye)), y1 = std::fmax(y1, std::fmax(p.y[i], ye));
   }
   if (active == 0 || !std::isfinite(x1 - x0) || !std::isfinite(y1 - y0)) return lg;
-  const double wanted = (g.reach + 2 * g.margin + 2 * g.half * g.v_cut) * (1 + 1e-9);
   const double w = x1 - x0, h = y1 - y0;
+  g.slabs = static_cast<int>(
+      std::clamp(std::ceil(kAlpha * std::sqrt(std::fmax(sc.n, 1.0)) * g.v_cut / box.L), 1.0, 256.0));
+  g.half = 0.5 / g.slabs;
+  const double wanted = (g.reach + 2 * g.margin + 2 * g.half * g.v_cut) * (1 + 1e-9);
   double cell = std::fmax(wanted, std::sqrt(sweep::kColumnsPerCell * w * h / (4.0 * active)));
   const auto count = [&](double extent, double per) { return std::floor(extent * per / cell) + 1; };
   while (count(h, 1) * count(w, sweep::kColumnsPerCell) > 8.0 * active + 64) cell *= 2;
@@ -150,10 +161,12 @@ struct Entries {
   std::vector<int> id;               //!< per entry: the particle (local index)
   std::vector<double> x, y, vx, vy;  //!< per entry: shifted midpoint position, velocity
   std::vector<sweep::Search> reach;  //!< per entry: what it searches (sweep::search_of())
+  int owned_from = 0;                //!< the first column that holds an owned entry
+  int owned_to = -1;                 //!< the last one (owned_to < owned_from: none)
 };
 
 /// Slab k's counting sort of the particles that take part in it (first[i] <= k <= last[i]).
-void bin(Entries& e, const Particles& p, const std::vector<int>& first,
+void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& first,
          const std::vector<int>& last, const std::vector<sweep::Search>& reach, int k,
          const LocalGrid& lg) {
   const sweep::Grid& g = lg.g;
@@ -172,6 +185,8 @@ void bin(Entries& e, const Particles& p, const std::vector<int>& first,
   for (auto* v : {&e.x, &e.y, &e.vx, &e.vy}) v->assign(m + kLanes, 0.0);
   e.id.resize(m);
   e.reach.resize(m);
+  e.owned_from = g.columns;
+  e.owned_to = -1;
   for (int i = 0; i < n; ++i) {  // start[c] moves on to where cell c + 1 starts
     if (last[i] < k || first[i] > k) continue;
     const int at = e.start[e.cell[i]]++;
@@ -181,6 +196,11 @@ void bin(Entries& e, const Particles& p, const std::vector<int>& first,
     e.y[at] = (p.y[i] + tm * p.vy[i]) - lg.y0;
     e.vx[at] = p.vx[i];
     e.vy[at] = p.vy[i];
+    if (i < owned) {
+      const int column = e.cell[i] % g.columns;
+      e.owned_from = std::min(e.owned_from, column);
+      e.owned_to = std::max(e.owned_to, column);
+    }
   }
   for (int c = g.cells(); c > 0; --c) e.start[c] = e.start[c - 1];
   e.start[0] = 0;
@@ -209,7 +229,8 @@ void test_range(const Entries& e, int a, int from, int to, int owned, const swee
 
 /// Slab k's search (stage 06's, sweep::search_of()): a slow entry against the later entries of
 /// its row up to the last column within its reach, then the columns within reach of the next row;
-/// a fast entry against every entry within its reach, one run per row.
+/// a fast entry against every entry within its reach, one run per row. A ghost searches only the
+/// columns that hold owned entries (the others hold ghosts alone: no rank needs those pairs).
 void search(const Entries& e, int owned, const sweep::Grid& g,
             std::vector<std::pair<int, int>>& hits) {
   const int columns = g.columns;
@@ -218,8 +239,14 @@ void search(const Entries& e, int owned, const sweep::Grid& g,
       const sweep::Search q = e.reach[a];
       int x0, x1;
       sweep::columns_within(e.x[a], q.d, g, x0, x1);
+      if (e.id[a] >= owned) {
+        x0 = std::max(x0, e.owned_from);
+        x1 = std::min(x1, e.owned_to);
+        if (x0 > x1) continue;
+      }
       if (!q.fast) {
-        test_range(e, a, a + 1, e.start[row * columns + x1 + 1], owned, g, hits);
+        test_range(e, a, std::max(a + 1, e.start[row * columns + x0]),
+                   e.start[row * columns + x1 + 1], owned, g, hits);
         if (row + 1 < g.rows)
           test_range(e, a, e.start[(row + 1) * columns + x0], e.start[(row + 1) * columns + x1 + 1],
                      owned, g, hits);
@@ -262,7 +289,7 @@ void find_candidates(const Box& box, const Ranks& r, const Scene& sc, const Loca
     wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
     end[i] = sweep::path_end(wall[i]);
   }
-  const LocalGrid lg = fit_grid(box, p, end, scratch);
+  const LocalGrid lg = fit_grid(box, sc, p, end, scratch);
   std::vector<int> first(n, 0), last(n);
   std::vector<sweep::Search> reach(n);
   for (int i = 0; i < n; ++i) {
@@ -273,7 +300,7 @@ void find_candidates(const Box& box, const Ranks& r, const Scene& sc, const Loca
   Entries e;
   std::vector<std::pair<int, int>> hits;
   for (int k = 0; k < lg.g.slabs; ++k) {
-    bin(e, p, first, last, reach, k, lg);
+    bin(e, p, s.owned, first, last, reach, k, lg);
     search(e, s.owned, lg.g, hits);
   }
   for (auto& [a, b] : hits)
