@@ -163,9 +163,11 @@ LocalGrid fit_grid(const Box& box, const Scene& sc, const Particles& p,
 constexpr int kLanes = 8;
 
 /// One time slab's entries, in cell order: the particles that take part, by the cell of their
-/// midpoint positions (shifted by the grid's origin); the arrays are padded by kLanes entries.
+/// midpoint positions (shifted by the grid's origin), the owned ones first in each cell; the
+/// arrays are padded by kLanes entries.
 struct Entries {
   std::vector<int> start;            //!< cell c holds entries [start[c], start[c + 1])
+  std::vector<int> owned_end;        //!< cell c's owned entries are [start[c], owned_end[c])
   std::vector<int> cell;             //!< per particle: its cell in this slab
   std::vector<int> id;               //!< per entry: the particle (local index)
   std::vector<double> x, y, vx, vy;  //!< per entry: shifted midpoint position, velocity
@@ -182,12 +184,14 @@ void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& firs
   const int n = static_cast<int>(p.size());
   const double tm = sweep::slab_mid(k, g);
   e.start.assign(g.cells() + 1, 0);
+  e.owned_end.assign(g.cells(), 0);
   e.cell.resize(n);
   int m = 0;
   for (int i = 0; i < n; ++i) {
     if (last[i] < k || first[i] > k) continue;
     e.cell[i] = sweep::cell_of((p.x[i] + tm * p.vx[i]) - lg.x0, (p.y[i] + tm * p.vy[i]) - lg.y0, g);
     ++e.start[e.cell[i] + 1];
+    if (i < owned) ++e.owned_end[e.cell[i]];
     ++m;
   }
   for (int c = 0; c < g.cells(); ++c) e.start[c + 1] += e.start[c];
@@ -196,7 +200,8 @@ void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& firs
   e.reach.resize(m);
   e.owned_from = g.columns;
   e.owned_to = -1;
-  for (int i = 0; i < n; ++i) {  // start[c] moves on to where cell c + 1 starts
+  for (int i = 0; i < n; ++i) {  // start[c] moves on to where cell c + 1 starts (owned first:
+                                 // they are particles 0 .. owned - 1)
     if (last[i] < k || first[i] > k) continue;
     const int at = e.start[e.cell[i]]++;
     e.id[at] = i;
@@ -213,13 +218,13 @@ void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& firs
   }
   for (int c = g.cells(); c > 0; --c) e.start[c] = e.start[c - 1];
   e.start[0] = 0;
+  for (int c = 0; c < g.cells(); ++c) e.owned_end[c] += e.start[c];
 }
 
-/// Files entry `a` with every entry of [from, to) that passes sweep::close_in_slab(), except
-/// itself and pairs of two ghosts (no rank needs those).
-void test_range(const Entries& e, int a, int from, int to, int owned, const sweep::Grid& g,
+/// Files owned entry `a` with every entry of [from, to) but itself that passes
+/// sweep::close_in_slab().
+void test_range(const Entries& e, int a, int from, int to, const sweep::Grid& g,
                 std::vector<std::pair<int, int>>& hits) {
-  const bool a_ghost = e.id[a] >= owned;
   const double xa = e.x[a], ya = e.y[a], vxa = e.vx[a], vya = e.vy[a];
   for (int b0 = from; b0 < to; b0 += kLanes) {
     unsigned char close[kLanes];
@@ -231,15 +236,26 @@ void test_range(const Entries& e, int a, int from, int to, int owned, const swee
     if (to - b0 < kLanes) lanes &= (1u << (to - b0)) - 1;
     for (; lanes != 0; lanes &= lanes - 1) {
       const int b = b0 + __builtin_ctz(lanes);
-      if (b != a && !(a_ghost && e.id[b] >= owned)) hits.emplace_back(e.id[a], e.id[b]);
+      if (b != a) hits.emplace_back(e.id[a], e.id[b]);
     }
   }
 }
 
+/// Files ghost entry `a` with every owned entry of [from, to) that passes
+/// sweep::close_in_slab().
+void test_owned(const Entries& e, int a, int from, int to, const sweep::Grid& g,
+                std::vector<std::pair<int, int>>& hits) {
+  for (int b = from; b < to; ++b)
+    if (sweep::close_in_slab(e.x[a] - e.x[b], e.y[a] - e.y[b], e.vx[a] - e.vx[b],
+                             e.vy[a] - e.vy[b], g))
+      hits.emplace_back(e.id[a], e.id[b]);
+}
+
 /// Slab k's search (stage 06's, sweep::search_of()): a slow entry against the later entries of
 /// its row up to the last column within its reach, then the columns within reach of the next row;
-/// a fast entry against every entry within its reach, one run per row. A ghost searches only the
-/// columns that hold owned entries (the others hold ghosts alone: no rank needs those pairs).
+/// a fast entry against every entry within its reach, one run per row. A ghost tests only the
+/// owned entries of those cells (first in each cell), in the columns that hold any: pairs of two
+/// ghosts no rank needs, and an owned entry before a ghost in its cell finds it itself.
 void search(const Entries& e, int owned, const sweep::Grid& g,
             std::vector<std::pair<int, int>>& hits) {
   const int columns = g.columns;
@@ -248,22 +264,27 @@ void search(const Entries& e, int owned, const sweep::Grid& g,
       const sweep::Search q = e.reach[a];
       int x0, x1;
       sweep::columns_within(e.x[a], q.d, g, x0, x1);
-      if (e.id[a] >= owned) {
+      if (e.id[a] >= owned) {  // a ghost
         x0 = std::max(x0, e.owned_from);
         x1 = std::min(x1, e.owned_to);
-        if (x0 > x1) continue;
+        int y0 = row, y1 = std::min(row + 1, g.rows - 1);
+        if (q.fast) sweep::rows_within(e.y[a], q.d, g, y0, y1);
+        const int own = e.cell[e.id[a]] % columns;
+        for (int y = y0; y <= y1; ++y)
+          for (int c = (!q.fast && y == row) ? std::max(x0, own + 1) : x0; c <= x1; ++c)
+            test_owned(e, a, e.start[y * columns + c], e.owned_end[y * columns + c], g, hits);
+        continue;
       }
       if (!q.fast) {
-        test_range(e, a, std::max(a + 1, e.start[row * columns + x0]),
-                   e.start[row * columns + x1 + 1], owned, g, hits);
+        test_range(e, a, a + 1, e.start[row * columns + x1 + 1], g, hits);
         if (row + 1 < g.rows)
           test_range(e, a, e.start[(row + 1) * columns + x0], e.start[(row + 1) * columns + x1 + 1],
-                     owned, g, hits);
+                     g, hits);
       } else {  // a pair found twice is harmless
         int y0, y1;
         sweep::rows_within(e.y[a], q.d, g, y0, y1);
         for (int y = y0; y <= y1; ++y)
-          test_range(e, a, e.start[y * columns + x0], e.start[y * columns + x1 + 1], owned, g, hits);
+          test_range(e, a, e.start[y * columns + x0], e.start[y * columns + x1 + 1], g, hits);
       }
     }
   }
