@@ -239,6 +239,8 @@ template std::vector<model::Event> all_to_all(const Ranks&,
                                             std::vector<int>*);
 template std::vector<double> all_to_all(const Ranks&, const std::vector<std::vector<double>>&,
                                       std::vector<int>*);
+template std::vector<int> all_to_all(const Ranks&, const std::vector<std::vector<int>>&,
+                                   std::vector<int>*);
 template std::vector<char> all_to_all(const Ranks&, const std::vector<std::vector<char>>&,
                                     std::vector<int>*);
 /// \endcond

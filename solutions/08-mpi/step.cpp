@@ -32,15 +32,22 @@ namespace plab::dist {
 
 namespace {
 
-/// Sends, for every rank q, value[k] of each owned particle k in s.sent_to[q], and writes what
-/// comes back into value[] of the ghosts, in the order their owners listed them.
+/// What the rounds exchange (shared_of()): only the ghosts that are a candidate partner of an
+/// owned particle are ever read, so only their values travel.
+struct Shared {
+  std::vector<std::vector<int>> send;  //!< per rank q: the owned particles whose values q reads
+  std::vector<int> recv;               //!< the ghosts read here, in the order their values come
+};
+
+/// Sends, for every rank q, value[k] of each owned particle k in sh.send[q], and writes what
+/// comes back into value[] of the ghosts in sh.recv.
 template <class T>
-void share_with_ghosts(const Ranks& r, const Local& s, std::vector<T>& value) {
+void share_with_ghosts(const Ranks& r, const Shared& sh, std::vector<T>& value) {
   std::vector<std::vector<T>> out(r.ranks);
   for (int q = 0; q < r.ranks; ++q)
-    for (int k : s.sent_to[q]) out[q].push_back(value[k]);
+    for (int k : sh.send[q]) out[q].push_back(value[k]);
   const std::vector<T> in = all_to_all(r, out);
-  std::copy(in.begin(), in.end(), value.begin() + s.owned);
+  for (std::size_t j = 0; j < in.size(); ++j) value[sh.recv[j]] = in[j];
 }
 
 /// What every rank knows of the whole scene at the start of the step (the same on every rank).
@@ -348,9 +355,32 @@ void find_candidates(const Box& box, const Ranks& r, const Scene& sc, const Loca
   cand.build(n, found);
 }
 
+/// Which ghosts' values the rounds need here (the candidate partners of the owned particles),
+/// and, from what the other ranks say they need, which owned particles' values go where (one
+/// exchange a step).
+Shared shared_of(const Ranks& r, const Local& s, const CandidateLists& cand) {
+  std::vector<char> read(s.size(), 0);
+  for (int i = 0; i < s.owned; ++i)
+    for (int k = cand.start[i]; k < cand.start[i + 1]; ++k) read[cand.other[k]] = 1;
+  Shared sh;
+  std::vector<std::vector<int>> ask(r.ranks);  // positions in the owner's list s.sent_to[q]
+  for (int q = 0; q < r.ranks; ++q)
+    for (int g = s.ghosts_from[q]; g < s.ghosts_from[q + 1]; ++g)
+      if (read[g]) {
+        ask[q].push_back(g - s.ghosts_from[q]);
+        sh.recv.push_back(g);
+      }
+  std::vector<int> from;
+  const std::vector<int> asked = all_to_all(r, ask, &from);
+  sh.send.assign(r.ranks, {});
+  for (int q = 0; q < r.ranks; ++q)
+    for (int j = from[q]; j < from[q + 1]; ++j) sh.send[q].push_back(s.sent_to[q][asked[j]]);
+  return sh;
+}
+
 /// 3. Stage 03's rounds across ranks. Returns each owned particle's event (walls and pairs
 /// keyed by scene indices; `t` = never for none), the same as model.md's greedy over every rank.
-std::vector<model::Event> choose_events(const Ranks& r, const Local& s,
+std::vector<model::Event> choose_events(const Ranks& r, const Local& s, const Shared& sh,
                                         const std::vector<double>& wall,
                                         const CandidateLists& cand) {
   const int n = s.size();
@@ -358,7 +388,7 @@ std::vector<model::Event> choose_events(const Ranks& r, const Local& s,
   std::vector<char> resolved(n, 0);
   std::vector<model::Event> best(n, none), chosen(s.owned, none);
   for (bool open = true; open;) {
-    share_with_ghosts(r, s, resolved);  // whom the ghosts' owners resolved last round
+    share_with_ghosts(r, sh, resolved);  // whom the ghosts' owners resolved last round
     for (int i = 0; i < s.owned; ++i) {
       if (resolved[i]) continue;
       model::Event b = model::in_step(wall[i]) ? model::wall_event_key(wall[i], s.id[i]) : none;
@@ -371,7 +401,7 @@ std::vector<model::Event> choose_events(const Ranks& r, const Local& s,
       }
       best[i] = b;
     }
-    share_with_ghosts(r, s, best);  // what the ghosts chose
+    share_with_ghosts(r, sh, best);  // what the ghosts chose
     bool left = false;
     for (int i = 0; i < s.owned; ++i) {
       if (resolved[i]) continue;
@@ -441,7 +471,8 @@ void step(const Box& box, const Ranks& r, Local& s) {
   std::vector<double> wall;
   CandidateLists cand;
   find_candidates(box, r, sc, s, wall, cand);
-  const std::vector<model::Event> chosen = choose_events(r, s, wall, cand);
+  const Shared sh = shared_of(r, s, cand);
+  const std::vector<model::Event> chosen = choose_events(r, s, sh, wall, cand);
   apply_events(box, chosen, cand, s);
   migrate(r, s);
 }
