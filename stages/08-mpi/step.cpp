@@ -157,12 +157,8 @@ LocalGrid fit_grid(const Box& box, const Scene& sc, const Particles& p,
   return lg;
 }
 
-/// close_in_slab() is evaluated for this many entries at a time (a loop the compiler vectorises).
-constexpr int kLanes = 8;
-
 /// One time slab's entries, in cell order: the particles that take part, by the cell of their
-/// midpoint positions (shifted by the grid's origin), the owned ones first in each cell; the
-/// arrays are padded by kLanes entries.
+/// midpoint positions (shifted by the grid's origin), the owned ones first in each cell.
 struct Entries {
   std::vector<int> start;            //!< cell c holds entries [start[c], start[c + 1])
   std::vector<int> owned_end;        //!< cell c's owned entries are [start[c], owned_end[c])
@@ -193,7 +189,7 @@ void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& firs
     ++m;
   }
   for (int c = 0; c < g.cells(); ++c) e.start[c + 1] += e.start[c];
-  for (auto* v : {&e.x, &e.y, &e.vx, &e.vy}) v->assign(m + kLanes, 0.0);
+  for (auto* v : {&e.x, &e.y, &e.vx, &e.vy}) v->resize(m);
   e.id.resize(m);
   e.reach.resize(m);
   e.owned_from = g.columns;
@@ -224,19 +220,9 @@ void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& firs
 void test_range(const Entries& e, int a, int from, int to, const sweep::Grid& g,
                 std::vector<std::pair<int, int>>& hits) {
   const double xa = e.x[a], ya = e.y[a], vxa = e.vx[a], vya = e.vy[a];
-  for (int b0 = from; b0 < to; b0 += kLanes) {
-    unsigned char close[kLanes];
-    for (int u = 0; u < kLanes; ++u)  // vectorised; the padding past `to` is masked off below
-      close[u] = sweep::close_in_slab(xa - e.x[b0 + u], ya - e.y[b0 + u], vxa - e.vx[b0 + u],
-                                      vya - e.vy[b0 + u], g);
-    unsigned lanes = 0;
-    for (int u = 0; u < kLanes; ++u) lanes |= unsigned{close[u]} << u;
-    if (to - b0 < kLanes) lanes &= (1u << (to - b0)) - 1;
-    for (; lanes != 0; lanes &= lanes - 1) {
-      const int b = b0 + __builtin_ctz(lanes);
-      if (b != a) hits.emplace_back(e.id[a], e.id[b]);
-    }
-  }
+  for (int b = from; b < to; ++b)
+    if (sweep::close_in_slab(xa - e.x[b], ya - e.y[b], vxa - e.vx[b], vya - e.vy[b], g) && b != a)
+      hits.emplace_back(e.id[a], e.id[b]);
 }
 
 /// Files ghost entry `a` with every owned entry of [from, to) that passes
