@@ -92,9 +92,10 @@ double end_of(const Box& box, const Local& s, int k) {
 /// 1. The halo: copies of every particle that could meet one of a rank's own before both their
 /// walls in this step. Owned particle k whose path ends at T = end_of(k) (T <= 0: it meets
 /// nobody) is at x_k + t vx_k at time t <= T; a partner of rank q is then within sc.vx t of
-/// [sc.lo[q], sc.hi[q]]. Both gaps close no faster than they open (sc.vx >= |vx_k|), so they can
-/// meet by T only if they can at T: k goes to q when [x_k + T vx_k -+ (T sc.vx + 2r + 2m)]
-/// meets [sc.lo[q], sc.hi[q]] (handout 08 proves it; a not-a-number sends it everywhere).
+/// [sc.lo[q], sc.hi[q]]. That range grows at least as fast as k moves (sc.vx >= |vx_k|), so if
+/// they can meet at some t <= T, k is also within reach of it at T: k goes to q when
+/// [x_k + T vx_k -+ (T sc.vx + 2r + 2m)] meets [sc.lo[q], sc.hi[q]] (handout 08 proves it; a
+/// not-a-number sends it everywhere).
 void share_halo(const Ranks& r, const Box& box, const Scene& sc, Local& s) {
   // EXERCISE 1: the halo. For every owned particle k whose path ends at T = end_of(box, s, k)
   // > 0 (T <= 0: its wall comes first, it meets nobody), at = x_k + T vx_k is where it is then,
