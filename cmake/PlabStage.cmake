@@ -7,8 +7,9 @@
 #                 kit/src/no_gpu_path.cpp: the stage runs on the CPU)
 #   needs_gpu     a CUDA stage: skipped without nvcc
 #   needs_openmp  skipped without OpenMP
-#   needs_mpi     runs on several processes (mpirun): linked with MPI, skipped without it; the
-#                 runner calls its plab::stage_worker() first
+#   needs_mpi     runs on several processes (mpirun): linked with the kit's plab::mpi (MPI's
+#                 plumbing, kit/mpi), skipped without MPI; the runner calls its
+#                 plab::stage_worker() first
 #   model         "stepped" (model.md) or "exact" (stage 07: its own tests and golden files)
 #   float_path, test_max_n, test_sizes, switches, simd: read by the runner and the tests
 # Adds:
@@ -138,7 +139,7 @@ function(plab_add_stage)
     target_sources(${lib} PRIVATE ${PROJECT_SOURCE_DIR}/kit/src/no_gpu_path.cpp)
   endif()
   if(needs_mpi)
-    target_link_libraries(${lib} PUBLIC MPI::MPI_CXX)
+    target_link_libraries(${lib} PUBLIC plab::mpi)  # kit/mpi: the slabs, exchanges and driver
   endif()
 
   set(program plab-run-${id}-${impl})

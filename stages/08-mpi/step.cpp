@@ -1,15 +1,18 @@
 /// \file stages/08-mpi/step.cpp
 /// \brief Stage 08, MPI: the box cut into slabs, one per rank; each rank steps the particles
-/// whose centre lies in its slab, with copies of its neighbours' particles within reach (the
-/// halo), chooses the events by stage 03's mutual-earliest rounds across ranks, and hands the
-/// particles that left its slab to their new owners. Same bits as stages 01-06 at any rank count.
+/// whose centre lies in its slab, with copies of the other ranks' particles that can meet them
+/// (the halo), finds its candidates with stage 06's space-time grid, chooses the events by stage
+/// 03's mutual-earliest rounds across ranks, and hands the particles that left its slab to their
+/// new owners. Same bits as stages 01-06 at any rank count.
 //
 // =================================================================================================
 //  GOAL   One step of model.md on R ranks, each holding only its slab's particles:
 //         1. the halo: every rank sends each other rank copies of its particles that could meet
-//            one of that rank's in this step (within h = 2 max|vx| + 2r of its slab, in x);
+//            one of that rank's before their walls in this step: where a particle is when its
+//            path ends (its wall time, or 1), widened by what any partner covers by then;
 //         2. candidates, local (given): walls of the owned particles, pairs with an owned one,
-//            tested only within 3 x 3 cells of the reach;
+//            found by stage 06's space-time grid (plab::sweep) over the owned particles and
+//            the ghosts;
 //         3. the rounds of stage 03 across ranks: each unresolved owned particle chooses its
 //            earliest event; the choices of the ghosts come from their owners; a pair is
 //            accepted when both chose it; the ghosts' "resolved" flags come back each round;
@@ -22,109 +25,350 @@
 #include <vector>
 
 #include "plab/candidates.hpp"
-#include "ranks.hpp"
+#include "plab/mpi/ranks.hpp"
+#include "plab/sweep.hpp"
 
 namespace plab::dist {
 
 namespace {
 
-/// Sends, for every rank q, value[k] of each owned particle k in s.sent_to[q], and writes what
-/// comes back into value[] of the ghosts, in the order their owners listed them.
+/// What the rounds exchange (shared_of()): only the ghosts that are a candidate partner of an
+/// owned particle are ever read, so only their values travel.
+struct Shared {
+  std::vector<std::vector<int>> send;  //!< per rank q: the owned particles whose values q reads
+  std::vector<int> recv;               //!< the ghosts read here, in the order their values come
+};
+
+/// Sends, for every rank q, value[k] of each owned particle k in sh.send[q], and writes what
+/// comes back into value[] of the ghosts in sh.recv.
 template <class T>
 [[maybe_unused]]
-void share_with_ghosts(const Ranks& r, const Local& s, std::vector<T>& value) {
+void share_with_ghosts(const Ranks& r, const Shared& sh, std::vector<T>& value) {
   std::vector<std::vector<T>> out(r.ranks);
   for (int q = 0; q < r.ranks; ++q)
-    for (int k : s.sent_to[q]) out[q].push_back(value[k]);
+    for (int k : sh.send[q]) out[q].push_back(value[k]);
   const std::vector<T> in = all_to_all(r, out);
-  std::copy(in.begin(), in.end(), value.begin() + s.owned);
+  for (std::size_t j = 0; j < in.size(); ++j) value[sh.recv[j]] = in[j];
 }
 
-/// How far apart in x and in y two disks can start and still touch within the step: each
-/// moves at most max|v| along an axis, the largest over every rank (max_over_ranks()), so
-/// 2 max|v| + 2r, with a margin far above rounding (a pair tested too many costs nothing, one
-/// missed changes the bits).
-struct Reach {
-  double x;  //!< in x: the halo's width
-  double y;  //!< in y
+/// What every rank knows of the whole scene at the start of the step (the same on every rank).
+struct Scene {
+  double vx = 0;                   //!< the largest |vx| of any particle (length per step)
+  double margin = 0;               //!< the rounding margin m (sweep.hpp's, for the fastest speed)
+  std::vector<double> lo;          //!< per rank: the least x of its owned particles (+inf: none)
+  std::vector<double> hi;          //!< per rank: the greatest x of its owned particles
+  double n = 0;                    //!< particles in the scene
 };
-Reach reach_of(const Ranks& r, const Box& box, const Local& s) {
-  double vx = 0, vy = 0;
+
+/// The Scene, from every rank's owned particles (two reductions and one exchange).
+Scene scene_of(const Ranks& r, const Box& box, const Local& s) {
+  Scene sc;
+  double v2 = 0, lo = HUGE_VAL, hi = -HUGE_VAL;
   for (int k = 0; k < s.owned; ++k) {
-    vx = std::fmax(vx, std::fabs(s.p.vx[k]));
-    vy = std::fmax(vy, std::fabs(s.p.vy[k]));
+    sc.vx = std::fmax(sc.vx, std::fabs(s.p.vx[k]));
+    v2 = std::fmax(v2, s.p.vx[k] * s.p.vx[k] + s.p.vy[k] * s.p.vy[k]);
+    lo = std::fmin(lo, s.p.x[k]);
+    hi = std::fmax(hi, s.p.x[k]);
   }
-  const auto with_margin = [&](double v) { return (2 * v + 2 * box.r) * (1 + 1e-9) + 1e-9 * box.L; };
-  return {with_margin(max_over_ranks(r, vx)), with_margin(max_over_ranks(r, vy))};
+  sc.vx = max_over_ranks(r, sc.vx);
+  sc.margin = 1e-6 * (box.L + std::sqrt(max_over_ranks(r, v2)) + box.r);
+  const std::vector<std::vector<double>> mine(r.ranks, std::vector<double>{lo, hi, 1.0 * s.owned});
+  const std::vector<double> all = all_to_all(r, mine);
+  for (int q = 0; q < r.ranks; ++q) {
+    sc.lo.push_back(all[3 * q]);
+    sc.hi.push_back(all[3 * q + 1]);
+    sc.n += all[3 * q + 2];
+  }
+  return sc;
 }
 
-/// 1. The halo: copies of every particle that could meet one of a rank's own in this step.
-void share_halo(const Ranks& r, const Reach& reach, Local& s) {
-  // EXERCISE 1: the halo. Two disks further apart in x than h = reach.x cannot touch within
-  // the step (reach_of() says why). For every owned particle k and every other rank q whose slab [slab_lo(q) - h, slab_hi(q) + h]
-  // holds its x: note k in s.sent_to[q] (assign R empty lists first) and send s.record(k) to q.
-  // all_to_all() the records with &s.ghosts_from, s.push() each one received, and shift
-  // s.ghosts_from by s.owned (the ghosts come after the owned particles).
-  (void)r, (void)reach, (void)s;
+/// When particle k's path stops mattering for pairs: its wall time if that is in the step, else
+/// 1 (sweep::path_end(): a pair at or after a particle's wall time is never accepted).
+[[maybe_unused]]
+double end_of(const Box& box, const Local& s, int k) {
+  return sweep::path_end(model::wall_time(s.p.x[k], s.p.y[k], s.p.vx[k], s.p.vy[k], box.L, box.r));
+}
+
+/// 1. The halo: copies of every particle that could meet one of a rank's own before both their
+/// walls in this step. Owned particle k whose path ends at T = end_of(k) (T <= 0: it meets
+/// nobody) is at x_k + t vx_k at time t <= T; a partner of rank q is then within sc.vx t of
+/// [sc.lo[q], sc.hi[q]]. That range grows at least as fast as k moves (sc.vx >= |vx_k|), so if
+/// they can meet at some t <= T, k is also within reach of it at T: k goes to q when
+/// [x_k + T vx_k -+ (T sc.vx + 2r + 2m)] meets [sc.lo[q], sc.hi[q]] (handout 08 proves it; a
+/// not-a-number sends it everywhere).
+void share_halo(const Ranks& r, const Box& box, const Scene& sc, Local& s) {
+  // EXERCISE 1: the halo. For every owned particle k whose path ends at T = end_of(box, s, k)
+  // > 0 (T <= 0: its wall comes first, it meets nobody), at = x_k + T vx_k is where it is then,
+  // and cover = (T sc.vx + 2r + 2 sc.margin) (1 + 1e-9) what any partner can close by then. For
+  // every other rank q whose owned x, [sc.lo[q], sc.hi[q]], meets [at - cover, at + cover] (a
+  // not-a-number: every rank; only ranks owner_of(lo) .. owner_of(hi) can): note k in
+  // s.sent_to[q] (assign R empty lists first) and send s.record(k) to q. all_to_all() the
+  // records with &s.ghosts_from, s.push() each one received, and shift s.ghosts_from by s.owned
+  // (the ghosts come after the owned particles). Why is no pair that can meet lost? (handout 08)
+  (void)r, (void)box, (void)sc, (void)s;
   PLAB_EXERCISE(1, "the halo: copies of the particles within reach of each rank's slab");
 }
 
+constexpr double kAlpha = 0.3;  //!< time slabs per sqrt(density) v_cut: stage 06's measured best
+
+/// One rank's grid (fit_grid()): stage 06's, over coordinates shifted by its origin.
+struct LocalGrid {
+  sweep::Grid g;  //!< the grid, over coordinates shifted by (x0, y0)
+  double x0 = 0;  //!< the least x of the paths
+  double y0 = 0;  //!< the least y of the paths
+};
+
+/// The space-time grid of stage 06 (sweep::choose(): reach, margin, v_cut) fitted to the
+/// rectangle that the paths here cover, [x0, x0 + w) x [y0, y0 + h), instead of the whole box: a
+/// rank's particles lie in a slab and its halo. The time slabs are those stage 06 chooses for the
+/// whole scene, \f$K = \lceil \alpha \sqrt N\, v_{cut} / L \rceil\f$ with its \f$\alpha =
+/// 0.3\f$ (they follow the density, \f$\sqrt{N / L^2}\f$, which a rank shares with the scene,
+/// not its own count of particles), with this rank's \f$v_{cut}\f$. Cells are at least a slow
+/// particle's reach, about 4n of them.
+LocalGrid fit_grid(const Box& box, const Scene& sc, const Particles& p,
+                   const std::vector<double>& end, std::vector<double>& scratch) {
+  LocalGrid lg{sweep::choose(box, p, end, scratch, 0.9, kAlpha)};
+  sweep::Grid& g = lg.g;
+  if (!std::isfinite(g.cell)) return lg;  // no geometry to trust: one cell
+  double x0 = HUGE_VAL, x1 = -HUGE_VAL, y0 = HUGE_VAL, y1 = -HUGE_VAL;
+  int active = 0;
+  for (int i = 0; i < static_cast<int>(p.size()); ++i) {
+    if (!(end[i] > 0)) continue;
+    ++active;
+    const double xe = p.x[i] + end[i] * p.vx[i], ye = p.y[i] + end[i] * p.vy[i];
+    x0 = std::fmin(x0, std::fmin(p.x[i], xe)), x1 = std::fmax(x1, std::fmax(p.x[i], xe));
+    y0 = std::fmin(y0, std::fmin(p.y[i], ye)), y1 = std::fmax(y1, std::fmax(p.y[i], ye));
+  }
+  if (active == 0 || !std::isfinite(x1 - x0) || !std::isfinite(y1 - y0)) return lg;
+  const double w = x1 - x0, h = y1 - y0;
+  g.slabs = static_cast<int>(
+      std::clamp(std::ceil(kAlpha * std::sqrt(std::fmax(sc.n, 1.0)) * g.v_cut / box.L), 1.0, 256.0));
+  g.half = 0.5 / g.slabs;
+  const double wanted = (g.reach + 2 * g.margin + 2 * g.half * g.v_cut) * (1 + 1e-9);
+  double cell = std::fmax(wanted, std::sqrt(sweep::kColumnsPerCell * w * h / (4.0 * active)));
+  const auto count = [&](double extent, double per) { return std::floor(extent * per / cell) + 1; };
+  while (count(h, 1) * count(w, sweep::kColumnsPerCell) > 8.0 * active + 64) cell *= 2;
+  g.cell = cell;
+  g.inv_cell = 1 / cell;
+  g.inv_column = sweep::kColumnsPerCell / cell;
+  g.rows = static_cast<int>(count(h, 1));
+  g.columns = static_cast<int>(count(w, sweep::kColumnsPerCell));
+  lg.x0 = x0;
+  lg.y0 = y0;
+  return lg;
+}
+
+/// One time slab's entries, in cell order: the particles that take part, by the cell of their
+/// midpoint positions (shifted by the grid's origin), the owned ones first in each cell.
+struct Entries {
+  std::vector<int> start;            //!< cell c holds entries [start[c], start[c + 1])
+  std::vector<int> owned_end;        //!< cell c's owned entries are [start[c], owned_end[c])
+  std::vector<int> cell;             //!< per particle: its cell in this slab
+  std::vector<int> id;               //!< per entry: the particle (local index)
+  std::vector<double> x, y, vx, vy;  //!< per entry: shifted midpoint position, velocity
+  std::vector<sweep::Search> reach;  //!< per entry: what it searches (sweep::search_of())
+  int owned_from = 0;                //!< the first column that holds an owned entry
+  int owned_to = -1;                 //!< the last one (owned_to < owned_from: none)
+};
+
+/// Slab k's counting sort of the particles that take part in it (first[i] <= k <= last[i]).
+void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& first,
+         const std::vector<int>& last, const std::vector<sweep::Search>& reach, int k,
+         const LocalGrid& lg) {
+  const sweep::Grid& g = lg.g;
+  const int n = static_cast<int>(p.size());
+  const double tm = sweep::slab_mid(k, g);
+  e.start.assign(g.cells() + 1, 0);
+  e.owned_end.assign(g.cells(), 0);
+  e.cell.resize(n);
+  int m = 0;
+  for (int i = 0; i < n; ++i) {
+    if (last[i] < k || first[i] > k) continue;
+    e.cell[i] = sweep::cell_of((p.x[i] + tm * p.vx[i]) - lg.x0, (p.y[i] + tm * p.vy[i]) - lg.y0, g);
+    ++e.start[e.cell[i] + 1];
+    if (i < owned) ++e.owned_end[e.cell[i]];
+    ++m;
+  }
+  for (int c = 0; c < g.cells(); ++c) e.start[c + 1] += e.start[c];
+  for (auto* v : {&e.x, &e.y, &e.vx, &e.vy}) v->resize(m);
+  e.id.resize(m);
+  e.reach.resize(m);
+  e.owned_from = g.columns;
+  e.owned_to = -1;
+  for (int i = 0; i < n; ++i) {  // start[c] moves on to where cell c + 1 starts (owned first:
+                                 // they are particles 0 .. owned - 1)
+    if (last[i] < k || first[i] > k) continue;
+    const int at = e.start[e.cell[i]]++;
+    e.id[at] = i;
+    e.reach[at] = reach[i];
+    e.x[at] = (p.x[i] + tm * p.vx[i]) - lg.x0;
+    e.y[at] = (p.y[i] + tm * p.vy[i]) - lg.y0;
+    e.vx[at] = p.vx[i];
+    e.vy[at] = p.vy[i];
+    if (i < owned) {
+      const int column = e.cell[i] % g.columns;
+      e.owned_from = std::min(e.owned_from, column);
+      e.owned_to = std::max(e.owned_to, column);
+    }
+  }
+  for (int c = g.cells(); c > 0; --c) e.start[c] = e.start[c - 1];
+  e.start[0] = 0;
+  for (int c = 0; c < g.cells(); ++c) e.owned_end[c] += e.start[c];
+}
+
+/// Files owned entry `a` with every entry of [from, to) but itself that passes
+/// sweep::close_in_slab().
+void test_range(const Entries& e, int a, int from, int to, const sweep::Grid& g,
+                std::vector<std::pair<int, int>>& hits) {
+  const double xa = e.x[a], ya = e.y[a], vxa = e.vx[a], vya = e.vy[a];
+  for (int b = from; b < to; ++b)
+    if (sweep::close_in_slab(xa - e.x[b], ya - e.y[b], vxa - e.vx[b], vya - e.vy[b], g) && b != a)
+      hits.emplace_back(e.id[a], e.id[b]);
+}
+
+/// Files ghost entry `a` with every owned entry of [from, to) that passes
+/// sweep::close_in_slab().
+void test_owned(const Entries& e, int a, int from, int to, const sweep::Grid& g,
+                std::vector<std::pair<int, int>>& hits) {
+  for (int b = from; b < to; ++b)
+    if (sweep::close_in_slab(e.x[a] - e.x[b], e.y[a] - e.y[b], e.vx[a] - e.vx[b],
+                             e.vy[a] - e.vy[b], g))
+      hits.emplace_back(e.id[a], e.id[b]);
+}
+
+/// Slab k's search (stage 06's, sweep::search_of()): a slow entry against the later entries of
+/// its row up to the last column within its reach, then the columns within reach of the next row;
+/// a fast entry against every entry within its reach, one run per row. A ghost tests only the
+/// owned entries of those cells (first in each cell), in the columns that hold any: pairs of two
+/// ghosts no rank needs, and an owned entry before a ghost in its cell finds it itself.
+void search(const Entries& e, int owned, const sweep::Grid& g,
+            std::vector<std::pair<int, int>>& hits) {
+  const int columns = g.columns;
+  for (int row = 0, a = 0; row < g.rows; ++row) {
+    for (const int end = e.start[(row + 1) * columns]; a < end; ++a) {
+      const sweep::Search q = e.reach[a];
+      int x0, x1;
+      sweep::columns_within(e.x[a], q.d, g, x0, x1);
+      if (e.id[a] >= owned) {  // a ghost
+        x0 = std::max(x0, e.owned_from);
+        x1 = std::min(x1, e.owned_to);
+        int y0 = row, y1 = std::min(row + 1, g.rows - 1);
+        if (q.fast) sweep::rows_within(e.y[a], q.d, g, y0, y1);
+        const int own = e.cell[e.id[a]] % columns;
+        for (int y = y0; y <= y1; ++y)
+          for (int c = (!q.fast && y == row) ? std::max(x0, own + 1) : x0; c <= x1; ++c)
+            test_owned(e, a, e.start[y * columns + c], e.owned_end[y * columns + c], g, hits);
+        continue;
+      }
+      if (!q.fast) {
+        test_range(e, a, a + 1, e.start[row * columns + x1 + 1], g, hits);
+        if (row + 1 < g.rows)
+          test_range(e, a, e.start[(row + 1) * columns + x0], e.start[(row + 1) * columns + x1 + 1],
+                     g, hits);
+      } else {  // a pair found twice is harmless
+        int y0, y1;
+        sweep::rows_within(e.y[a], q.d, g, y0, y1);
+        for (int y = y0; y <= y1; ++y)
+          test_range(e, a, e.start[y * columns + x0], e.start[y * columns + x1 + 1], g, hits);
+      }
+    }
+  }
+}
+
+/// The first time slab in which a ghost at `x` moving at `vx` can meet a particle of rank q:
+/// q's particles are within sc.vx t of [sc.lo[q], sc.hi[q]] at time t, and the gap between the
+/// ghost and that range, less 2r + 2m, closes at vx + sc.vx from the left (sc.vx - vx from the
+/// right). Slabs before the time it closes need not hold the ghost. (0 when unsure.)
+int first_slab(const Box& box, const Scene& sc, int q, double x, double vx, const sweep::Grid& g) {
+  const double c = 2 * box.r + 2 * sc.margin;
+  const double left = (sc.lo[q] - c) - x, right = x - (sc.hi[q] + c);
+  double t = 0;
+  if (left > 0) t = left / (vx + sc.vx);
+  else if (right > 0) t = right / (sc.vx - vx);
+  t *= 1 - 1e-9;
+  if (!(t > 0)) return 0;  // also not-a-number
+  return t >= 1 ? g.slabs : static_cast<int>(std::fmin(std::floor(t * g.slabs), g.slabs));
+}
+
 /// 2. The candidates of the owned particles: their walls, and their pairs with any particle
-/// here (each computed with the lower scene index first, as every stage does). Only the pairs
-/// within `reach` in x and in y can meet: the particles are sorted into square cells of the
-/// larger reach, and each owned particle is tested against the 3 x 3 cells around its own.
-void find_candidates(const Box& box, const Local& s, const Reach& reach,
+/// here (each pair time computed with the lower scene index first, as every stage does), found
+/// by stage 06's space-time grid over the owned particles and the ghosts (sweep.hpp): every pair
+/// that can meet in the step before both walls is found, and few others.
+void find_candidates(const Box& box, const Ranks& r, const Scene& sc, const Local& s,
                      std::vector<double>& wall, CandidateLists& cand) {
   const Particles& p = s.p;
   const int n = s.size();
-  std::vector<std::vector<FoundPair>> found(1);
+  std::vector<double> end(n), scratch;
   wall.assign(n, model::never());
-  if (n == 0) return cand.build(0, found);
-  double x0 = p.x[0], x1 = p.x[0], y0 = p.y[0], y1 = p.y[0];
-  for (int k = 1; k < n; ++k) {
-    x0 = std::fmin(x0, p.x[k]), x1 = std::fmax(x1, p.x[k]);
-    y0 = std::fmin(y0, p.y[k]), y1 = std::fmax(y1, p.y[k]);
-  }
-  double w = std::fmax(reach.x, reach.y);
-  while (((x1 - x0) / w + 1) * ((y1 - y0) / w + 1) > 4.0 * n + 16) w *= 2;  // cells <= 4n
-  const int nx = static_cast<int>((x1 - x0) / w) + 1, ny = static_cast<int>((y1 - y0) / w) + 1;
-  const auto cell_x = [&](int k) { return static_cast<int>((p.x[k] - x0) / w); };
-  const auto cell_y = [&](int k) { return static_cast<int>((p.y[k] - y0) / w); };
-  std::vector<int> start(static_cast<std::size_t>(nx) * ny + 1, 0), sorted(n);
-  for (int k = 0; k < n; ++k) ++start[cell_y(k) * nx + cell_x(k) + 1];
-  for (std::size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
-  std::vector<int> fill(start.begin(), start.end() - 1);
-  for (int k = 0; k < n; ++k) sorted[fill[cell_y(k) * nx + cell_x(k)]++] = k;
-  for (int i = 0; i < s.owned; ++i) {
+  for (int i = 0; i < n; ++i) {
     wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
-    const int cx = cell_x(i), cy = cell_y(i);
-    for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, ny - 1); ++y)
-      for (int x = std::max(cx - 1, 0); x <= std::min(cx + 1, nx - 1); ++x)
-        for (int e = start[y * nx + x]; e < start[y * nx + x + 1]; ++e) {
-          const int j = sorted[e];
-          if (j <= i) continue;  // each owned pair once; every ghost is after the owned
-          const bool ij = s.id[i] < s.id[j];
-          const int a = ij ? i : j, b = ij ? j : i;
-          const double t = model::pair_time(p.x[a], p.y[a], p.vx[a], p.vy[a], p.x[b], p.y[b],
-                                            p.vx[b], p.vy[b], box.r);
-          if (model::in_step(t)) found[0].push_back(FoundPair{t, i, j});
-        }
+    end[i] = sweep::path_end(wall[i]);
+  }
+  const LocalGrid lg = fit_grid(box, sc, p, end, scratch);
+  std::vector<int> first(n, 0), last(n);
+  std::vector<sweep::Search> reach(n);
+  for (int i = 0; i < n; ++i) {
+    last[i] = sweep::last_slab(end[i], lg.g);
+    reach[i] = sweep::search_of(p.vx[i], p.vy[i], lg.g);
+    if (i >= s.owned) first[i] = first_slab(box, sc, r.rank, p.x[i], p.vx[i], lg.g);
+  }
+  Entries e;
+  std::vector<std::pair<int, int>> hits;
+  for (int k = 0; k < lg.g.slabs; ++k) {
+    bin(e, p, s.owned, first, last, reach, k, lg);
+    search(e, s.owned, lg.g, hits);
+  }
+  for (auto& [a, b] : hits)
+    if (a > b) std::swap(a, b);
+  std::sort(hits.begin(), hits.end());
+  hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
+  std::vector<std::vector<FoundPair>> found(1);
+  for (const auto& [i, j] : hits) {  // the narrow phase
+    const bool ij = s.id[i] < s.id[j];
+    const int a = ij ? i : j, b = ij ? j : i;
+    const double t =
+        model::pair_time(p.x[a], p.y[a], p.vx[a], p.vy[a], p.x[b], p.y[b], p.vx[b], p.vy[b], box.r);
+    if (model::in_step(t)) found[0].push_back(FoundPair{t, i, j});
   }
   cand.build(n, found);
 }
 
+/// Which ghosts' values the rounds need here (the candidate partners of the owned particles),
+/// and, from what the other ranks say they need, which owned particles' values go where (one
+/// exchange a step).
+Shared shared_of(const Ranks& r, const Local& s, const CandidateLists& cand) {
+  std::vector<char> read(s.size(), 0);
+  for (int i = 0; i < s.owned; ++i)
+    for (int k = cand.start[i]; k < cand.start[i + 1]; ++k) read[cand.other[k]] = 1;
+  Shared sh;
+  std::vector<std::vector<int>> ask(r.ranks);  // positions in the owner's list s.sent_to[q]
+  for (int q = 0; q < r.ranks; ++q)
+    for (int g = s.ghosts_from[q]; g < s.ghosts_from[q + 1]; ++g)
+      if (read[g]) {
+        ask[q].push_back(g - s.ghosts_from[q]);
+        sh.recv.push_back(g);
+      }
+  std::vector<int> from;
+  const std::vector<int> asked = all_to_all(r, ask, &from);
+  sh.send.assign(r.ranks, {});
+  for (int q = 0; q < r.ranks; ++q)
+    for (int j = from[q]; j < from[q + 1]; ++j) sh.send[q].push_back(s.sent_to[q][asked[j]]);
+  return sh;
+}
+
 /// 3. Stage 03's rounds across ranks. Returns each owned particle's event (walls and pairs
 /// keyed by scene indices; `t` = never for none), the same as model.md's greedy over every rank.
-std::vector<model::Event> choose_events(const Ranks& r, const Local& s,
+std::vector<model::Event> choose_events(const Ranks& r, const Local& s, const Shared& sh,
                                         const std::vector<double>& wall,
                                         const CandidateLists& cand) {
   // EXERCISE 2: stage 03's rounds across ranks, with events keyed by scene indices (s.id[]).
   // Until no rank has an unresolved particle left (any_rank()): share the ghosts' `resolved`
-  // flags (share_with_ghosts()); each unresolved owned particle chooses its earliest event (its
-  // wall, or a candidate pair with an unresolved partner: pair_event_key(t, lower id, higher
-  // id)); share the ghosts' choices; accept a wall, no event, or a pair its partner chose too.
+  // flags (share_with_ghosts(r, sh, resolved): the ghosts that are candidate partners get their
+  // owners' values); each unresolved owned particle chooses its earliest event (its wall, or a
+  // candidate pair with an unresolved partner: pair_event_key(t, lower id, higher id)); share
+  // the ghosts' choices; accept a wall, no event, or a pair its partner chose too.
   // Why is the result model.md's greedy over every rank? (handout 08)
-  (void)r, (void)s, (void)wall, (void)cand;
+  (void)r, (void)s, (void)sh, (void)wall, (void)cand;
   PLAB_EXERCISE(2, "the rounds across ranks");
 }
 
@@ -163,15 +407,30 @@ void migrate(const Ranks& r, Local& s) {
 
 }  // namespace
 
+/// One step on this rank: the five parts above, in order.
 void step(const Box& box, const Ranks& r, Local& s) {
-  const Reach reach = reach_of(r, box, s);
-  share_halo(r, reach, s);
+  const Scene sc = scene_of(r, box, s);
+  share_halo(r, box, sc, s);
   std::vector<double> wall;
   CandidateLists cand;
-  find_candidates(box, s, reach, wall, cand);
-  const std::vector<model::Event> chosen = choose_events(r, s, wall, cand);
+  find_candidates(box, r, sc, s, wall, cand);
+  const Shared sh = shared_of(r, s, cand);
+  const std::vector<model::Event> chosen = choose_events(r, s, sh, wall, cand);
   apply_events(box, chosen, cand, s);
   migrate(r, s);
 }
 
 }  // namespace plab::dist
+
+namespace plab {
+
+/// Stage 08's first call on every rank (stage.hpp): the kit's MPI driver (plab/mpi/ranks.hpp)
+/// serves rank 0's run with this stage's step on every other rank.
+int stage_worker() { return dist::serve(dist::step); }
+
+/// Stage 08's entry point (stage.hpp), on rank 0: the kit's MPI driver with this stage's step.
+std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions&) {
+  return dist::mpi_stage(box, p, dist::step);
+}
+
+}  // namespace plab

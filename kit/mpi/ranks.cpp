@@ -1,9 +1,9 @@
-/// \file stages/08-mpi/ranks.cpp
-/// \brief Stage 08's given part: MPI's start and end, the exchanges, and the run as the kit's
-/// driver sees it. Rank 0 runs the runner as every stage does; its plab::Stepper tells the other
+/// \file mpi/ranks.cpp
+/// \brief The kit's MPI plumbing (plab::mpi, stage 08's given part): MPI's start and end, the
+/// exchanges, and the run as the kit's driver sees it. Rank 0 runs the runner as every stage does; its plab::Stepper tells the other
 /// ranks what to do next (start from a scattered state, step, gather, stop), and they serve
 /// those commands from plab::dist::serve(), never reading a file or printing anything.
-#include "ranks.hpp"
+#include "plab/mpi/ranks.hpp"
 
 #include <unistd.h>
 
@@ -39,6 +39,9 @@ class InMessages {
 
 /// The ranks of this process (set by start_mpi()).
 Ranks the_ranks;
+
+/// The stage's step (set by mpi_stage() on rank 0 and serve() on the others).
+DistStepFn the_step = nullptr;
 
 /// Ends MPI on rank 0 when the program ends: the other ranks leave serve() and end too.
 void finish() {
@@ -131,7 +134,7 @@ void act(int command, const Ranks& r, Run& run, Particles* all) {
       break;
     }
     case kStep:
-      step(run.box, r, run.s);
+      the_step(run.box, r, run.s);
       break;
     case kRead:
       gather(r, run.s, all);
@@ -234,6 +237,10 @@ template std::vector<Record> all_to_all(const Ranks&, const std::vector<std::vec
 template std::vector<model::Event> all_to_all(const Ranks&,
                                             const std::vector<std::vector<model::Event>>&,
                                             std::vector<int>*);
+template std::vector<double> all_to_all(const Ranks&, const std::vector<std::vector<double>>&,
+                                      std::vector<int>*);
+template std::vector<int> all_to_all(const Ranks&, const std::vector<std::vector<int>>&,
+                                   std::vector<int>*);
 template std::vector<char> all_to_all(const Ranks&, const std::vector<std::vector<char>>&,
                                     std::vector<int>*);
 /// \endcond
@@ -252,32 +259,29 @@ bool any_rank(const Ranks& r, bool v) {
   return any != 0;
 }
 
-}  // namespace plab::dist
-
-namespace plab {
-
-int stage_worker() {
-  const dist::Ranks& r = dist::start_mpi();
+int serve(DistStepFn step) {
+  the_step = step;
+  const Ranks& r = start_mpi();
   if (r.rank == 0) return -1;  // rank 0 goes on as the runner
-  dist::Run run;
+  Run run;
   for (;;) {
     int command = 0;
     MPI_Bcast(&command, 1, MPI_INT, 0, r.comm);
-    if (command == dist::kExit) break;
+    if (command == kExit) break;
     try {
-      if (command == dist::kStop) run = dist::Run{};
-      else dist::act(command, r, run, nullptr);
+      if (command == kStop) run = Run{};
+      else act(command, r, run, nullptr);
     } catch (const std::exception& e) {
-      dist::abort_all(r, e);
+      abort_all(r, e);
     }
   }
   MPI_Finalize();
   return 0;
 }
 
-/// Stage 08's entry point (stage.hpp): on rank 0, a run whose every call the other ranks follow.
-std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions&) {
-  return std::make_unique<dist::DistStepper>(box, p);
+std::unique_ptr<Stepper> mpi_stage(const Box& box, Particles& p, DistStepFn step) {
+  the_step = step;
+  return std::make_unique<DistStepper>(box, p);
 }
 
-}  // namespace plab
+}  // namespace plab::dist

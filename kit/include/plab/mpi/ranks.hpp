@@ -1,11 +1,14 @@
-/// \file solutions/08-mpi/ranks.hpp
-/// \brief Stage 08's given part: the decomposition of the box into slabs, this rank's particles
-/// (owned, then ghosts), the exchanges between ranks, and the driver on rank 0 that the other
-/// ranks serve. The stage's idea (halo, rounds across ranks, migration) is in step.cpp.
+/// \file mpi/ranks.hpp
+/// \brief The kit's MPI plumbing (library plab::mpi, what stage 08 links): the decomposition of
+/// the box into slabs, this rank's particles (owned, then ghosts), the exchanges between ranks,
+/// and the driver on rank 0 that the other ranks serve. The stage's idea (halo, candidates,
+/// rounds across ranks, migration) is its step, in its own step.cpp, which it hands to
+/// mpi_stage() and serve() as a CPU stage hands its step to plab::cpu_stage().
 #pragma once
 
 #include <mpi.h>
 
+#include <memory>
 #include <vector>
 
 #include "plab/stage.hpp"
@@ -77,7 +80,20 @@ double max_over_ranks(const Ranks& r, double v);
 /// Whether `v` is true on any rank.
 bool any_rank(const Ranks& r, bool v);
 
-/// One step of the distributed model (step.cpp: the stage's exercises).
-void step(const Box& box, const Ranks& r, Local& s);
+/// One step of the distributed model on this rank (a stage's step.cpp: its exercises): from the
+/// owned particles of `s` at the start of the step to those it owns at its end (ghosts dropped).
+using DistStepFn = void (*)(const Box& box, const Ranks& r, Local& s);
+
+/// Stage 08's plab::make_stepper(), on rank 0: a run whose every call (start, step, read,
+/// traffic, end) the other ranks follow, every rank stepping with `step`.
+/// \param box  the box and radius
+/// \param p    the initial state, which rank 0 scatters to the owners
+/// \param step the stage's step
+std::unique_ptr<Stepper> mpi_stage(const Box& box, Particles& p, DistStepFn step);
+
+/// Stage 08's plab::stage_worker(): starts MPI; returns -1 on rank 0 (which goes on as the
+/// runner), and on every other rank serves rank 0's runs, stepping with `step`, until rank 0
+/// ends, then returns its exit status (0).
+int serve(DistStepFn step);
 
 }  // namespace plab::dist
