@@ -187,13 +187,23 @@ void print_summary(const std::string& head, const std::vector<Case>& cases) {
   std::printf("%s%s\n", head.c_str(), what.c_str());
 }
 
-/// The test's own explanation when it stopped it (watchdog, build check), or nothing.
+/// The test's own explanation when it stopped it (watchdog, build check), or why the program
+/// ended (an exception that left an OpenMP region ends it through std::terminate, whose `what():`
+/// line holds the message, e.g. a starting point's "EXERCISE 1 ... is not done yet"), or nothing.
 std::string stop_message(const std::string& output) {
-  for (const std::string& line : lines_of(output))
+  static const std::string what = "what():";
+  for (const std::string& line : lines_of(output)) {
     if (line.find("an endless loop?") != std::string::npos ||
         line.find("did not compile") != std::string::npos ||
         line.find("is not built from its current code") != std::string::npos)
       return line;
+    const std::size_t at = line.find(what);
+    if (at != std::string::npos) {
+      const std::size_t from = line.find_first_not_of(' ', at + what.size());
+      return "the program ended on an uncaught exception: " +
+             (from == std::string::npos ? std::string("(no message)") : line.substr(from));
+    }
+  }
   return "";
 }
 
@@ -344,7 +354,10 @@ void print_failures(const std::vector<TestResult>& tests) {
       continue;
     }
     const std::string stopped = stop_message(t.output);
-    const std::string head = t.name + ": " + (t.status == "Failed" ? "FAILED" : t.status) +
+    const std::string status = t.status == "Failed" ? "FAILED"
+                               : t.status.rfind("Subprocess aborted", 0) == 0 ? "ABORTED"
+                                                                              : t.status;
+    const std::string head = t.name + ": " + status +
                              (stopped.empty() ? "" : ": " + stopped);
     const std::vector<Case> cases = gtest_cases(t.output);
     if (t.name.find(".Golden") != std::string::npos && stopped.empty()) {
