@@ -10,6 +10,10 @@ DIR, by default beside itself; `plab docs` writes them into build/docs/figures)
   stage06-pairs.png     pairs tested per step by stage 06 against all pairs, and time per step
                         against N at the report's density (data/pairs-stage06.csv,
                         data/bench-stage0[36]-cpu-scale.csv, data/bench-stage06-gpu-scale.csv)
+  stage06-cores.png     stage 06's CPU path on 1-16 threads of the H100 machine's host
+                        (data/bench-stage06-cpu16.csv)
+  stage08-scaling.png   stage 08 on 1-16 ranks: strong scaling at N = 10^6 and weak scaling at
+                        10^5 a rank, with the share of time in exchanges (data/bench-stage08-cpu16.csv)
   accuracy.png          run time against error of the stepped model's variants, against stage
                         07's exact dynamics, best-for-its-cost variants ringed (data/accuracy.csv,
                         from `plab accuracy --csv`)
@@ -132,6 +136,57 @@ def stage06_pairs():
     plt.close(fig)
 
 
+def stage06_cores():
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    data = rows("bench-stage06-cpu16.csv")
+    for n, steps in sorted({(int(r["n"]), int(r["steps"])) for r in data}):
+        pts = sorted((int(r["threads"]), float(r["step_median_s"])) for r in data
+                     if int(r["n"]) == n and int(r["steps"]) == steps)
+        ax.plot([p[0] for p in pts], [pts[0][1] / p[1] for p in pts], "o-",
+                label=f"N = {n}, S = {steps}")
+    ax.plot([1, 16], [1, 16], "k:", label="linear")
+    ax.set(xscale="log", yscale="log", xlabel="threads", ylabel="speedup over 1 thread (time in steps)",
+           xticks=[1, 2, 4, 8, 16], xticklabels=["1", "2", "4", "8", "16"],
+           title="Stage 06, CPU path, 16-core host")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(OUT / "stage06-cores.png", dpi=100)
+    plt.close(fig)
+
+
+def stage08_scaling():
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.5))
+    data = rows("bench-stage08-cpu16.csv")
+    strong = sorted((int(r["ranks"]), r) for r in data if int(r["n"]) == 1000000)
+    weak = sorted((int(r["ranks"]), r) for r in data if int(r["n"]) == 100000 * int(r["ranks"]))
+    one = float(strong[0][1]["step_median_s"])
+    ranks = [k for k, _ in strong]
+    left.plot(ranks, [one / float(r["step_median_s"]) for _, r in strong], "o-",
+              label="strong: N = 10^6, speedup")
+    left.plot(ranks, ranks, "k:", label="linear")
+    left.plot(ranks, [0.7 * k for k in ranks], "k--", lw=0.8, label="70% efficiency (goal)")
+    w1 = float(weak[0][1]["step_median_s"])
+    left.plot([k for k, _ in weak], [w1 / float(r["step_median_s"]) for _, r in weak], "s-",
+              label="weak: 10^5 a rank, efficiency (T1 / TR)")
+    left.set(xscale="log", yscale="log", xlabel="ranks", xticks=ranks,
+             xticklabels=[str(k) for k in ranks], title="Stage 08 on the 16-core host")
+    width = 0.38
+    xs = range(len(ranks))
+    right.bar([x - width / 2 for x in xs], [100 * float(r["comm_share"]) for _, r in strong], width,
+              label="strong, N = 10^6")
+    right.bar([x + width / 2 for x in xs], [100 * float(r["comm_share"]) for _, r in weak], width,
+              label="weak, 10^5 a rank")
+    right.set(xticks=list(xs), xticklabels=[str(k) for k in ranks], xlabel="ranks",
+              ylabel="% of the busiest rank's time in exchanges", title="Time in exchanges")
+    for ax in (left, right):
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(OUT / "stage08-scaling.png", dpi=100)
+    plt.close(fig)
+
+
 def frontier(points):
     """The points no other point beats in both coordinates (lower is better in both)."""
     return [p for p in points if not any(q[0] <= p[0] and q[1] <= p[1] and q != p for q in points)]
@@ -221,6 +276,8 @@ def main():
     gpu_time()
     stage05_changes()
     stage06_pairs()
+    stage06_cores()
+    stage08_scaling()
     accuracy_frontier(HERE / "data" / "accuracy.csv", OUT / "accuracy.png")
     pairtime_ulps(HERE / "data" / "pairtime-ulps.csv", OUT / "pairtime-ulps.png")
 
