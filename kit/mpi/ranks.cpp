@@ -126,10 +126,11 @@ void act(int command, const Ranks& r, Run& run, Particles* all) {
   switch (command) {
     case kStart: {
       traffic_here = {};
-      double head[2] = {run.box.L, run.box.r};
-      MPI_Bcast(head, 2, MPI_DOUBLE, 0, r.comm);
+      double head[3] = {run.box.L, run.box.r, the_ranks.gpu ? 1.0 : 0.0};
+      MPI_Bcast(head, 3, MPI_DOUBLE, 0, r.comm);
       run.box = {head[0], head[1]};
       the_ranks.L = run.box.L;
+      the_ranks.gpu = head[2] != 0;
       scatter(r, all, run.s);
       break;
     }
@@ -154,8 +155,9 @@ void act(int command, const Ranks& r, Run& run, Particles* all) {
 /// Rank 0's view of the run: each call tells the other ranks to do the same.
 class DistStepper final : public Stepper {
  public:
-  DistStepper(const Box& box, Particles& p) : r_(start_mpi()) {
+  DistStepper(const Box& box, Particles& p, bool gpu) : r_(start_mpi()) {
     run_.box = box;
+    the_ranks.gpu = gpu;
     command(kStart, &p);
   }
   ~DistStepper() override {
@@ -279,9 +281,9 @@ int serve(DistStepFn step) {
   return 0;
 }
 
-std::unique_ptr<Stepper> mpi_stage(const Box& box, Particles& p, DistStepFn step) {
+std::unique_ptr<Stepper> mpi_stage(const Box& box, Particles& p, DistStepFn step, bool gpu) {
   the_step = step;
-  return std::make_unique<DistStepper>(box, p);
+  return std::make_unique<DistStepper>(box, p, gpu);
 }
 
 }  // namespace plab::dist
