@@ -9,6 +9,7 @@
 #include <mpi.h>
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "plab/stage.hpp"
@@ -92,9 +93,10 @@ using DistStepFn = void (*)(const Box& box, const Ranks& r, Local& s);
 /// \param box  the box and radius
 /// \param p    the initial state, which rank 0 scatters to the owners
 /// \param step the stage's step
-/// \param gpu  whether the run steps on the GPU (Ranks::gpu on every rank: `step` reads it)
+/// \param gpu  the GPU's name when the run steps on one GPU per rank (Ranks::gpu on every rank:
+///             `step` reads it), "" on the CPU
 std::unique_ptr<Stepper> mpi_stage(const Box& box, Particles& p, DistStepFn step,
-                                   bool gpu = false);
+                                   const std::string& gpu = "");
 
 /// Stage 08's plab::stage_worker(): starts MPI; returns -1 on rank 0 (which goes on as the
 /// runner), and on every other rank serves rank 0's runs, stepping with `step`, until rank 0
