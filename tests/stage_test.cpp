@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cctype>
 #include <cstdlib>
 #include <filesystem>
 #include <random>
@@ -458,23 +459,28 @@ TEST(RanksScenes, EmptySlabs) {
 // (rank % the GPUs there; ranks share one where there are fewer). Skipped, with the reason,
 // where the stage has no GPU path or no GPU can be used.
 
-/// Why this stage's GPU path cannot run here ("" when it can): built without one, or the
-/// NoDevice that starting it on one particle throws.
+/// Why this stage's GPU path cannot run here ("" when it can): built without one, or what its
+/// program says when it ends with NoDevice (exit 4) on a one-particle scene. The program runs
+/// alone, not in this process: MPI started here would stop the mpirun of the tests.
 std::string missing_gpu_path() {
-  static const std::string why = [] {
-    if (!plab::stage_info().gpu_path)
-      return std::string("built without its GPU path (no CUDA compiler)");
-    plab::Particles p;
-    p.resize(1);
-    p.x[0] = p.y[0] = 5;
-    plab::StageOptions options = stage_options;
-    options.device = plab::Device::kGpu;
-    try {
-      plab::make_stepper({10, 1}, p, options);
-    } catch (const plab::NoDevice& e) {
-      return std::string(e.what());
+  static const std::string why = []() -> std::string {
+    if (!plab::stage_info().gpu_path) return "built without its GPU path (no CUDA compiler)";
+    const plab::test::ScratchDir dir;
+    const std::string scene = dir.file("one.in"), err = dir.file("err.txt");
+    {
+      std::FILE* f = std::fopen(scene.c_str(), "w");
+      std::fputs("1\n10\n1\n1\nperf\n0 5 5 1 0\n", f);
+      std::fclose(f);
     }
-    return std::string();
+    std::filesystem::create_directories(dir.file("mpi"));
+    plab::test::unwatch();
+    const int status =
+        plab::test::run_watched("env TMPDIR=" + dir.file("mpi") + " " + plab::test::kThisProgram +
+                                " --device gpu --quiet --out /dev/null " + scene + " 2>" + err);
+    if (status != 4) return "";  // it runs (or fails, and the tests say how)
+    std::string said = plab::read_file(err);
+    while (!said.empty() && std::isspace(static_cast<unsigned char>(said.back()))) said.pop_back();
+    return said.empty() ? "no CUDA device (exit 4)" : said;
   }();
   return why;
 }
