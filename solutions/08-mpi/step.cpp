@@ -484,8 +484,8 @@ int stage_worker() {
 
 /// Stage 08's entry point (stage.hpp), on rank 0: the kit's MPI driver with this stage's step,
 /// on the CPU, or on one GPU per rank with `--device gpu` (make_gpu_stepper(), step.cu; NoDevice
-/// where there is none). `--device auto` is the CPU here: ranks that share a GPU are slower than
-/// the CPU path, so the GPU is asked for, not taken.
+/// where there is none). `--device auto` is the CPU here: the GPU is asked for, not taken, since
+/// several ranks of one machine would share its GPUs.
 std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions& options) {
   if (auto gpu = make_gpu_stepper(box, p, options)) return gpu;
   return dist::mpi_stage(box, p, dist::step);
