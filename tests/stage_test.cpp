@@ -341,8 +341,8 @@ std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::t
   // run reports no steps to the watchdog, so `timeout` bounds it instead of the stall limit.
   const std::string command = "env TMPDIR=" + dir.file("mpi") + " timeout --kill-after=5 " +
                               std::to_string(kRanksSeconds) + " mpirun --oversubscribe -np " +
-                              std::to_string(ranks) + " " + plab::test::kThisProgram + " " + options +
-                              " --quiet --out " + out + " " + scene_file;
+                              std::to_string(ranks) + " " + plab::test::kThisProgram + " " +
+                              options + " --quiet --out " + out + " " + scene_file;
   std::filesystem::create_directories(dir.file("mpi"));
   plab::test::unwatch();
   const int status = plab::test::run_watched(command);
@@ -497,8 +497,8 @@ TEST_P(GpuPath, GoldenOnRanks) {
   const auto& [d, ranks] = GetParam();
   const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
   const plab::test::ScratchDir scratch;
-  const std::string output =
-      run_on_ranks(m.scene_path(d), ranks, scratch, "scene " + d.name + " on the GPU", "--device gpu");
+  const std::string output = run_on_ranks(m.scene_path(d), ranks, scratch,
+                                          "scene " + d.name + " on the GPU", "--device gpu");
   if (!output.empty())
     expect_same(plab::read_file(m.golden_path(d)), output,
                 m.golden_path(d) + " (--device gpu, on " + std::to_string(ranks) + " ranks)");
