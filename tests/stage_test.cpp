@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cctype>
 #include <cstdlib>
 #include <filesystem>
 #include <random>
@@ -330,7 +331,7 @@ constexpr int kRanksSeconds = 240;
 /// Runs this stage's program on `ranks` ranks on `scene_file`; returns its output ("" and a
 /// failure when it fails).
 std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::test::ScratchDir& dir,
-                         const std::string& what) {
+                         const std::string& what, const std::string& options = "") {
   if (geteuid() == 0) {  // OpenMPI refuses root unless told twice (containers, CI)
     setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
     setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
@@ -340,8 +341,8 @@ std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::t
   // run reports no steps to the watchdog, so `timeout` bounds it instead of the stall limit.
   const std::string command = "env TMPDIR=" + dir.file("mpi") + " timeout --kill-after=5 " +
                               std::to_string(kRanksSeconds) + " mpirun --oversubscribe -np " +
-                              std::to_string(ranks) + " " + plab::test::kThisProgram +
-                              " --quiet --out " + out + " " + scene_file;
+                              std::to_string(ranks) + " " + plab::test::kThisProgram + " " +
+                              options + " --quiet --out " + out + " " + scene_file;
   std::filesystem::create_directories(dir.file("mpi"));
   plab::test::unwatch();
   const int status = plab::test::run_watched(command);
@@ -377,8 +378,10 @@ INSTANTIATE_TEST_SUITE_P(
     });
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(Ranks);
 
-/// A scene that stresses the cut, on 1 to 4 ranks: the other stage's solution's text.
-void expect_same_on_ranks(const plab::Scene& scene, const std::string& how_made) {
+/// A scene that stresses the cut, on 1 to `most` ranks (with the runner's `options`): the other
+/// stage's solution's text.
+void expect_same_on_ranks(const plab::Scene& scene, const std::string& how_made,
+                          const std::string& options = "", int most = 4) {
   if (!plab::stage_info().mpi) GTEST_SKIP() << this_name() << " runs on one process";
   const std::string other = plab::test::kOtherProgram;
   if (other.empty()) GTEST_SKIP() << "no other stage's solution is built to compare with";
@@ -394,8 +397,8 @@ void expect_same_on_ranks(const plab::Scene& scene, const std::string& how_made)
   plab::test::watch(std::string("stage ") + kOtherId + "'s solution on " + how_made, 0);
   ASSERT_EQ(plab::test::run_watched(other + " --quiet --out " + reference + " " + scene_file), 0);
   const std::string expected = plab::read_file(reference);
-  for (int ranks = 1; ranks <= 4; ++ranks) {
-    const std::string output = run_on_ranks(scene_file, ranks, scratch, how_made);
+  for (int ranks = 1; ranks <= most; ++ranks) {
+    const std::string output = run_on_ranks(scene_file, ranks, scratch, how_made, options);
     if (output.empty()) return;
     if (plab::first_difference(expected, output)) {
       expect_same(expected, output, std::string("stage ") + kOtherId + " on " + how_made + " (" +
@@ -449,6 +452,89 @@ TEST(RanksScenes, EmptySlabs) {
   p.vx = {1, -1, 0.5};
   p.vy = {0, 0, -1};
   expect_same_on_ranks(scene, "3 particles in the first slab of 4");
+}
+
+// -- An MPI stage's GPU path (08 with nvcc: --device gpu, one GPU per rank) -----------------------
+// The same runs on 1, 2 and 3 ranks with `--device gpu`: each rank's candidate search on its GPU
+// (rank % the GPUs there; ranks share one where there are fewer). Skipped, with the reason,
+// where the stage has no GPU path or no GPU can be used.
+
+/// Why this stage's GPU path cannot run here ("" when it can): built without one, or what its
+/// program says when it ends with NoDevice (exit 4) on a one-particle scene. The program runs
+/// alone, not in this process: MPI started here would stop the mpirun of the tests.
+std::string missing_gpu_path() {
+  static const std::string why = []() -> std::string {
+    if (!plab::stage_info().gpu_path) return "built without its GPU path (no CUDA compiler)";
+    const plab::test::ScratchDir dir;
+    const std::string scene = dir.file("one.in"), err = dir.file("err.txt");
+    {
+      std::FILE* f = std::fopen(scene.c_str(), "w");
+      std::fputs("1\n10\n1\n1\nperf\n0 5 5 1 0\n", f);
+      std::fclose(f);
+    }
+    std::filesystem::create_directories(dir.file("mpi"));
+    plab::test::unwatch();
+    const int status =
+        plab::test::run_watched("env TMPDIR=" + dir.file("mpi") + " " + plab::test::kThisProgram +
+                                " --device gpu --quiet --out /dev/null " + scene + " 2>" + err);
+    if (status != 4) return "";  // it runs (or fails, and the tests say how)
+    std::string said = plab::read_file(err);
+    while (!said.empty() && std::isspace(static_cast<unsigned char>(said.back()))) said.pop_back();
+    return said.empty() ? "no CUDA device (exit 4)" : said;
+  }();
+  return why;
+}
+
+/// Skips a test of the GPU path where it cannot run, saying why.
+#define PLAB_SKIP_WITHOUT_GPU_PATH()                                                           \
+  if (const std::string why = missing_gpu_path(); !why.empty())                                \
+  GTEST_SKIP() << why << ": stage " << plab::stage_info().id << "'s GPU path (--device gpu) not run"
+
+/// Every small and medium dataset on 1, 2 and 3 ranks with `--device gpu`: its golden output.
+class GpuPath : public testing::TestWithParam<std::tuple<plab::Dataset, int>> {};
+TEST_P(GpuPath, GoldenOnRanks) {
+  PLAB_SKIP_WITHOUT_GPU_PATH();
+  const auto& [d, ranks] = GetParam();
+  const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
+  const plab::test::ScratchDir scratch;
+  const std::string output = run_on_ranks(m.scene_path(d), ranks, scratch,
+                                          "scene " + d.name + " on the GPU", "--device gpu");
+  if (!output.empty())
+    expect_same(plab::read_file(m.golden_path(d)), output,
+                m.golden_path(d) + " (--device gpu, on " + std::to_string(ranks) + " ranks)");
+}
+INSTANTIATE_TEST_SUITE_P(
+    Datasets, GpuPath,
+    testing::Combine(testing::ValuesIn(plab::stage_info().mpi ? datasets(false)
+                                                              : std::vector<plab::Dataset>{}),
+                     testing::Values(1, 2, 3)),
+    [](const auto& info) {
+      std::string s = std::get<0>(info.param).name + "_" + std::to_string(std::get<1>(info.param));
+      for (char& c : s)
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      return s;
+    });
+GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(GpuPath);
+
+/// The scenes that stress the cut, on 1 to 3 ranks with `--device gpu`: the other stage's text.
+TEST(GpuPathScenes, CutScenes) {
+  if (!plab::stage_info().mpi) GTEST_SKIP() << this_name() << " runs on one process";
+  PLAB_SKIP_WITHOUT_GPU_PATH();
+  const std::string gpu = "--device gpu";
+  expect_same_on_ranks(plab::generate_scene({300, 60, 1, 20, plab::Mode::kPrint, 20195}),
+                       "a dense scene on the GPU", gpu, 3);
+  expect_same_on_ranks(plab::generate_scene({60, 100, 1, 20, plab::Mode::kPrint, 20196, 60, 300}),
+                       "fast particles on the GPU", gpu, 3);
+  plab::Scene scene;
+  scene.box = {40, 1};
+  scene.steps = 40;
+  scene.particles.resize(3);
+  plab::Particles& p = scene.particles;
+  p.x = {3, 7, 5};
+  p.y = {20, 20, 30};
+  p.vx = {1, -1, 0.5};
+  p.vy = {0, 0, -1};
+  expect_same_on_ranks(scene, "3 particles in the first slab, on the GPU", gpu, 3);
 }
 
 }  // namespace

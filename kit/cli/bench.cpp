@@ -109,10 +109,11 @@ void add_bench(CLI::App& app) {
             if (threads == a->threads.front()) one_thread = median;
             const double spread = (t.back() - t.front()) / median;
             char speedup[32] = "-";
-            if (one_thread > 0 && !gpu)
+            if (one_thread > 0 && (!gpu || by_ranks))
               std::snprintf(speedup, sizeof speedup, "%.2f", one_thread / median);
             std::printf("%-5s %6lld %5lld %7s %-11s %10.3f %8.1f%% %8s %10.4f %9.4f  %s (%s)\n",
-                        id.c_str(), n, a->steps, gpu ? "-" : std::to_string(threads).c_str(),
+                        id.c_str(), n, a->steps,
+                        gpu && !by_ranks ? "-" : std::to_string(threads).c_str(),
                         gpu ? "-" : schedule.c_str(), median, 100 * spread, speedup, step_median,
                         a->steps ? 1e3 * step_median / a->steps : 0.0, device.c_str(),
                         timer.c_str());
@@ -137,7 +138,7 @@ void add_bench(CLI::App& app) {
               csv += "," + std::to_string(threads) + "," + std::to_string(bytes / steps) + "," +
                      std::to_string(step_median > 0 ? comm / step_median : 0.0) + "\n";
             }
-            if (gpu) break;  // threads and schedules are CPU settings
+            if (gpu && !by_ranks) break;  // threads and schedules are CPU settings (ranks are not)
           }
         }
       }

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <type_traits>
+#include <utility>
 
 namespace plab::dist {
 
@@ -126,10 +127,11 @@ void act(int command, const Ranks& r, Run& run, Particles* all) {
   switch (command) {
     case kStart: {
       traffic_here = {};
-      double head[2] = {run.box.L, run.box.r};
-      MPI_Bcast(head, 2, MPI_DOUBLE, 0, r.comm);
+      double head[3] = {run.box.L, run.box.r, the_ranks.gpu ? 1.0 : 0.0};
+      MPI_Bcast(head, 3, MPI_DOUBLE, 0, r.comm);
       run.box = {head[0], head[1]};
       the_ranks.L = run.box.L;
+      the_ranks.gpu = head[2] != 0;
       scatter(r, all, run.s);
       break;
     }
@@ -154,8 +156,10 @@ void act(int command, const Ranks& r, Run& run, Particles* all) {
 /// Rank 0's view of the run: each call tells the other ranks to do the same.
 class DistStepper final : public Stepper {
  public:
-  DistStepper(const Box& box, Particles& p) : r_(start_mpi()) {
+  DistStepper(const Box& box, Particles& p, std::string gpu)
+      : r_(start_mpi()), gpu_(std::move(gpu)) {
     run_.box = box;
+    the_ranks.gpu = !gpu_.empty();
     command(kStart, &p);
   }
   ~DistStepper() override {
@@ -164,6 +168,10 @@ class DistStepper final : public Stepper {
   }
   void step() override { command(kStep, nullptr); }
   void read(Particles& p) override { command(kRead, &p); }
+  /// "cpu", or the GPU's name and how many ranks step on GPUs.
+  [[nodiscard]] std::string device() const override {
+    return gpu_.empty() ? "cpu" : gpu_ + ", one per rank of " + std::to_string(r_.ranks);
+  }
   Traffic traffic() override {
     command(kTraffic, nullptr);
     return run_.traffic;
@@ -180,6 +188,7 @@ class DistStepper final : public Stepper {
     }
   }
   const Ranks& r_;
+  std::string gpu_;  //!< the GPU's name ("": the CPU)
   Run run_;
 };
 
@@ -279,9 +288,10 @@ int serve(DistStepFn step) {
   return 0;
 }
 
-std::unique_ptr<Stepper> mpi_stage(const Box& box, Particles& p, DistStepFn step) {
+std::unique_ptr<Stepper> mpi_stage(const Box& box, Particles& p, DistStepFn step,
+                                   const std::string& gpu) {
   the_step = step;
-  return std::make_unique<DistStepper>(box, p);
+  return std::make_unique<DistStepper>(box, p, gpu);
 }
 
 }  // namespace plab::dist

@@ -27,8 +27,11 @@
 #include "plab/candidates.hpp"
 #include "plab/mpi/ranks.hpp"
 #include "plab/sweep.hpp"
+#include "search.hpp"
 
 namespace plab::dist {
+
+PairSearch gpu_search = nullptr;
 
 namespace {
 
@@ -119,13 +122,6 @@ void share_halo(const Ranks& r, const Box& box, const Scene& sc, Local& s) {
 }
 
 constexpr double kAlpha = 0.3;  //!< time slabs per sqrt(density) v_cut: stage 06's measured best
-
-/// One rank's grid (fit_grid()): stage 06's, over coordinates shifted by its origin.
-struct LocalGrid {
-  sweep::Grid g;  //!< the grid, over coordinates shifted by (x0, y0)
-  double x0 = 0;  //!< the least x of the paths
-  double y0 = 0;  //!< the least y of the paths
-};
 
 /// The space-time grid of stage 06 (sweep::choose(): reach, margin, v_cut) fitted to the
 /// rectangle that the paths here cover, [x0, x0 + w) x [y0, y0 + h), instead of the whole box: a
@@ -321,6 +317,13 @@ void find_candidates(const Box& box, const Ranks& r, const Scene& sc, const Loca
     reach[i] = sweep::search_of(p.vx[i], p.vy[i], lg.g);
     if (i >= s.owned) first[i] = first_slab(box, sc, r.rank, p.x[i], p.vx[i], lg.g);
   }
+  std::vector<std::vector<FoundPair>> found(1);
+  if (r.gpu) {  // the same search and narrow phase on this rank's GPU (step.cu)
+    if (gpu_search == nullptr) throw NoDevice("stage 08 was built without its GPU path");
+    gpu_search(box, r, lg, s, first, last, found[0]);
+    cand.build(n, found);
+    return;
+  }
   Entries e;
   std::vector<std::pair<int, int>> hits;
   for (int k = 0; k < lg.g.slabs; ++k) {
@@ -331,7 +334,6 @@ void find_candidates(const Box& box, const Ranks& r, const Scene& sc, const Loca
     if (a > b) std::swap(a, b);
   std::sort(hits.begin(), hits.end());
   hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
-  std::vector<std::vector<FoundPair>> found(1);
   for (const auto& [i, j] : hits) {  // the narrow phase
     const bool ij = s.id[i] < s.id[j];
     const int a = ij ? i : j, b = ij ? j : i;
@@ -469,11 +471,23 @@ void step(const Box& box, const Ranks& r, Local& s) {
 namespace plab {
 
 /// Stage 08's first call on every rank (stage.hpp): the kit's MPI driver (plab/mpi/ranks.hpp)
-/// serves rank 0's run with this stage's step on every other rank.
-int stage_worker() { return dist::serve(dist::step); }
+/// serves rank 0's run with this stage's step on every other rank. make_gpu_stepper() with
+/// the CPU asked for only sets dist::gpu_search (where this build has a GPU path), so that these
+/// ranks can step on the GPU when rank 0's run does.
+int stage_worker() {
+  Particles none;
+  StageOptions cpu;
+  cpu.device = Device::kCpu;
+  make_gpu_stepper(Box{}, none, cpu);
+  return dist::serve(dist::step);
+}
 
-/// Stage 08's entry point (stage.hpp), on rank 0: the kit's MPI driver with this stage's step.
-std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions&) {
+/// Stage 08's entry point (stage.hpp), on rank 0: the kit's MPI driver with this stage's step,
+/// on the CPU, or on one GPU per rank with `--device gpu` (make_gpu_stepper(), step.cu; NoDevice
+/// where there is none). `--device auto` is the CPU here: the GPU is asked for, not taken, since
+/// several ranks of one machine would share its GPUs.
+std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions& options) {
+  if (auto gpu = make_gpu_stepper(box, p, options)) return gpu;
   return dist::mpi_stage(box, p, dist::step);
 }
 

@@ -9,6 +9,7 @@
 #include <mpi.h>
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "plab/stage.hpp"
@@ -21,6 +22,9 @@ struct Ranks {
   int rank = 0;                    //!< this rank (0 reads, prints and drives)
   int ranks = 1;                   //!< how many
   double L = 0;                    //!< the box side: rank k owns the slab x in [k L/R, (k+1) L/R)
+  bool gpu = false;                //!< this run steps on the GPU (rank 0's `--device gpu`, sent
+                                   //!< to every rank with the start): each rank binds one
+                                   //!< GPU, rank % the GPUs its machine has
 
   /// The rank that owns a particle whose centre is at `x` (centres outside the box, which
   /// overlaps can make, go to the first or last slab).
@@ -89,7 +93,10 @@ using DistStepFn = void (*)(const Box& box, const Ranks& r, Local& s);
 /// \param box  the box and radius
 /// \param p    the initial state, which rank 0 scatters to the owners
 /// \param step the stage's step
-std::unique_ptr<Stepper> mpi_stage(const Box& box, Particles& p, DistStepFn step);
+/// \param gpu  the GPU's name when the run steps on one GPU per rank (Ranks::gpu on every rank:
+///             `step` reads it), "" on the CPU
+std::unique_ptr<Stepper> mpi_stage(const Box& box, Particles& p, DistStepFn step,
+                                   const std::string& gpu = "");
 
 /// Stage 08's plab::stage_worker(): starts MPI; returns -1 on rank 0 (which goes on as the
 /// runner), and on every other rank serves rank 0's runs, stepping with `step`, until rank 0
