@@ -11,11 +11,13 @@
 //            counting sort by row, then by column within each row: sort_rows()), then test each
 //            against the rest of its row and the next row within its reach (a fast particle:
 //            every cell within its search radius) with sweep::close_in_slab() (search_cells());
+//            a small scene with at least two slabs a thread: each thread takes whole slabs
+//            alone instead (slab_alone(), given: one counting sort by cell, then the same search);
 //         2. narrow phase: model.md's pair time for each pair that passed;
 //         3. model.md's greedy selection over the sparse candidates (a pair at or after either
 //            wall time is never accepted), by the team (plan_team.hpp), then apply.
 //         Memory O(N + candidates + cells), shared by the threads: no N x N anything, and no
-//         copy per thread. Slab k is sorted from slab k - 1's order, which is nearly right
+//         copy per thread (but in small scenes). Slab k is sorted from slab k - 1's order, which is nearly right
 //         already, so the sort's writes stay close together (handout 06, "Many cores").
 //  READ   handouts/06-broadphase.md     TEST   ./plab test --impl student --stage 06
 // =================================================================================================
@@ -467,7 +469,8 @@ inline void slab_alone(const Box& box, const ParticlesOf<Real>& p, Slab& o, Mine
 
 /// One step in reals of type `Real`: `double` is model.md's step, `float` the variant that
 /// `plab accuracy` measures (the broad phase always works in double). One parallel region: every
-/// thread works on every slab in turn (two barriers a slab), then on the selection.
+/// thread works on every slab in turn (two barriers a slab), or, in a small scene with at least two
+/// slabs a thread (whole_slabs()), each thread on whole slabs alone; then all on the selection.
 template <class Real>
 void step_in(const Box& box, ParticlesOf<Real>& p) {
   const int n = static_cast<int>(p.size());
