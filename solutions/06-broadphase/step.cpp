@@ -518,21 +518,26 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
     }
 #pragma omp barrier
     my.sample.clear();
-    for (int u = 0, at = 0, stride = static_cast<int>(sweep::sample_stride(n)); u <= t; ++u) {
-      if (u < t) {
-        at += mine[u].active;
-        continue;
+    const int stride = static_cast<int>(sweep::sample_stride(n));
+    if (n > kSmall) {  // a small scene's sample is taken by the single below: one barrier less
+      for (int u = 0, at = 0; u <= t; ++u) {
+        if (u < t) {
+          at += mine[u].active;
+          continue;
+        }
+        for (int i = my.lo; i < my.hi; ++i)
+          if (end[i] > 0 && at++ % stride == 0) my.sample.push_back(speed2(i));
       }
-      for (int i = my.lo; i < my.hi; ++i)
-        if (end[i] > 0 && at++ % stride == 0) my.sample.push_back(speed2(i));
-    }
 #pragma omp barrier
+    }
 #pragma omp single
     {
       int active = 0;
       double max2 = 0;
       bool unordered = false;
       scratch.clear();
+      for (int i = 0, at = 0; i < n && n <= kSmall; ++i)
+        if (end[i] > 0 && at++ % stride == 0) scratch.push_back(speed2(i));
       for (const Mine& m : mine) {
         if (&m - mine.data() >= threads) break;
         active += m.active;
