@@ -242,7 +242,8 @@ inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, i
     for (int c = g.columns - 1; c > 0; --c) start[c] = start[c - 1];
     start[0] = lo;
   }
-  if (r1 == g.rows) s.start[g.cells()] = row_start[g.rows];  // where the last cell ends
+  if (r0 < r1 && r1 == g.rows) s.start[g.cells()] = row_start[g.rows];  // where the last cell ends
+  // (r0 < r1: one thread; those after it have no rows)
 }
 
 /// Bit u of the result: whether entry `a` and entry `b0 + u` pass close_in_slab(), u < kLanes.
