@@ -11,11 +11,13 @@
 //            counting sort by row, then by column within each row: sort_rows()), then test each
 //            against the rest of its row and the next row within its reach (a fast particle:
 //            every cell within its search radius) with sweep::close_in_slab() (search_cells());
+//            a small scene with at least two slabs a thread: each thread takes whole slabs
+//            alone instead (slab_alone(), given: one counting sort by cell, then the same search);
 //         2. narrow phase: model.md's pair time for each pair that passed;
 //         3. model.md's greedy selection over the sparse candidates (a pair at or after either
 //            wall time is never accepted), by the team (plan_team.hpp), then apply.
 //         Memory O(N + candidates + cells), shared by the threads: no N x N anything, and no
-//         copy per thread. Slab k is sorted from slab k - 1's order, which is nearly right
+//         copy per thread (but in small scenes). Slab k is sorted from slab k - 1's order, which is nearly right
 //         already, so the sort's writes stay close together (handout 06, "Many cores").
 //  READ   handouts/06-broadphase.md     TEST   ./plab test --impl student --stage 06
 // =================================================================================================
@@ -48,6 +50,7 @@ constexpr int kLanes = 8;          //!< close_in_slab() is evaluated for this ma
 constexpr double kQuantile = 0.9;  //!< the fastest 10% search wider (sweep::choose())
 constexpr double kAlpha = 0.3;     //!< slabs per sqrt(N) v_cut / L, measured best on the report's scene
 constexpr int kChunk = 256;        //!< entries a thread searches at a time (dynamic schedule)
+constexpr int kSmall = 1 << 15;    //!< up to this many particles, a thread may take whole slabs
 
 /// A slab's entries, one array per field: the particles that take part, in cell order.
 struct Entries {
@@ -104,6 +107,8 @@ struct alignas(128) Mine {
   double max2 = 0;                        //!< the largest squared speed among them
   bool unordered = false;                 //!< whether one of them has a speed that is not a number
   std::vector<double> sample;             //!< its part of the sample of squared speeds
+  Slab own;                               //!< its own slab, when it takes whole slabs alone
+  bool first = false;                     //!< whether it sorted slab 0 alone (own.order is new)
 };
 
 /// Each thread's row of a table of counts per row (`rows + 1` of them), rounded up to whole cache
@@ -171,6 +176,33 @@ inline void group_rows(Slab& s, Mine& my, const Entries& in, int k, const sweep:
       s.from[my.next[row]++] = j;
     else if (k == 0)
       s.order[my.next[g.rows]++] = in.id[j];
+  }
+}
+
+/// Whether each thread takes whole slabs alone, as a team of one with its own buffers (no barrier
+/// a slab), rather than every thread working on every slab: when there are at least two slabs a
+/// thread and the scene is small (its slabs in cache: at N = 10^4 a slab is about 0.3 ms of work,
+/// and two barriers a slab cost more than the sort they share, on a loaded machine most of all).
+inline bool whole_slabs(int n, const sweep::Grid& g, int threads) {
+  return n <= kSmall && g.slabs >= 2 * threads;
+}
+
+/// Slab 0's input, entries [lo, hi): the particles in `order` (the last step's slab-0 order),
+/// each with its last slab and its search; each filed for slab 0 when `count` is given.
+template <class Real>
+inline void gather(Entries& first, const ParticlesOf<Real>& p, const std::vector<double>& end,
+                   const std::vector<int>& order, int lo, int hi, const sweep::Grid& g,
+                   int* count) {
+  for (int j = lo; j < hi; ++j) {
+    const int i = order[j];
+    first.id[j] = i;
+    first.last[j] = sweep::last_slab(end[i], g);
+    first.x0[j] = p.x[i];
+    first.y0[j] = p.y[i];
+    first.vx[j] = p.vx[i];
+    first.vy[j] = p.vy[i];
+    first.reach[j] = sweep::search_of(p.vx[i], p.vy[i], g);
+    if (count) count_entry(first, j, 0, g, count);
   }
 }
 
@@ -357,11 +389,70 @@ void search(const View& s, std::vector<std::pair<int, int>>& hits, int from, int
   search_cells<Isa::kPortable>(s, hits, from, to, g);
 }
 
+/// The narrow phase: model.md's pair time of each entry pair in `hits` (entries of `out`), kept in
+/// `found` if it is in the step (the plan drops pairs after walls).
+template <class Real>
+inline void narrow(const Box& box, const ParticlesOf<Real>& p, const Entries& out,
+                   const std::vector<std::pair<int, int>>& hits, std::vector<model::Event>& found) {
+  // EXERCISE 2: the narrow phase. For each entry pair (a, b) in `hits`: the particles
+  // i < j (out.id[a], out.id[b]), model.md's pair time (pair_candidate(box, p, i, j));
+  // keep it in `found` if it is in the step. (The plan then drops every pair at or after
+  // either wall time: why may it? handout 06)
+  (void)box, (void)p, (void)out, (void)hits, (void)found;
+  // (One thread stops the run with this message, the others wait: replace both lines.)
+#pragma omp critical
+  PLAB_EXERCISE(2, "the narrow phase: pair times of the pairs that passed");
+}
+
+/// Slab k alone, by one thread in its own buffers `o` (whole_slabs()): a counting sort by cell
+/// of slab 0's input `in` (the team's, read only) into `o`, the search, and the pairs' times (into
+/// `my.found`). One level and one move an entry: the slab is small enough to stay in cache.
+template <class Real>
+inline void slab_alone(const Box& box, const ParticlesOf<Real>& p, Slab& o, Mine& my,
+                       const Entries& in, int n, int k, const sweep::Grid& g) {
+  const double tm = sweep::slab_mid(k, g);
+  std::vector<int>& cell = o.from;  // per input entry: its cell, or -1
+  int* start = o.start.data();
+  std::fill(start, start + g.cells() + 1, 0);
+  for (int j = 0; j < n; ++j) {  // count
+    cell[j] = in.last[j] < k ? -1
+                             : sweep::cell_of(in.x0[j] + tm * in.vx[j], in.y0[j] + tm * in.vy[j], g);
+    if (cell[j] >= 0) ++start[cell[j] + 1];
+  }
+  for (int c = 0; c < g.cells(); ++c) start[c + 1] += start[c];
+  const int taking = start[g.cells()];
+  Entries& out = o.set[1];
+  for (int j = 0, rest = taking; j < n; ++j) {  // scatter: start[c] moves on to cell c + 1's
+    if (cell[j] < 0) {
+      if (k == 0) o.order[rest++] = in.id[j];  // no part in the step: the next step's order's end
+      continue;
+    }
+    const int to = start[cell[j]]++;
+    out.id[to] = in.id[j];
+    out.vx[to] = in.vx[j];
+    out.vy[to] = in.vy[j];
+    out.reach[to] = in.reach[j];
+    o.x[to] = in.x0[j] + tm * in.vx[j];
+    o.y[to] = in.y0[j] + tm * in.vy[j];
+    if (k == 0) o.order[to] = in.id[j];
+  }
+  for (int c = g.cells(); c > 0; --c) start[c] = start[c - 1];
+  start[0] = 0;
+  std::vector<int>& row_start = o.row_start[0];
+  for (int r = 0; r <= g.rows; ++r) row_start[r] = start[static_cast<std::size_t>(r) * g.columns];
+  const View v{o.x.data(),       o.y.data(), out.vx.data(), out.vy.data(),
+               out.reach.data(), start,      row_start.data()};
+  my.hits.clear();
+  search(v, my.hits, 0, taking, g);
+  narrow(box, p, out, my.hits, my.found);
+}
+
 }  // namespace
 
 /// One step in reals of type `Real`: `double` is model.md's step, `float` the variant that
 /// `plab accuracy` measures (the broad phase always works in double). One parallel region: every
-/// thread works on every slab in turn (two barriers a slab), then on the selection.
+/// thread works on every slab in turn (two barriers a slab), or, in a small scene with at least two
+/// slabs a thread (whole_slabs()), each thread on whole slabs alone; then all on the selection.
 template <class Real>
 void step_in(const Box& box, ParticlesOf<Real>& p) {
   const int n = static_cast<int>(p.size());
@@ -409,21 +500,26 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
     }
 #pragma omp barrier
     my.sample.clear();
-    for (int u = 0, at = 0, stride = static_cast<int>(sweep::sample_stride(n)); u <= t; ++u) {
-      if (u < t) {
-        at += mine[u].active;
-        continue;
+    const int stride = static_cast<int>(sweep::sample_stride(n));
+    if (n > kSmall) {  // a small scene's sample is taken by the single below: one barrier less
+      for (int u = 0, at = 0; u <= t; ++u) {
+        if (u < t) {
+          at += mine[u].active;
+          continue;
+        }
+        for (int i = my.lo; i < my.hi; ++i)
+          if (end[i] > 0 && at++ % stride == 0) my.sample.push_back(speed2(i));
       }
-      for (int i = my.lo; i < my.hi; ++i)
-        if (end[i] > 0 && at++ % stride == 0) my.sample.push_back(speed2(i));
-    }
 #pragma omp barrier
+    }
 #pragma omp single
     {
       int active = 0;
       double max2 = 0;
       bool unordered = false;
       scratch.clear();
+      for (int i = 0, at = 0; i < n && n <= kSmall; ++i)
+        if (end[i] > 0 && at++ % stride == 0) scratch.push_back(speed2(i));
       for (const Mine& m : mine) {
         if (&m - mine.data() >= threads) break;
         active += m.active;
@@ -432,76 +528,79 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
         scratch.insert(scratch.end(), m.sample.begin(), m.sample.end());
       }
       g = sweep::choose_from_sample(box, active, max2, unordered, scratch, kQuantile, kAlpha);
+      const bool alone = whole_slabs(n, g, threads);
       s.reserve(n, g, threads);
-      for (Mine& m : mine) m.next.resize(g.rows + 1);
-    }
-    // 1. Broad phase. Slab 0's input: every particle, in the order of the last step's slab 0
-    // (close to this step's, so the sort's writes stay close together): the one pass that reads
-    // the particles out of index order. Each thread takes a share and files it for slab 0.
-    Entries& first = s.set[0];
-    int* count = &s.counts[0][static_cast<std::size_t>(t) * count_stride(g.rows)];
-    std::fill(count, count + g.rows + 1, 0);
-    my.lo = share(n, t, threads);
-    my.hi = share(n, t + 1, threads);
-    for (int j = my.lo; j < my.hi; ++j) {
-      const int i = s.order[j];
-      first.id[j] = i;
-      first.last[j] = sweep::last_slab(end[i], g);
-      first.x0[j] = p.x[i];
-      first.y0[j] = p.y[i];
-      first.vx[j] = p.vx[i];
-      first.vy[j] = p.vy[i];
-      first.reach[j] = sweep::search_of(p.vx[i], p.vy[i], g);
-      count_entry(first, j, 0, g, count);
-    }
-#pragma omp barrier
-    int taking = place_rows(s, my.next, 0, g, t, threads);
-    group_rows(s, my, first, 0, g);
-#pragma omp barrier
-    for (int k = 0; k < g.slabs; ++k) {
-      const Entries& in = s.set[k % 2];
-      Entries& out = s.set[(k + 1) % 2];
-      // This thread's rows: those that start in its share of the entries. Sorting them files
-      // their entries for slab k + 1, which this thread then groups by row.
-      const std::vector<int>& row_start = s.row_start[k % 2];
-      const auto row_at = [&](int u) {
-        return u == threads ? g.rows
-                            : static_cast<int>(std::lower_bound(row_start.begin(),
-                                                                row_start.begin() + g.rows,
-                                                                share(taking, u, threads)) -
-                                               row_start.begin());
-      };
-      const int r0 = row_at(t), r1 = row_at(t + 1);
-      int* next_count = nullptr;
-      if (k + 1 < g.slabs) {
-        next_count = &s.counts[(k + 1) % 2][static_cast<std::size_t>(t) * count_stride(g.rows)];
-        std::fill(next_count, next_count + g.rows + 1, 0);
+      for (Mine& m : mine) {
+        m.next.resize(g.rows + 1);
+        if (alone && &m - mine.data() < threads) m.own.reserve(n, g, 1);
       }
-      sort_rows(s, in, out, k, r0, r1, g, next_count);
-      my.lo = row_start[r0];
-      my.hi = row_start[r1];
+    }
+    if (whole_slabs(n, g, threads)) {
+      // 1-2. Broad and narrow phase, each thread whole slabs alone, from slab 0's input (gathered
+      // by the team); whoever sorts slab 0 hands its order on to the next step.
+      Entries& in = s.set[0];
+      gather(in, p, end, s.order, share(n, t, threads), share(n, t + 1, threads), g, nullptr);
+      my.first = false;
 #pragma omp barrier
-      const int next_taking = k + 1 < g.slabs ? place_rows(s, my.next, k + 1, g, t, threads) : 0;
-      // The search (each pair that passes, then the narrow phase at once), in chunks of entries
-      // taken as threads come free; then this thread groups slab k + 1's entries by row. No
-      // barrier between: the grouping touches nothing the search reads.
-      const View v{s.x.data(),       s.y.data(),     out.vx.data(),   out.vy.data(),
-                   out.reach.data(), s.start.data(), row_start.data()};
+#pragma omp for schedule(dynamic, 1)
+      for (int k = 0; k < g.slabs; ++k) {
+        slab_alone(box, p, my.own, my, in, n, k, g);
+        my.first |= (k == 0);
+      }
+      if (my.first) std::swap(s.order, my.own.order);  // no thread reads s.order until next step
+    } else {
+      // 1. Broad phase. Slab 0's input: every particle, in the order of the last step's slab 0
+      // (close to this step's, so the sort's writes stay close together): the one pass that reads
+      // the particles out of index order. Each thread takes a share and files it for slab 0.
+      Entries& first = s.set[0];
+      int* count = &s.counts[0][static_cast<std::size_t>(t) * count_stride(g.rows)];
+      std::fill(count, count + g.rows + 1, 0);
+      my.lo = share(n, t, threads);
+      my.hi = share(n, t + 1, threads);
+      gather(first, p, end, s.order, my.lo, my.hi, g, count);
+#pragma omp barrier
+      int taking = place_rows(s, my.next, 0, g, t, threads);
+      group_rows(s, my, first, 0, g);
+#pragma omp barrier
+      for (int k = 0; k < g.slabs; ++k) {
+        const Entries& in = s.set[k % 2];
+        Entries& out = s.set[(k + 1) % 2];
+        // This thread's rows: those that start in its share of the entries. Sorting them files
+        // their entries for slab k + 1, which this thread then groups by row.
+        const std::vector<int>& row_start = s.row_start[k % 2];
+        const auto row_at = [&](int u) {
+          return u == threads ? g.rows
+                              : static_cast<int>(std::lower_bound(row_start.begin(),
+                                                                  row_start.begin() + g.rows,
+                                                                  share(taking, u, threads)) -
+                                                 row_start.begin());
+        };
+        const int r0 = row_at(t), r1 = row_at(t + 1);
+        int* next_count = nullptr;
+        if (k + 1 < g.slabs) {
+          next_count = &s.counts[(k + 1) % 2][static_cast<std::size_t>(t) * count_stride(g.rows)];
+          std::fill(next_count, next_count + g.rows + 1, 0);
+        }
+        sort_rows(s, in, out, k, r0, r1, g, next_count);
+        my.lo = row_start[r0];
+        my.hi = row_start[r1];
+#pragma omp barrier
+        const int next_taking = k + 1 < g.slabs ? place_rows(s, my.next, k + 1, g, t, threads) : 0;
+        // The search (each pair that passes, then the narrow phase at once), in chunks of entries
+        // taken as threads come free; then this thread groups slab k + 1's entries by row. No
+        // barrier between: the grouping touches nothing the search reads.
+        const View v{s.x.data(),       s.y.data(),     out.vx.data(),   out.vy.data(),
+                     out.reach.data(), s.start.data(), row_start.data()};
 #pragma omp for schedule(dynamic, 1) nowait
-      for (int from = 0; from < taking; from += kChunk) {
-        my.hits.clear();
-        search(v, my.hits, from, std::min(from + kChunk, taking), g);
-        // EXERCISE 2: the narrow phase. For each entry pair (a, b) in my.hits: the particles
-        // i < j (out.id[a], out.id[b]), model.md's pair time (pair_candidate(box, p, i, j));
-        // keep it in my.found if it is in the step. (The plan then drops every pair at or after
-        // either wall time: why may it? handout 06)
-        // (One thread stops the run with this message, the others wait: replace both lines.)
-#pragma omp critical
-        PLAB_EXERCISE(2, "the narrow phase: pair times of the pairs that passed");
-      }
-      if (k + 1 < g.slabs) group_rows(s, my, out, k + 1, g);
-      taking = next_taking;
+        for (int from = 0; from < taking; from += kChunk) {
+          my.hits.clear();
+          search(v, my.hits, from, std::min(from + kChunk, taking), g);
+          narrow(box, p, out, my.hits, my.found);  // the pairs' times, at once
+        }
+        if (k + 1 < g.slabs) group_rows(s, my, out, k + 1, g);
+        taking = next_taking;
 #pragma omp barrier
+      }
     }
 
     // EXERCISE 3: choose the events with every thread (plab::sparse_greedy_plan_in_team(), from

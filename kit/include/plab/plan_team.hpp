@@ -50,6 +50,7 @@ inline void sparse_greedy_plan_in_team(std::vector<model::Event>& mine,
 #pragma omp for schedule(static)
   for (int i = 0; i < n; ++i) {
     plan.partner[i] = Plan::kFree;
+    plan.time[i] = -HUGE_VAL;  // no time yet (read for pairs only)
     work.only[i] = kNone;
   }
   mine.erase(std::remove_if(mine.begin(), mine.end(),
@@ -71,18 +72,13 @@ inline void sparse_greedy_plan_in_team(std::vector<model::Event>& mine,
   };
   std::vector<model::Event>& contested = work.contested[t];
   contested.clear();
-  for (const model::Event& e : mine) {  // isolated pairs: taken (their times below)
-    if (!alone(e)) {
+  for (const model::Event& e : mine) {  // isolated pairs: taken, at the earliest of their times
+    if (!alone(e)) {                     // (a pair found twice)
       contested.push_back(e);
       continue;
     }
     std::atomic_ref<int>(plan.partner[e.lo]).store(e.hi, std::memory_order_relaxed);
     std::atomic_ref<int>(plan.partner[e.hi]).store(e.lo, std::memory_order_relaxed);
-    std::atomic_ref<double>(plan.time[e.lo]).store(-HUGE_VAL, std::memory_order_relaxed);
-  }
-#pragma omp barrier
-  for (const model::Event& e : mine) {  // then the earliest of their times (a pair found twice)
-    if (!alone(e)) continue;
     std::atomic_ref<double> time(plan.time[e.lo]);
     double seen = time.load(std::memory_order_relaxed);
     while ((seen == -HUGE_VAL || e.t < seen) &&
