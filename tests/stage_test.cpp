@@ -461,7 +461,10 @@ TEST(RanksScenes, EmptySlabs) {
 
 /// Why this stage's GPU path cannot run here ("" when it can): built without one, or what its
 /// program says when it ends with NoDevice (exit 4) on a one-particle scene. The program runs
-/// alone, not in this process: MPI started here would stop the mpirun of the tests.
+/// alone, not in this process: MPI started here would stop the mpirun of the tests. It runs as an
+/// isolated singleton (no OpenMPI daemon: Open MPI 4's singleton otherwise forks an `orted` that
+/// outlives the program by up to a second and writes its session files into the scratch folder
+/// while it is being removed, which left the folder behind on a loaded CI machine).
 std::string missing_gpu_path() {
   static const std::string why = []() -> std::string {
     if (!plab::stage_info().gpu_path) return "built without its GPU path (no CUDA compiler)";
@@ -475,7 +478,8 @@ std::string missing_gpu_path() {
     std::filesystem::create_directories(dir.file("mpi"));
     plab::test::unwatch();
     const int status =
-        plab::test::run_watched("env TMPDIR=" + dir.file("mpi") + " " + plab::test::kThisProgram +
+        plab::test::run_watched("env OMPI_MCA_ess_singleton_isolated=1 TMPDIR=" + dir.file("mpi") +
+                                " " + plab::test::kThisProgram +
                                 " --device gpu --quiet --out /dev/null " + scene + " 2>" + err);
     if (status != 4) return "";  // it runs (or fails, and the tests say how)
     std::string said = plab::read_file(err);

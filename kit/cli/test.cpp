@@ -27,6 +27,12 @@ int with_scratch_tmpdir(Body body) {
     std::printf("plab test: FAILED: the tests left %zu file(s) in their temporary folder "
                 "(TMPDIR=%s), e.g. %s: a test must remove its scratch files\n",
                 left.size(), scratch.c_str(), left.front().c_str());
+    // What is inside says who left it (a test's scratch folder, a tool's session files).
+    std::error_code error;
+    int shown = 0;
+    for (fs::recursive_directory_iterator it(scratch, error), end; !error && it != end && shown < 8;
+         it.increment(error), ++shown)
+      std::printf("  left: %s\n", fs::relative(it->path(), scratch).c_str());
     status = status ? status : 1;
   }
   std::error_code ignored;
