@@ -354,28 +354,44 @@ std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::t
   return status == 0 ? plab::read_file(out) : std::string();
 }
 
+/// Dataset `d` on `ranks` ranks (with the runner's `options`, said as `how` in messages): its
+/// golden output.
+void expect_golden_on_ranks(const plab::Dataset& d, int ranks, const std::string& options = "",
+                            const std::string& how = "") {
+  const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
+  const plab::test::ScratchDir scratch;
+  const std::string output =
+      run_on_ranks(m.scene_path(d), ranks, scratch, "scene " + d.name + how, options);
+  if (!output.empty())
+    expect_same(plab::read_file(m.golden_path(d)), output,
+                m.golden_path(d) + " (" + (options.empty() ? "" : options + ", ") + "on " +
+                    std::to_string(ranks) + " ranks)");
+}
+
+/// The datasets an MPI stage runs on several ranks (none for other stages).
+std::vector<plab::Dataset> rank_datasets() {
+  return plab::stage_info().mpi ? datasets(false) : std::vector<plab::Dataset>{};
+}
+
+/// A (dataset, ranks) case's name: `course_1_3`.
+std::string dataset_ranks_name(
+    const testing::TestParamInfo<std::tuple<plab::Dataset, int>>& info) {
+  std::string s = std::get<0>(info.param).name + "_" + std::to_string(std::get<1>(info.param));
+  for (char& c : s)
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  return s;
+}
+
 /// Every small and medium dataset on 2, 3 and 4 ranks: its golden output.
 class Ranks : public testing::TestWithParam<std::tuple<plab::Dataset, int>> {};
 TEST_P(Ranks, GoldenOnRanks) {
   const auto& [d, ranks] = GetParam();
-  const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
-  const plab::test::ScratchDir scratch;
-  const std::string output = run_on_ranks(m.scene_path(d), ranks, scratch, "scene " + d.name);
-  if (!output.empty())
-    expect_same(plab::read_file(m.golden_path(d)), output,
-                m.golden_path(d) + " (on " + std::to_string(ranks) + " ranks)");
+  expect_golden_on_ranks(d, ranks);
 }
-INSTANTIATE_TEST_SUITE_P(
-    Datasets, Ranks,
-    testing::Combine(testing::ValuesIn(plab::stage_info().mpi ? datasets(false)
-                                                              : std::vector<plab::Dataset>{}),
-                     testing::Values(2, 3, 4)),
-    [](const auto& info) {
-      std::string s = std::get<0>(info.param).name + "_" + std::to_string(std::get<1>(info.param));
-      for (char& c : s)
-        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-      return s;
-    });
+INSTANTIATE_TEST_SUITE_P(Datasets, Ranks,
+                         testing::Combine(testing::ValuesIn(rank_datasets()),
+                                          testing::Values(2, 3, 4)),
+                         dataset_ranks_name);
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(Ranks);
 
 /// A scene that stresses the cut, on 1 to `most` ranks (with the runner's `options`): the other
@@ -499,25 +515,12 @@ class GpuPath : public testing::TestWithParam<std::tuple<plab::Dataset, int>> {}
 TEST_P(GpuPath, GoldenOnRanks) {
   PLAB_SKIP_WITHOUT_GPU_PATH();
   const auto& [d, ranks] = GetParam();
-  const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
-  const plab::test::ScratchDir scratch;
-  const std::string output = run_on_ranks(m.scene_path(d), ranks, scratch,
-                                          "scene " + d.name + " on the GPU", "--device gpu");
-  if (!output.empty())
-    expect_same(plab::read_file(m.golden_path(d)), output,
-                m.golden_path(d) + " (--device gpu, on " + std::to_string(ranks) + " ranks)");
+  expect_golden_on_ranks(d, ranks, "--device gpu", " on the GPU");
 }
-INSTANTIATE_TEST_SUITE_P(
-    Datasets, GpuPath,
-    testing::Combine(testing::ValuesIn(plab::stage_info().mpi ? datasets(false)
-                                                              : std::vector<plab::Dataset>{}),
-                     testing::Values(1, 2, 3)),
-    [](const auto& info) {
-      std::string s = std::get<0>(info.param).name + "_" + std::to_string(std::get<1>(info.param));
-      for (char& c : s)
-        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-      return s;
-    });
+INSTANTIATE_TEST_SUITE_P(Datasets, GpuPath,
+                         testing::Combine(testing::ValuesIn(rank_datasets()),
+                                          testing::Values(1, 2, 3)),
+                         dataset_ranks_name);
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(GpuPath);
 
 /// The scenes that stress the cut, on 1 to 3 ranks with `--device gpu`: the other stage's text.

@@ -141,13 +141,13 @@ class DeviceSearch {
                             time_.data(),
                             static_cast<int>(std::min<std::size_t>(key_.size(), time_.size())),
                             length_.data()};
-    temp_.reserve(launch::scan_bytes(cells + 1));
+    temp_.reserve(cuda::exclusive_scan_bytes(cells + 1));
     PLAB_CUDA_CHECK(cudaMemsetAsync(length_.data(), 0, sizeof(int), st));
     for (int k = 0; k < lg.g.slabs; ++k) {
       const kernels::SlabGrid d{lg.g, lg.x0, lg.y0, k, cells};
       PLAB_CUDA_CHECK(cudaMemsetAsync(filled_.data(), 0, (cells + 1) * sizeof(int), st));
       launch::bin_count(a, d, st);
-      launch::scan(filled_.data(), start_.data(), cells + 1, temp_.data(), temp_.size(), st);
+      cuda::exclusive_scan(filled_.data(), start_.data(), cells + 1, temp_.data(), temp_.size(), st);
       launch::bin_scatter(a, d, st);
       launch::find_pairs(a, d, box.r, st);
     }

@@ -1,12 +1,12 @@
 /// \file stages/06-broadphase/launchers.cuh
-/// \brief Stage 06's launchers: grid size, launch on a stream, check. One per kernel (and the
-/// CUB scan of the counting sort).
+/// \brief Stage 06's launchers: grid size, launch on a stream, check. One per kernel (the
+/// counting sort's scan is the kit's, plab::cuda::exclusive_scan()).
 #pragma once
 
-#include <cub/device/device_scan.cuh>
 
 #include "kernels.cuh"
 #include "plab/cuda/check.hpp"
+#include "plab/cuda/scan.cuh"
 #include "plab/cuda/stream.hpp"
 #include "plab/stage.hpp"
 
@@ -29,22 +29,6 @@ inline void bin_count([[maybe_unused]] const cuda::ParticlesView& p,
   // EXERCISE 4: launch kernels::bin_count on a grid of (N / kThreads) x (the pass's d.slabs)
   // blocks.
   PLAB_EXERCISE(4, "the broad phase on the GPU: kernels bin_count, bin_scatter, find_pairs");
-}
-
-/// start[b] becomes the number of entries in buckets before b (CUB's exclusive scan of `filled`;
-/// `temp` of `temp_bytes` from scan_bytes()). Also where each particle's candidates start, from
-/// their counts.
-inline void scan(const int* filled, int* start, int size, void* temp, std::size_t temp_bytes,
-                 cudaStream_t s) {
-  PLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(temp, temp_bytes, filled, start, size, s));
-}
-
-/// Bytes of temporary storage scan() needs for `size` counters.
-inline std::size_t scan_bytes(int size) {
-  std::size_t bytes = 0;
-  PLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, bytes, static_cast<const int*>(nullptr),
-                                                static_cast<int*>(nullptr), size));
-  return bytes;
 }
 
 inline void bin_scatter([[maybe_unused]] const cuda::ParticlesView& p,

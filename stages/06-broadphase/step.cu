@@ -76,11 +76,11 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
       const int buckets = pass.slabs * grid_.cells + 1;
       PLAB_CUDA_CHECK(cudaMemsetAsync(filled_.get(), 0, buckets * sizeof(int), main_));
       launch::bin_count(p_.view(), a, pass, main_);
-      launch::scan(filled_.get(), start_.get(), buckets, temp_.get(), temp_.size(), main_);
+      cuda::exclusive_scan(filled_.get(), start_.get(), buckets, temp_.get(), temp_.size(), main_);
       launch::bin_scatter(p_.view(), a, pass, main_);
       launch::find_pairs(p_.view(), box_, a, pass, main_);
     }
-    launch::scan(a.slots.count, a.slots.end, n_, temp_.get(), temp_.size(), main_);
+    cuda::exclusive_scan(a.slots.count, a.slots.end, n_, temp_.get(), temp_.size(), main_);
     launch::place_pairs(a, main_);
     launch::start_rounds(n_, a, main_);
     if (n_ >= kGridResolveFrom)
@@ -122,7 +122,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     start_.resize(size);
     for (auto* v : {&rank_, &entry_id_, &entry_k_}) v->resize(entries);
     entry_.resize(entries);
-    temp_.resize(std::max(launch::scan_bytes(size), launch::scan_bytes(n_)));
+    temp_.resize(std::max(cuda::exclusive_scan_bytes(size), cuda::exclusive_scan_bytes(n_)));
     stale_ = true;
   }
 

@@ -1,14 +1,15 @@
 /// \file stages/08-mpi/launchers.cuh
-/// \brief Stage 08's launchers: grid size, launch on a stream, check; the CUB scan of the
-/// counting sort, and the CUB radix sort and unique-by-key that order the pairs found.
+/// \brief Stage 08's launchers: grid size, launch on a stream, check; the CUB radix sort and
+/// unique-by-key that order the pairs found (the counting sort's scan is the kit's,
+/// plab::cuda::exclusive_scan()).
 #pragma once
 
 #include <cub/device/device_radix_sort.cuh>
-#include <cub/device/device_scan.cuh>
 #include <cub/device/device_select.cuh>
 
 #include "kernels.cuh"
 #include "plab/cuda/check.hpp"
+#include "plab/cuda/scan.cuh"
 
 namespace plab::dist::launch {
 
@@ -20,21 +21,6 @@ inline unsigned blocks(long long n) { return static_cast<unsigned>((n + kThreads
 inline void bin_count(const kernels::Arrays& a, const kernels::SlabGrid& d, cudaStream_t s) {
   kernels::bin_count<<<blocks(a.n), kThreads, 0, s>>>(a, d);
   PLAB_CUDA_CHECK_LAUNCH("bin_count");
-}
-
-/// start[c] becomes the number of entries in cells before c (CUB's exclusive scan of `filled`,
-/// `size` counters; `temp` of `temp_bytes`, at least scan_bytes(size)).
-inline void scan(const int* filled, int* start, int size, void* temp, std::size_t temp_bytes,
-                 cudaStream_t s) {
-  PLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(temp, temp_bytes, filled, start, size, s));
-}
-
-/// Bytes of temporary storage scan() needs for `size` counters.
-inline std::size_t scan_bytes(int size) {
-  std::size_t bytes = 0;
-  PLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, bytes, static_cast<const int*>(nullptr),
-                                                static_cast<int*>(nullptr), size));
-  return bytes;
 }
 
 inline void bin_scatter(const kernels::Arrays& a, const kernels::SlabGrid& d, cudaStream_t s) {
