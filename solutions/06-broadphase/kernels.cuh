@@ -32,6 +32,8 @@ struct Flags {
   int pairs;             //!< pairs filed this step (CompactView::file())
   int contested;         //!< particles with pair events this step (listed by start_rounds)
   int open[3];           //!< resolve_grid: someone left unresolved in round r (at r % 3)
+  int fast;              //!< fast entries the pass's search listed for a team search (the solution's
+                         //!< find_fast_pairs)
 };
 
 /// The grid of the batch and the slabs of one pass of the counting sort, as the kernels see it.
@@ -139,14 +141,17 @@ __device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, in
   return sweep::close_in_slab(xi - xj, yi - yj, p.vx[i] - p.vx[j], p.vy[i] - p.vy[j], d.g);
 }
 
-/// Entry e against entries [from, to) of its slab: the pairs that pass sweep::close_in_slab() get model.md's pair time,
-/// unless slab k - 1 found them already (a pair filed twice is harmless to the rounds, but it
-/// takes room), and are filed when the pair comes before both particles' walls.
+/// Entry e against entries [from, to) of its slab: the pairs that pass sweep::close_in_slab() get
+/// model.md's pair time, unless slab k - 1 found them already (a pair filed twice is harmless to
+/// the rounds, but it takes room), and are filed when the pair comes before both particles'
+/// walls. A team of `lanes` threads can share the run: this one takes every lanes-th entry from
+/// from + lane.
 __device__ inline void test_entries(const ParticlesView& p, const Box& box, const StepArrays& a,
-                                    const DeviceGrid& d, int e, int from, int to) {
+                                    const DeviceGrid& d, int e, int from, int to, int lane = 0,
+                                    int lanes = 1) {
   const int i = a.entry_id[e], k = a.entry_k[e];
   const Entry me = a.entry[e];
-  for (int f = from; f < to; ++f) {
+  for (int f = from + lane; f < to; f += lanes) {
     const Entry o = a.entry[f];
     if (f == e || !sweep::close_in_slab(me.x - o.x, me.y - o.y, me.vx - o.vx, me.vy - o.vy, d.g))
       continue;
@@ -160,29 +165,59 @@ __device__ inline void test_entries(const ParticlesView& p, const Box& box, cons
   }
 }
 
-/// The pair search, one thread per entry (as step.cpp): a slow entry against the later entries of
-/// its row up to the last column within its reach, then the columns within reach of the row
-/// above (two runs of entries of its slab); a fast entry against every entry within its reach
-/// (sweep::search_of()), one run per row.
-__global__ void find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
+constexpr int kSearchThreads = 256;  //!< threads per block of find_pairs and find_fast_pairs
+constexpr int kFastTeam = 8;         //!< threads that search together for one fast entry
+
+/// The pair search, one thread per entry (as step.cpp, but for the fast entries): a slow entry
+/// against the later entries of its row up to the last column within its reach, then the
+/// columns within reach of the row above (two runs of entries of its slab). A fast entry
+/// searches about twice as many entries (every row within its reach): it is listed in `a.rank`
+/// (free once bin_scatter ran) for find_fast_pairs, so that the threads of a warp run loops of
+/// like length. At most 64 registers a thread (four blocks an SM).
+__global__ void __launch_bounds__(kSearchThreads, 4)
+    find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
+  namespace cg = cooperative_groups;
   const int e = blockIdx.x * blockDim.x + threadIdx.x;
   if (e >= a.start[d.slabs * d.cells] || a.flags->overflow) return;
-  const int columns = d.g.columns;
-  const int* row = a.start + (a.entry_k[e] - d.first) * d.cells;  // this slab's cells
   const Entry me = a.entry[e];
   const sweep::Search q = sweep::search_of(me.vx, me.vy, d.g);
+  if (q.fast) {  // one atomic for the fast threads of the warp
+    const cg::coalesced_group fast = cg::coalesced_threads();
+    int first = 0;
+    if (fast.thread_rank() == 0) first = atomicAdd(&a.flags->fast, static_cast<int>(fast.size()));
+    a.rank[fast.shfl(first, 0) + static_cast<int>(fast.thread_rank())] = e;
+    return;
+  }
+  const int columns = d.g.columns;
+  const int* row = a.start + (a.entry_k[e] - d.first) * d.cells;  // this slab's cells
   int x0, x1;
   sweep::columns_within(me.x, q.d, d.g, x0, x1);
-  if (!q.fast) {
-    const int y = sweep::row_of(me.y, d.g);
-    test_entries(p, box, a, d, e, e + 1, row[y * columns + x1 + 1]);
-    if (y + 1 < d.g.rows)
-      test_entries(p, box, a, d, e, row[(y + 1) * columns + x0], row[(y + 1) * columns + x1 + 1]);
-  } else {  // a pair found twice is harmless
-    int y0, y1;
-    sweep::rows_within(me.y, q.d, d.g, y0, y1);
+  const int y = sweep::row_of(me.y, d.g);
+  test_entries(p, box, a, d, e, e + 1, row[y * columns + x1 + 1]);
+  if (y + 1 < d.g.rows)
+    test_entries(p, box, a, d, e, row[(y + 1) * columns + x0], row[(y + 1) * columns + x1 + 1]);
+}
+
+/// The search of the fast entries find_pairs listed (`flags->fast` of them in `a.rank`): a team
+/// of kFastTeam threads for each, sharing every run of entries within its reach, one run per
+/// row (a pair found twice is harmless); any grid, the teams stride over the list.
+__global__ void __launch_bounds__(kSearchThreads, 4)
+    find_fast_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
+  const int t = blockIdx.x * blockDim.x + threadIdx.x;
+  const int lane = t % kFastTeam, teams = gridDim.x * blockDim.x / kFastTeam;
+  if (a.flags->overflow) return;
+  const int m = a.flags->fast, columns = d.g.columns;
+  for (int q = t / kFastTeam; q < m; q += teams) {
+    const int e = a.rank[q];
+    const int* row = a.start + (a.entry_k[e] - d.first) * d.cells;
+    const Entry me = a.entry[e];
+    const double reach = sweep::search_of(me.vx, me.vy, d.g).d;
+    int x0, x1, y0, y1;
+    sweep::columns_within(me.x, reach, d.g, x0, x1);
+    sweep::rows_within(me.y, reach, d.g, y0, y1);
     for (int y = y0; y <= y1; ++y)
-      test_entries(p, box, a, d, e, row[y * columns + x0], row[y * columns + x1 + 1]);
+      test_entries(p, box, a, d, e, row[y * columns + x0], row[y * columns + x1 + 1], lane,
+                   kFastTeam);
   }
 }
 

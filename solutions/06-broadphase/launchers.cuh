@@ -13,6 +13,8 @@ namespace plab::launch {
 
 constexpr int kThreads = 256;  //!< threads per block of the per-particle and per-entry kernels
 
+static_assert(kernels::kSearchThreads == kThreads);
+
 /// Blocks of kThreads covering `n`.
 inline unsigned blocks(long long n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
 
@@ -34,11 +36,18 @@ inline void bin_scatter(const cuda::ParticlesView& p, const kernels::StepArrays&
   PLAB_CUDA_CHECK_LAUNCH("bin_scatter");
 }
 
+/// The pair search of a pass: find_pairs over every entry (the slow ones), then find_fast_pairs
+/// over the fast ones it listed (a team of kernels::kFastTeam threads each, on a grid for a
+/// tenth of the entries: the fastest tenth of the particles are the fast ones, sweep::choose()).
 inline void find_pairs(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
                        const kernels::DeviceGrid& d, cudaStream_t s) {
   const long long most = static_cast<long long>(p.n) * d.slabs;  // entries this pass, at most
-  kernels::find_pairs<<<blocks(most), kThreads, 0, s>>>(p, box, a, d);
+  PLAB_CUDA_CHECK(cudaMemsetAsync(&a.flags->fast, 0, sizeof(int), s));
+  kernels::find_pairs<<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d);
   PLAB_CUDA_CHECK_LAUNCH("find_pairs");
+  kernels::find_fast_pairs<<<blocks((most / 10 + 1) * kernels::kFastTeam),
+                             kernels::kSearchThreads, 0, s>>>(p, box, a, d);
+  PLAB_CUDA_CHECK_LAUNCH("find_fast_pairs");
 }
 
 /// One thread per pair the list can hold.

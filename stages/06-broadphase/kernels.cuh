@@ -32,6 +32,8 @@ struct Flags {
   int pairs;             //!< pairs filed this step (CompactView::file())
   int contested;         //!< particles with pair events this step (listed by start_rounds)
   int open[3];           //!< resolve_grid: someone left unresolved in round r (at r % 3)
+  int fast;              //!< fast entries the pass's search listed for a team search (the solution's
+                         //!< find_fast_pairs)
 };
 
 /// The grid of the batch and the slabs of one pass of the counting sort, as the kernels see it.
@@ -121,14 +123,17 @@ __device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, in
   return sweep::close_in_slab(xi - xj, yi - yj, p.vx[i] - p.vx[j], p.vy[i] - p.vy[j], d.g);
 }
 
-/// Entry e against entries [from, to) of its slab: the pairs that pass sweep::close_in_slab() get model.md's pair time,
-/// unless slab k - 1 found them already (a pair filed twice is harmless to the rounds, but it
-/// takes room), and are filed when the pair comes before both particles' walls.
+/// Entry e against entries [from, to) of its slab: the pairs that pass sweep::close_in_slab() get
+/// model.md's pair time, unless slab k - 1 found them already (a pair filed twice is harmless to
+/// the rounds, but it takes room), and are filed when the pair comes before both particles'
+/// walls. A team of `lanes` threads can share the run: this one takes every lanes-th entry from
+/// from + lane.
 __device__ inline void test_entries(const ParticlesView& p, const Box& box, const StepArrays& a,
-                                    const DeviceGrid& d, int e, int from, int to) {
+                                    const DeviceGrid& d, int e, int from, int to, int lane = 0,
+                                    int lanes = 1) {
   const int i = a.entry_id[e], k = a.entry_k[e];
   const Entry me = a.entry[e];
-  for (int f = from; f < to; ++f) {
+  for (int f = from + lane; f < to; f += lanes) {
     const Entry o = a.entry[f];
     if (f == e || !sweep::close_in_slab(me.x - o.x, me.y - o.y, me.vx - o.vx, me.vy - o.vy, d.g))
       continue;
