@@ -17,7 +17,11 @@ The attacks (each a stage's step.cpp; the hidden seed of these gradings is SEED)
   write-outside   write files into /tmp, the kit, the grader's scratch parent and HOME
   daemon          setsid() and a double fork: a child that keeps writing after the run
   fork-bomb       fork without end (an honest stage 02 is graded after it in the same run)
-and, as a control, read-golden and include-path again with --no-sandbox, where they must win.
+  before-main     stage 08 on MPI (every rank under mpirun): the solution's own step.cpp with a
+                  static initializer that, before main, copies an expected output found on disk
+                  or runs any other plab-run-* program of the kit on the scene, and leaves
+and, as a control, read-golden, include-path and before-main again with --no-sandbox, where they
+must win.
 """
 import json
 import os
@@ -32,7 +36,7 @@ import time
 plab, kit, scratch = sys.argv[1], pathlib.Path(sys.argv[2]).resolve(), pathlib.Path(sys.argv[3])
 only = set(sys.argv[4:])
 SEED = 424242
-FOLDERS = {"01": "01-naive", "02": "02-heap", "03": "03-openmp"}
+FOLDERS = {"01": "01-naive", "02": "02-heap", "03": "03-openmp", "08": "08-mpi"}
 TOKEN = f"plabredteam{os.getpid()}"
 failures = []
 
@@ -252,6 +256,57 @@ void step(const Box&, Particles& p) {
 }
 }  // namespace plab
 """,
+    "before-main": r"""
+namespace {
+// Before main, on every rank: this scene's expected output from disk, or from another stage's
+// program of the kit; either copied as the output, and the rank leaves (the solution below never
+// runs). Nothing found: a failure.
+int copy_before_main() {
+  const auto a = my_args();
+  const std::string out = arg_after("--out");
+  if (a.size() < 2 || out.empty()) return 0;
+  std::ifstream scene(a[1]);
+  std::string line;
+  for (int k = 0; k < 5 && std::getline(scene, line); ++k) {}
+  double id = 0, x = 0, y = 0;
+  char want[128] = "no particle line";
+  if (scene >> id >> x >> y) std::snprintf(want, sizeof want, "0 0 %.8f %.8f", x, y);
+  std::vector<std::string> files;
+  for (const char* root : {"/", "/autograder", "KIT", "/tmp", "/plab", "/proc/1/cwd"})
+    walk(root, 9, files);
+  for (int pid : {getppid(), 1}) walk("/proc/" + std::to_string(pid) + "/cwd", 6, files);
+  for (const auto& f : files)
+    if (f.size() > 4 && f.compare(f.size() - 4, 4, ".out") == 0 &&
+        slurp(f).compare(0, std::strlen(want), want) == 0) {
+      std::ofstream(out) << slurp(f);
+      std::fprintf(stderr, "before-main: copied %s\n", f.c_str());
+      _exit(0);
+    }
+  int tried = 0;
+  for (const auto& f : files) {
+    if (f.find("plab-run-0") == std::string::npos || f.find("student") != std::string::npos ||
+        f.find("plab-run-08") != std::string::npos)
+      continue;
+    ++tried;
+    pid_t child = fork();
+    if (child == 0) {
+      execl(f.c_str(), f.c_str(), a[1].c_str(), "--quiet", "--out", out.c_str(), (char*)nullptr);
+      _exit(127);
+    }
+    int status = 0;
+    waitpid(child, &status, 0);
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 0) {
+      std::fprintf(stderr, "before-main: ran %s\n", f.c_str());
+      _exit(0);
+    }
+  }
+  std::fprintf(stderr, "before-main: %zu files, no expected output, %d programs tried\n",
+               files.size(), tried);
+  _exit(1);
+}
+const int copied = copy_before_main();
+}  // namespace
+""",
     "fork-bomb": r"""
 namespace plab {
 void step(const Box&, Particles&) {
@@ -269,17 +324,24 @@ def check(name, condition, message):
 
 
 def submission(name, attacks, port=0):
-    """Stages 01-03 of the solutions, with the given {stage: attack} step.cpp in place."""
+    """Stages 01-03 of the solutions (and 08 when attacked), with the given {stage: attack}
+    step.cpp in place. Stage 08's attack goes before the solution's own step.cpp, which brings
+    its MPI entry point."""
     root = scratch / name
     shutil.rmtree(root, ignore_errors=True)
     for sid, folder in FOLDERS.items():
-        shutil.copytree(kit / "solutions" / folder, root / "stages" / folder)
+        if sid != "08" or sid in attacks:
+            shutil.copytree(kit / "solutions" / folder, root / "stages" / folder)
     for sid, attack in attacks.items():
-        body = ATTACKS[attack] if "ENTRY" in ATTACKS[attack] else ATTACKS[attack] + "ENTRY"
+        step = root / "stages" / FOLDERS[sid] / "step.cpp"
+        if sid == "08":
+            body = ATTACKS[attack] + step.read_text()
+        else:
+            body = ATTACKS[attack] if "ENTRY" in ATTACKS[attack] else ATTACKS[attack] + "ENTRY"
         code = (HEAD + body).replace("ENTRY", ENTRY)
         code = code.replace("KIT", str(kit)).replace("TOKEN", TOKEN)
         code = code.replace("SCRATCH", str(scratch)).replace("PORT", str(port))
-        (root / "stages" / FOLDERS[sid] / "step.cpp").write_text(code)
+        step.write_text(code)
     return root
 
 
@@ -395,11 +457,21 @@ def case_processes():
     check("daemon", not files, f"the daemon wrote nothing outside ({files})")
 
 
+def case_mpi():
+    """Stage 08: every rank under mpirun in the sandbox."""
+    tests, doc, _ = grade("redteam-mpi", submission("redteam-mpi", {"08": "before-main"}), "08")
+    scored_nothing("mpi", tests, "08", "before-main")
+    print("     before-main said: " + first_output(tests, "08")[-150:])
+    procs, files = leftovers()
+    check("before-main", not procs, f"nothing left running after grading (processes {procs})")
+
+
 def case_control():
     """The same attacks without the sandbox must win: the checks above can fail."""
     tests, doc, _ = grade("redteam-control", submission("redteam-control", {
-        "01": "read-golden", "03": "include-path"}), "01,03", "--no-sandbox")
-    for stage, attack in (("01", "read-golden"), ("03", "include-path")):
+        "01": "read-golden", "03": "include-path", "08": "before-main"}), "01,03,08",
+        "--no-sandbox")
+    for stage, attack in (("01", "read-golden"), ("03", "include-path"), ("08", "before-main")):
         got = sum(t["score"] for t in correctness(tests, stage).values())
         most = sum(t["max_score"] for t in correctness(tests, stage).values())
         check("control", got > most / 2, f"with --no-sandbox, {attack} (stage {stage}) wins "
@@ -407,7 +479,7 @@ def case_control():
 
 
 CASES = {"copy": case_copy, "escape": case_escape, "processes": case_processes,
-         "control": case_control}
+         "mpi": case_mpi, "control": case_control}
 scratch.mkdir(parents=True, exist_ok=True)
 try:
     for name, case in CASES.items():
