@@ -16,7 +16,7 @@
 #include "plab/diff.hpp"
 #include "plab/driver.hpp"
 #include "plab/generate.hpp"
-#include "plab/grading.hpp"
+#include "plab/oracle.hpp"
 #include "plab/io.hpp"
 #include "plab/plan.hpp"
 #include "plab/stage.hpp"

@@ -12,6 +12,8 @@ The attacks (each a stage's step.cpp; the hidden seed of these gradings is SEED)
                   the kit's datasets/golden, /autograder) and copy it as its own output
   run-solution    find any plab-run-* program of the kit and run it on the same scene
   include-path    #include the kit's solution by its absolute path (and a relative one)
+  call-oracle     the whole step from the kit's own greedy oracle (plab::plan_step(), which the
+                  runner links for --explain), declared by hand, its source included when found
   spy             read its environment, its command line and every process's, report them
   network         open a TCP connection to a listener of this test
   write-outside   write files into /tmp, the kit, the grader's scratch parent and HOME
@@ -20,8 +22,8 @@ The attacks (each a stage's step.cpp; the hidden seed of these gradings is SEED)
   before-main     stage 08 on MPI (every rank under mpirun): the solution's own step.cpp with a
                   static initializer that, before main, copies an expected output found on disk
                   or runs any other plab-run-* program of the kit on the scene, and leaves
-and, as a control, read-golden, include-path and before-main again with --no-sandbox, where they
-must win.
+and, as a control, read-golden, include-path, call-oracle and before-main again with
+--no-sandbox, where they must win.
 """
 import json
 import os
@@ -181,6 +183,18 @@ void step(const Box&, Particles& p) {  // no solution found: a wrong step
 }  // namespace plab
 ENTRY
 #endif
+""",
+    "call-oracle": r"""
+#include "plab/plan.hpp"
+#if __has_include("KIT/kit/src/oracle.cpp")
+#include "KIT/kit/src/oracle.cpp"
+#elif __has_include("../../kit/src/oracle.cpp")
+#include "../../kit/src/oracle.cpp"
+#endif
+namespace plab {
+Plan plan_step(const Box& box, const Particles& p);  // the kit's oracle (plab/oracle.hpp)
+void step(const Box& box, Particles& p) { apply(box, p, plan_step(box, p)); }
+}  // namespace plab
 """,
     "spy": r"""
 namespace plab {
@@ -457,6 +471,17 @@ def case_processes():
     check("daemon", not files, f"the daemon wrote nothing outside ({files})")
 
 
+def case_oracle():
+    """The kit's own oracle: a graded build has none to call or include."""
+    tests, doc, _ = grade("redteam-oracle", submission("redteam-oracle", {"02": "call-oracle"}),
+                          "02")
+    got = sum(t["score"] for t in correctness(tests, "02").values())
+    said = next((t["output"] for t in correctness(tests, "02").values()), "")
+    check("call-oracle", got == 0 and "does not compile" in said,
+          f"stage 02 scored {got} on correctness and did not build: {said.splitlines()[:2]}")
+    print("     call-oracle: " + " ".join(said.splitlines()[:2])[:150])
+
+
 def case_mpi():
     """Stage 08: every rank under mpirun in the sandbox."""
     tests, doc, _ = grade("redteam-mpi", submission("redteam-mpi", {"08": "before-main"}), "08")
@@ -469,9 +494,10 @@ def case_mpi():
 def case_control():
     """The same attacks without the sandbox must win: the checks above can fail."""
     tests, doc, _ = grade("redteam-control", submission("redteam-control", {
-        "01": "read-golden", "03": "include-path", "08": "before-main"}), "01,03,08",
-        "--no-sandbox")
-    for stage, attack in (("01", "read-golden"), ("03", "include-path"), ("08", "before-main")):
+        "01": "read-golden", "02": "call-oracle", "03": "include-path", "08": "before-main"}),
+        "01,02,03,08", "--no-sandbox")
+    for stage, attack in (("01", "read-golden"), ("02", "call-oracle"), ("03", "include-path"),
+                          ("08", "before-main")):
         got = sum(t["score"] for t in correctness(tests, stage).values())
         most = sum(t["max_score"] for t in correctness(tests, stage).values())
         check("control", got > most / 2, f"with --no-sandbox, {attack} (stage {stage}) wins "
@@ -479,7 +505,7 @@ def case_control():
 
 
 CASES = {"copy": case_copy, "escape": case_escape, "processes": case_processes,
-         "mpi": case_mpi, "control": case_control}
+         "oracle": case_oracle, "mpi": case_mpi, "control": case_control}
 scratch.mkdir(parents=True, exist_ok=True)
 try:
     for name, case in CASES.items():

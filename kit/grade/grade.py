@@ -209,14 +209,16 @@ class Grader:
     def build(self, stages, found):
         """Builds each stage's program from the submission's sources and the kit's own CMake, kit
         and runner, in the sandbox (the compiler sees the system, the kit's public part and the
-        submission, nothing else). Returns {folder id: program path or error text}."""
+        submission, nothing else: not the kit's greedy oracle, a whole step that a stage could
+        call or include, so the runner is built there without it). Returns {folder id: program
+        path or error text}."""
         folders = self.kit_folders
         src = self.sandbox.shared_dir("src")
         for item in ("CMakeLists.txt", "CMakePresets.json", "cmake", "kit", "docs"):
             source = self.kit / item
             if source.is_dir():
                 shutil.copytree(source, src / item, ignore=shutil.ignore_patterns(
-                    "grade", "__pycache__"))
+                    "grade", "__pycache__", "oracle.cpp"))
             else:
                 shutil.copy2(source, src / item)
         built = {}

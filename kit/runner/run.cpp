@@ -2,6 +2,7 @@
 /// \brief What the runner runs: the scene with the stage (the loop is plab::simulate()), and the
 /// grader's two modes (one step from each printed block, the events of chosen particles).
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -9,6 +10,9 @@
 #include "plab/io.hpp"
 #include "plab/runtime.hpp"
 #include "runner.hpp"
+#if PLAB_HAVE_ORACLE
+#include "plab/oracle.hpp"
+#endif
 
 namespace plab::runner {
 
@@ -37,6 +41,9 @@ RunStats simulate_scene(const Options& o, const Scene& scene) {
   OutputFile audit_log(o.audit_log_path, /*optional=*/true);
   Audit audit;
   audit.log = audit_log.get();
+#if PLAB_HAVE_ORACLE
+  audit.oracle = plan_step;
+#endif
   OutputWriter writer(out.get());
   const RunStats stats =
       simulate(scene, make, writer,
@@ -64,6 +71,11 @@ void step_from_each(const Options& o, const Scene& scene) {
 }
 
 void explain(const Options& o, const Scene& scene) {
+#if !PLAB_HAVE_ORACLE
+  (void)o, (void)scene;
+  throw std::runtime_error("--explain needs the kit's oracle, which this build leaves out (a "
+                           "graded build of a submission); run it with the kit's own build");
+#else
   std::vector<int> which;
   const auto colon = o.explain.find(':');
   const long long k = std::stoll(o.explain.substr(0, colon));
@@ -78,6 +90,7 @@ void explain(const Options& o, const Scene& scene) {
   for (long long s = 0; s < k; ++s) stage->step();
   stage->read(p);
   std::fputs(describe_events(scene.box, p, which).c_str(), stdout);
+#endif
 }
 
 }  // namespace plab::runner

@@ -7,7 +7,6 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
-#include "plab/grading.hpp"
 
 namespace plab {
 namespace {
@@ -116,8 +115,8 @@ void Audit::step(const Box& box, const Particles& before, const Particles& after
     pair_growth += dp;
   }
   if (pair_growth % 2 != 0) ++counter_errors;
-  if (!with_oracle) return;
-  const Plan plan = plan_step(box, before);
+  if (!with_oracle || oracle == nullptr) return;
+  const Plan plan = oracle(box, before);
   for (std::size_t i = 0; i < after.size(); ++i) {
     const int j = plan.partner[i];
     if (j == Plan::kFree) continue;

@@ -1,5 +1,5 @@
 /// \file grading.cpp
-/// \brief The autograder's helpers: the greedy oracle, event descriptions, one step from each state.
+/// \brief The autograder's helper that runs in the stage's program: one step from each state.
 #include "plab/grading.hpp"
 
 #include <algorithm>
@@ -9,42 +9,6 @@
 #include "plab/io.hpp"
 
 namespace plab {
-
-Plan plan_step(const Box& box, const Particles& p) {
-  const int n = static_cast<int>(p.size());
-  std::vector<model::Event> events;
-  for (int i = 0; i < n; ++i) {
-    const model::Event w = wall_candidate(box, p, i);
-    if (model::in_step(w.t)) events.push_back(w);
-    for (int j = i + 1; j < n; ++j) {
-      const model::Event e = pair_candidate(box, p, i, j);
-      if (model::in_step(e.t)) events.push_back(e);
-    }
-  }
-  return greedy_plan(events, p.size());
-}
-
-std::string describe_events(const Box& box, const Particles& p, const std::vector<int>& which) {
-  const Plan plan = plan_step(box, p);
-  std::ostringstream s;
-  char t[64];
-  for (const int i : which) {
-    if (i < 0 || i >= static_cast<int>(p.size())) continue;
-    s << "particle " << i << ": ";
-    const int j = plan.partner[i];
-    if (j == Plan::kFree) {
-      s << "moves freely";
-    } else if (j == Plan::kWall) {
-      std::snprintf(t, sizeof t, "%.8f", model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r));
-      s << "hits a wall at t = " << t;
-    } else {
-      std::snprintf(t, sizeof t, "%.8f", plan.time[i]);
-      s << "pair collision with " << j << " at t = " << t;
-    }
-    s << "\n";
-  }
-  return s.str();
-}
 
 void step_from_each(const Box& box, const std::vector<OutputBlock>& blocks,
                     const MakeStepper& make, std::FILE* out) {

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <string>
 
+#include "plab/plan.hpp"
 #include "plab/scene.hpp"
 
 namespace plab {
@@ -27,12 +28,15 @@ struct Audit {
                                   //!< or an odd sum of pair counters
   long long collisions_checked = 0;  //!< collisions whose energy change was measured
   std::FILE* log = nullptr;       //!< one JSON line per audited state (optional)
+  /// The greedy oracle the collision check plans with (plab::plan_step(), oracle.hpp), or nullptr
+  /// in a build without it: then steps are audited for their counters only.
+  Plan (*oracle)(const Box&, const Particles&) = nullptr;
 
   /// Audits one state (after step `step`).
   void state(const Box& box, const Particles& p, long long step);
   /// Audits one step of model.md's stepped model from `before` to `after`: counters, and, when
-  /// `with_oracle` (small scenes: the kit's greedy oracle is O(N^2)), the energy of each
-  /// collision against its partner's.
+  /// `with_oracle` (small scenes: the kit's greedy oracle is O(N^2)) and `oracle` is set, the
+  /// energy of each collision against its partner's.
   void step(const Box& box, const Particles& before, const Particles& after, bool with_oracle);
   /// The summary as JSON.
   [[nodiscard]] std::string json() const;

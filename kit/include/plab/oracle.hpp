@@ -1,0 +1,29 @@
+/// \file oracle.hpp
+/// \brief The kit's greedy oracle: the events of one step by model.md's rule, computed the
+/// plainest way, to explain a divergence (`--explain`) and to audit collisions (`--audit`).
+///
+/// It is a whole step, so a stage must not call it: it lives in its own library (plab::oracle,
+/// kit/src/oracle.cpp), which the kit's own builds link into the runner, and which a graded build
+/// of a submission does not have (the grader's sandbox gets the kit without oracle.cpp, and the
+/// runner is built there with PLAB_HAVE_ORACLE=0).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "plab/plan.hpp"
+#include "plab/scene.hpp"
+
+namespace plab {
+
+/// The events of one step by model.md's rule, computed the plainest way: every candidate (walls,
+/// pairs with t < 1) sorted by key, each accepted when its particles are still free. O(N^2 log N):
+/// an independent oracle for diagnosis and tests, not a stage.
+Plan plan_step(const Box& box, const Particles& p);
+
+/// One line per particle of `which` saying its event in the step that starts from `p`, e.g.
+/// `particle 17: pair collision with 42 at t = 0.31270000`, `particle 3: wall at t = 0.5`,
+/// `particle 8: moves freely`.
+std::string describe_events(const Box& box, const Particles& p, const std::vector<int>& which);
+
+}  // namespace plab
