@@ -444,20 +444,17 @@ TEST(RanksScenes, ParticlesOnBorders) {
 }
 
 /// A dense scene where many pairs straddle the borders.
-TEST(RanksScenes, DenseAcrossBorders) {
-  expect_same_on_ranks(plab::generate_scene({300, 60, 1, 20, plab::Mode::kPrint, 20195}),
-                       "a dense scene (plab gen --n 300 --l 60 --r 1 --steps 20 --seed 20195)");
+plab::Scene dense_scene() {
+  return plab::generate_scene({300, 60, 1, 20, plab::Mode::kPrint, 20195});
 }
 
 /// Particles faster than a slab is wide: each step they cross several slabs, or the whole box.
-TEST(RanksScenes, FasterThanASlab) {
-  expect_same_on_ranks(
-      plab::generate_scene({60, 100, 1, 20, plab::Mode::kPrint, 20196, 60, 300}),
-      "fast particles (plab gen --n 60 --l 100 --r 1 --steps 20 --seed 20196 --speed 60:300)");
+plab::Scene fast_scene() {
+  return plab::generate_scene({60, 100, 1, 20, plab::Mode::kPrint, 20196, 60, 300});
 }
 
-/// More ranks than particles, and slabs with no particle at all.
-TEST(RanksScenes, EmptySlabs) {
+/// Three particles in the first of four slabs: more ranks than particles, and empty slabs.
+plab::Scene empty_slabs_scene() {
   plab::Scene scene;
   scene.box = {40, 1};
   scene.steps = 40;
@@ -467,7 +464,23 @@ TEST(RanksScenes, EmptySlabs) {
   p.y = {20, 20, 30};
   p.vx = {1, -1, 0.5};
   p.vy = {0, 0, -1};
-  expect_same_on_ranks(scene, "3 particles in the first slab of 4");
+  return scene;
+}
+
+TEST(RanksScenes, DenseAcrossBorders) {
+  expect_same_on_ranks(dense_scene(),
+                       "a dense scene (plab gen --n 300 --l 60 --r 1 --steps 20 --seed 20195)");
+}
+
+TEST(RanksScenes, FasterThanASlab) {
+  expect_same_on_ranks(
+      fast_scene(),
+      "fast particles (plab gen --n 60 --l 100 --r 1 --steps 20 --seed 20196 --speed 60:300)");
+}
+
+/// More ranks than particles, and slabs with no particle at all.
+TEST(RanksScenes, EmptySlabs) {
+  expect_same_on_ranks(empty_slabs_scene(), "3 particles in the first slab of 4");
 }
 
 // -- An MPI stage's GPU path (08 with nvcc: --device gpu, one GPU per rank) -----------------------
@@ -528,20 +541,9 @@ TEST(GpuPathScenes, CutScenes) {
   if (!plab::stage_info().mpi) GTEST_SKIP() << this_name() << " runs on one process";
   PLAB_SKIP_WITHOUT_GPU_PATH();
   const std::string gpu = "--device gpu";
-  expect_same_on_ranks(plab::generate_scene({300, 60, 1, 20, plab::Mode::kPrint, 20195}),
-                       "a dense scene on the GPU", gpu, 3);
-  expect_same_on_ranks(plab::generate_scene({60, 100, 1, 20, plab::Mode::kPrint, 20196, 60, 300}),
-                       "fast particles on the GPU", gpu, 3);
-  plab::Scene scene;
-  scene.box = {40, 1};
-  scene.steps = 40;
-  scene.particles.resize(3);
-  plab::Particles& p = scene.particles;
-  p.x = {3, 7, 5};
-  p.y = {20, 20, 30};
-  p.vx = {1, -1, 0.5};
-  p.vy = {0, 0, -1};
-  expect_same_on_ranks(scene, "3 particles in the first slab, on the GPU", gpu, 3);
+  expect_same_on_ranks(dense_scene(), "a dense scene on the GPU", gpu, 3);
+  expect_same_on_ranks(fast_scene(), "fast particles on the GPU", gpu, 3);
+  expect_same_on_ranks(empty_slabs_scene(), "3 particles in the first slab, on the GPU", gpu, 3);
 }
 
 }  // namespace

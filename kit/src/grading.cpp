@@ -2,10 +2,6 @@
 /// \brief The autograder's helper that runs in the stage's program: one step from each state.
 #include "plab/grading.hpp"
 
-#include <algorithm>
-#include <cstdlib>
-#include <sstream>
-
 #include "plab/io.hpp"
 
 namespace plab {
