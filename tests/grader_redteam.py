@@ -186,10 +186,10 @@ ENTRY
 """,
     "call-oracle": r"""
 #include "plab/plan.hpp"
-#if __has_include("KIT/kit/src/oracle.cpp")
-#include "KIT/kit/src/oracle.cpp"
-#elif __has_include("../../kit/src/oracle.cpp")
-#include "../../kit/src/oracle.cpp"
+#if __has_include("KIT/kit/instructor/src/oracle.cpp")
+#include "KIT/kit/instructor/src/oracle.cpp"
+#elif __has_include("../../kit/instructor/src/oracle.cpp")
+#include "../../kit/instructor/src/oracle.cpp"
 #endif
 namespace plab {
 Plan plan_step(const Box& box, const Particles& p);  // the kit's oracle (plab/oracle.hpp)

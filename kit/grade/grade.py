@@ -218,7 +218,7 @@ class Grader:
             source = self.kit / item
             if source.is_dir():
                 shutil.copytree(source, src / item, ignore=shutil.ignore_patterns(
-                    "grade", "__pycache__", "oracle.cpp"))
+                    "grade", "__pycache__", "instructor"))
             else:
                 shutil.copy2(source, src / item)
         built = {}

@@ -29,7 +29,7 @@ import tempfile
 
 # Tracked paths that are the instructor's, never a student's: the solutions, the CI, the student
 # README's own source (it becomes README.md), and the instructor's README (replaced).
-INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "README.md")
+INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "README.md")
 # Files that belong to nobody's copy even when tracked by mistake: logs, build folders, scratch.
 SCRATCH = ("*.log", "*.partial", "*.orig", "*.rej", "*.swp", "*~", "*.pyc", "__pycache__/*",
            "build/*", "build-*/*", ".configure.log")

@@ -3,8 +3,8 @@
 /// plainest way, to explain a divergence (`--explain`) and to audit collisions (`--audit`).
 ///
 /// It is a whole step, so a stage must not call it: it lives in its own library (plab::oracle,
-/// kit/src/oracle.cpp), which the kit's own builds link into the runner, and which a graded build
-/// of a submission does not have (the grader's sandbox gets the kit without oracle.cpp, and the
+/// kit/instructor/src/oracle.cpp), which the kit's own builds link into the runner, and which a graded build
+/// of a submission does not have (the grader's sandbox gets the kit without kit/instructor/, and the
 /// runner is built there with PLAB_HAVE_ORACLE=0).
 #pragma once
 
