@@ -1,0 +1,44 @@
+#!/usr/bin/env python3
+"""Checks `plab report`: on the reference stage 03 with two sizes and two thread counts it writes
+report.md with this machine's description, one table row per configuration (the timings' own CSV),
+the three figures as PNG images of a real size, and the handout's questions. Run by CTest (label
+report).
+
+  report_check.py PLAB_PROGRAM SCRATCH_DIR
+"""
+import csv
+import pathlib
+import shutil
+import subprocess
+import sys
+
+from PIL import Image
+
+plab, scratch = sys.argv[1], pathlib.Path(sys.argv[2])
+shutil.rmtree(scratch, ignore_errors=True)
+out = scratch / "report-03"
+done = subprocess.run([plab, "report", "--stage", "03", "--impl", "solution", "--n", "100,200",
+                       "--threads", "1,2", "--steps", "5", "--runs", "1", "--out", str(out)],
+                      capture_output=True, text=True)
+if done.returncode != 0:
+    sys.exit(f"plab report exited {done.returncode}:\n{done.stdout}\n{done.stderr}")
+md = (out / "report.md").read_text()
+rows = list(csv.DictReader(open(out / "bench.csv", newline="")))
+assert len(rows) == 4, f"{len(rows)} timings, expected 2 sizes x 2 thread counts"
+for r in rows:  # every timing is in the table, as measured
+    line = f"| {r['n']} | {r['threads']} | {float(r['median_s']):.3f} |"
+    assert line in md, f"the table has no row {line!r}"
+for part in ("## The machine", "| cores the OS sees |", "## Measurements",
+             "## Questions from the handout (handouts/03-"):
+    assert part in md, f"report.md has no {part!r}"
+questions = md.split("## Questions from the handout", 1)[1]
+assert "has no section named Questions" not in questions and len(questions.strip()) > 80, \
+    f"the handout's questions are missing:\n{questions}"
+for fig in ("time-vs-n.png", "speedup.png", "efficiency.png"):
+    assert f"]({fig})" in md, f"report.md does not show {fig}"
+    with Image.open(out / fig) as im:
+        assert im.format == "PNG" and im.size[0] > 300 and im.size[1] > 200, (fig, im.size)
+bad = subprocess.run([plab, "report", "--stage", "42"], capture_output=True, text=True)
+assert bad.returncode != 0 and "42" in bad.stderr, f"stage 42 accepted:\n{bad.stderr}"
+shutil.rmtree(scratch)
+print("plab report: table, figures and questions written")
