@@ -23,6 +23,7 @@ void add_test(CLI::App& app);    //!< `plab test`: run the test suite with CTest
 void add_docs(CLI::App& app);    //!< `plab docs`: build the HTML docs with Doxygen
 void add_demo(CLI::App& app);    //!< `plab demo`: the reference on the course and demo scenes
 void add_bench(CLI::App& app);   //!< `plab bench`: timings, medians, speedups, CSV
+void add_similar(CLI::App& app); //!< `plab similar`: submissions ranked by shared code
 void add_report(CLI::App& app);  //!< `plab report`: the student's report skeleton, figures included
 
 /// The exit status the chosen subcommand asked for.

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   plab::cli::add_demo(app);
   plab::cli::add_bench(app);
   plab::cli::add_report(app);
+  plab::cli::add_similar(app);
   plab::cli::add_render(app);
   plab::cli::add_grade(app);
   plab::cli::add_release(app);

@@ -1,0 +1,204 @@
+#!/usr/bin/env python3
+"""plab similar: ranks the pairs of a class's submissions of one stage by how much code they share,
+with copydetect (winnowed fingerprints of the token stream, names normalised, so renamed
+identifiers, moved functions and changed comments do not hide a copy) and the stage's starting
+point as boilerplate (the given code every student shares is ignored). Writes an offline HTML page
+with the pairs side by side, the shared code highlighted.
+
+A submission is a folder or a zip, one per student, holding the stage's files anywhere inside
+(stages/NN-name/, NN-name/, or flat). Symbolic links are never followed.
+"""
+import argparse
+import html
+import json
+import pathlib
+import re
+import shutil
+import sys
+import tempfile
+import zipfile
+
+from copydetect import CopyDetector
+
+EXTENSIONS = (".cpp", ".cu", ".cuh", ".hpp", ".h", ".cc")
+
+
+def stage_folder(kit, stage):
+    found = sorted((kit / "stages").glob(f"{stage}-*"))
+    if not found:
+        sys.exit(f"plab similar: the kit has no stage {stage} (stages/{stage}-*)")
+    return found[0]
+
+
+def sources_in(root, stage_name):
+    """The stage's source files of one submission: in a folder named like the stage if there is
+    one, else every source file at its top level; links are skipped."""
+    def real_files(folder):
+        return sorted(p for p in folder.iterdir()
+                      if p.is_file() and not p.is_symlink() and p.suffix in EXTENSIONS)
+    for folder in sorted(root.rglob(stage_name)):
+        if folder.is_dir() and not folder.is_symlink():
+            return real_files(folder)
+    return real_files(root)
+
+
+def unpack(entry, scratch):
+    """A submission as a folder: a zip is extracted (no links, no paths outside)."""
+    if entry.is_dir() and not entry.is_symlink():
+        return entry
+    dest = scratch / ("zip-" + entry.stem)
+    with zipfile.ZipFile(entry) as z:
+        for info in z.infolist():
+            name = pathlib.PurePosixPath(info.filename)
+            mode = info.external_attr >> 16
+            if info.is_dir() or name.is_absolute() or ".." in name.parts or (mode & 0o170000) == 0o120000:
+                continue
+            target = dest / name
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_bytes(z.read(info))
+    return dest
+
+
+def gather(submissions, stage_name, scratch):
+    """{student: one file holding their stage's sources, in name order}."""
+    flat = scratch / "students"
+    flat.mkdir()
+    out = {}
+    skipped = []
+    for entry in sorted(submissions.iterdir()):
+        if entry.is_symlink() or not (entry.is_dir() or entry.suffix == ".zip"):
+            continue
+        student = re.sub(r"\.zip$", "", entry.name)
+        try:
+            files = sources_in(unpack(entry, scratch), stage_name)
+        except (zipfile.BadZipFile, OSError) as e:
+            skipped.append(f"{entry.name} ({e})")
+            continue
+        if not files:
+            skipped.append(f"{entry.name} (no source file of {stage_name})")
+            continue
+        text = "".join(f"// ---- {f.name}\n{f.read_text(errors='replace')}\n" for f in files)
+        path = flat / f"{student}.cpp"
+        path.write_text(text)
+        out[student] = path
+    return out, skipped
+
+
+def boilerplate(folder, scratch):
+    """The starting point's files, concatenated the same way (one file per source, too)."""
+    dest = scratch / "boilerplate"
+    dest.mkdir()
+    for f in sorted(folder.iterdir()):
+        if f.suffix in EXTENSIONS:
+            shutil.copy2(f, dest / (f.name + ".cpp"))
+    return dest
+
+
+def rank(files, boiler):
+    """Every pair with its similarity (the larger of the two shares of shared code)."""
+    det = CopyDetector(test_dirs=[str(next(iter(files.values())).parent)],
+                       boilerplate_dirs=[str(boiler)], extensions=["cpp"], display_t=0.0,
+                       autoopen=False, silent=True, noise_t=25, guarantee_t=25)
+    det.run()
+    student = {str(p): s for s, p in files.items()}
+    pairs = {}
+    for sim_a, sim_b, fa, fb, code_a, code_b, overlap in det.get_copied_code_list():
+        a, b = student[str(fa)], student[str(fb)]
+        if a == b:
+            continue
+        key = tuple(sorted((a, b)))
+        score = max(sim_a, sim_b)
+        if key not in pairs or score > pairs[key]["score"]:
+            left = (code_a, sim_a) if key[0] == a else (code_b, sim_b)
+            right = (code_b, sim_b) if key[0] == a else (code_a, sim_a)
+            pairs[key] = {"a": key[0], "b": key[1], "score": float(score), "overlap": int(overlap),
+                          "left": left, "right": right}
+    return sorted(pairs.values(), key=lambda p: -p["score"])
+
+
+PAGE = """<!DOCTYPE html><html><head><meta charset="utf-8"><title>plab similar: stage {stage}</title>
+<style>
+body {{ font-family: sans-serif; margin: 1.5em; }} table {{ border-collapse: collapse; }}
+td, th {{ border: 1px solid #ccc; padding: 0.2em 0.6em; }} .flag {{ background: #fdd; }}
+.pair {{ display: flex; gap: 1em; }} .pair pre {{ flex: 1; overflow: auto; max-height: 40em;
+background: #f8f8f8; padding: 0.5em; font-size: 0.8em; }}
+.highlight-red {{ background: #f99; }} .highlight-green {{ background: #9e9; }}
+</style></head><body>
+<h1>Stage {stage}: pairs of submissions by shared code</h1>
+<p>{count} submissions, {npairs} pairs compared with copydetect (names normalised), the starting
+point ignored as boilerplate. Flagged (at or above {threshold:.0%}): {nflag}. A flag is a reason to
+read both, not a verdict.</p>{skipped}
+<table><tr><th>#</th><th>pair</th><th>similarity</th><th>shared tokens</th></tr>{rows}</table>
+{details}</body></html>"""
+
+
+def write_page(path, stage, files, pairs, threshold, skipped, top):
+    rows, details = [], []
+    for k, p in enumerate(pairs, 1):
+        flag = ' class="flag"' if p["score"] >= threshold else ""
+        link = f'<a href="#pair{k}">{html.escape(p["a"])} / {html.escape(p["b"])}</a>' if k <= top \
+            else f'{html.escape(p["a"])} / {html.escape(p["b"])}'
+        rows.append(f'<tr{flag}><td>{k}</td><td>{link}</td><td>{p["score"]:.0%}</td>'
+                    f'<td>{p["overlap"]}</td></tr>')
+        if k <= top:
+            details.append(
+                f'<h2 id="pair{k}">{k}. {html.escape(p["a"])} and {html.escape(p["b"])}: '
+                f'{p["score"]:.0%}</h2><div class="pair">'
+                f'<pre><b>{html.escape(p["a"])}</b> ({p["left"][1]:.0%} of it shared)\n{p["left"][0]}</pre>'
+                f'<pre><b>{html.escape(p["b"])}</b> ({p["right"][1]:.0%} of it shared)\n{p["right"][0]}</pre>'
+                f'</div>')
+    note = ("<p>Not compared: " + html.escape("; ".join(skipped)) + "</p>") if skipped else ""
+    path.write_text(PAGE.format(stage=stage, count=len(files), npairs=len(files) * (len(files) - 1) // 2,
+                                threshold=threshold, nflag=sum(p["score"] >= threshold for p in pairs),
+                                skipped=note, rows="".join(rows), details="".join(details)))
+
+
+def main():
+    ap = argparse.ArgumentParser(prog="plab similar", description=__doc__.split("\n\n")[0])
+    ap.add_argument("submissions", type=pathlib.Path, help="a folder with one folder or zip per student")
+    ap.add_argument("--stage", required=True, help="the stage, e.g. 03")
+    ap.add_argument("--out", type=pathlib.Path, default=None,
+                    help="the HTML report (default: similar-NN.html)")
+    ap.add_argument("--threshold", type=float, default=0.75,
+                    help="flag pairs at or above this similarity (0..1; default %(default)s)")
+    ap.add_argument("--json", type=pathlib.Path, default=None,
+                    help="also write the ranking as JSON (pairs, similarity, flagged)")
+    ap.add_argument("--show", type=int, default=20, help="pairs shown side by side (default %(default)s)")
+    ap.add_argument("--kit", type=pathlib.Path, default=pathlib.Path(__file__).resolve().parents[2],
+                    help=argparse.SUPPRESS)
+    a = ap.parse_args()
+    stage = a.stage.zfill(2)
+    if not a.submissions.is_dir():
+        sys.exit(f"plab similar: {a.submissions} is not a folder")
+    folder = stage_folder(a.kit, stage)
+    out = a.out or pathlib.Path(f"similar-{stage}.html")
+    with tempfile.TemporaryDirectory(prefix="plab-similar-") as tmp:
+        scratch = pathlib.Path(tmp)
+        files, skipped = gather(a.submissions, folder.name, scratch)
+        if len(files) < 2:
+            sys.exit(f"plab similar: {len(files)} submission(s) with stage {stage} in "
+                     f"{a.submissions}: nothing to compare" +
+                     (f" (not compared: {'; '.join(skipped)})" if skipped else ""))
+        print(f"plab similar: comparing {len(files)} submissions of stage {stage} "
+              f"({len(files) * (len(files) - 1) // 2} pairs)", flush=True)
+        pairs = rank(files, boilerplate(folder, scratch))
+        write_page(out, stage, files, pairs, a.threshold, skipped, a.show)
+    if a.json:
+        a.json.write_text(json.dumps({
+            "stage": stage, "threshold": a.threshold, "submissions": sorted(files),
+            "not_compared": skipped,
+            "pairs": [{"a": p["a"], "b": p["b"], "similarity": p["score"],
+                       "shared_tokens": p["overlap"], "flagged": p["score"] >= a.threshold}
+                      for p in pairs]}, indent=1))
+    print(f"{'rank':>4}  {'similarity':>10}  pair")
+    for k, p in enumerate(pairs[:10], 1):
+        mark = "  FLAGGED" if p["score"] >= a.threshold else ""
+        print(f"{k:>4}  {p['score']:>10.0%}  {p['a']} / {p['b']}{mark}")
+    for s in skipped:
+        print(f"not compared: {s}")
+    print(f"plab similar: {sum(p['score'] >= a.threshold for p in pairs)} pair(s) at or above "
+          f"{a.threshold:.0%}; side by side: {out}")
+
+
+if __name__ == "__main__":
+    main()

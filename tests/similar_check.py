@@ -1,0 +1,50 @@
+#!/usr/bin/env python3
+"""Checks `plab similar`: a class of stage 03 submissions written independently (the kit's
+solution and two others in tests/similar/, each checked against the golden files when written)
+with one planted copy (tests/similar/dee: bo's code with every identifier renamed, its functions
+in another order and its comments rewritten), one submission as a zip and one with no stage 03.
+The copy must rank first and be flagged; no independent pair may be flagged; the HTML page must
+show the pair side by side and load nothing from the network. Run by CTest (label kit).
+
+  similar_check.py PLAB_PROGRAM KIT_SOURCE SCRATCH_DIR
+"""
+import json
+import pathlib
+import shutil
+import subprocess
+import sys
+import zipfile
+
+plab, kit, scratch = sys.argv[1], pathlib.Path(sys.argv[2]), pathlib.Path(sys.argv[3])
+shutil.rmtree(scratch, ignore_errors=True)
+cls = scratch / "class"
+for who in ("bo", "dee"):
+    (cls / who / "stages" / "03-openmp").mkdir(parents=True)
+    shutil.copy2(kit / "tests" / "similar" / who / "step.cpp", cls / who / "stages" / "03-openmp")
+(cls / "ann").mkdir()  # flat upload: the kit's own solution
+shutil.copy2(kit / "solutions" / "03-openmp" / "step.cpp", cls / "ann")
+with zipfile.ZipFile(cls / "cy.zip", "w") as z:  # a zip upload
+    z.write(kit / "tests" / "similar" / "cy" / "step.cpp", "03-openmp/step.cpp")
+(cls / "eve" / "stages" / "02-heap").mkdir(parents=True)  # no stage 03: not compared
+shutil.copy2(kit / "stages" / "02-heap" / "step.cpp", cls / "eve" / "stages" / "02-heap")
+
+page, ranking = scratch / "similar.html", scratch / "similar.json"
+done = subprocess.run([plab, "similar", str(cls), "--stage", "3", "--out", str(page),
+                       "--json", str(ranking)], capture_output=True, text=True)
+if done.returncode != 0:
+    sys.exit(f"plab similar exited {done.returncode}:\n{done.stdout}\n{done.stderr}")
+r = json.loads(ranking.read_text())
+pairs = r["pairs"]
+assert r["submissions"] == ["ann", "bo", "cy", "dee"], r["submissions"]
+assert any("eve" in s for s in r["not_compared"]), r["not_compared"]
+assert {pairs[0]["a"], pairs[0]["b"]} == {"bo", "dee"}, f"the copy is not first: {pairs[:2]}"
+assert pairs[0]["flagged"], f"the copy is not flagged: {pairs[0]}"
+honest = [p for p in pairs if {p["a"], p["b"]} != {"bo", "dee"}]
+assert not any(p["flagged"] for p in honest), f"an independent pair is flagged: {honest}"
+text = page.read_text()
+assert "bo and dee" in text and "highlight-red" in text, "the page does not show the pair"
+assert "http://" not in text and "https://" not in text, "the page loads from the network"
+assert "1         " in done.stdout or "FLAGGED" in done.stdout, done.stdout
+shutil.rmtree(scratch)
+print(f"plab similar: the copy first at {pairs[0]['similarity']:.0%}, the closest independent "
+      f"pair {honest[0]['similarity']:.0%} (threshold {r['threshold']:.0%})")
