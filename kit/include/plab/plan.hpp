@@ -60,24 +60,33 @@ struct FieldPointers {
   long long* wc;   //!< collisions with walls so far
 };
 
+/// apply_planned()'s wall event unless a stage gives its own: model::wall_event() as a function
+/// object. A stage passes another form of the same event (stage 05's branchless one) as a
+/// struct with this call operator; it must give the same bits.
+struct BranchyWall {
+  /// model::wall_event() on particle `(x, y, vx, vy, wc)`.
+  template <class Real>
+  PLAB_HD void operator()(Real& x, Real& y, Real& vx, Real& vy, long long& wc, Real L,
+                          Real r) const {
+    model::wall_event(x, y, vx, vy, wc, L, r);
+  }
+};
+
 /// Applies particle `i`'s planned event, the plan given as plain arrays (`partner[i]`:
 /// Plan::kFree, Plan::kWall or the other particle; `time[i]`: the pair time, read for a pair
 /// only): a free move, a wall event, or a pair event applied by its lower index, which writes
 /// both particles. Host and device: apply_one() calls it on the CPU, the CUDA stages' `apply`
 /// kernels on the GPU, so both run the same operations in the same order. `p`: any struct of
-/// field pointers named as FieldPointers. `Branchless` picks model::wall_event_branchless()
-/// (the same bits, less divergence on a GPU) over model::wall_event().
-template <bool Branchless = false, class Fields, class Real>
+/// field pointers named as FieldPointers. `Wall` is the form of the wall event (BranchyWall, or
+/// a stage's own struct with the same call operator, chosen once at compile time).
+template <class Wall = BranchyWall, class Fields, class Real>
 PLAB_HD inline void apply_planned(const Fields& p, const int* partner, const double* time, int i,
                                   Real L, Real r) {
   const int j = partner[i];
   if (j == Plan::kFree) {
     model::free_move(p.x[i], p.y[i], p.vx[i], p.vy[i]);
   } else if (j == Plan::kWall) {
-    if constexpr (Branchless)
-      model::wall_event_branchless(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], L, r);
-    else
-      model::wall_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], L, r);
+    Wall{}(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], L, r);
   } else if (i < j) {
     model::pair_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.pc[i], p.x[j], p.y[j], p.vx[j], p.vy[j],
                       p.pc[j], static_cast<Real>(time[i]), L, r);
