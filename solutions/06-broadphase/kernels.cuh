@@ -33,23 +33,26 @@ struct Grid {
   [[nodiscard]] __host__ __device__ int cells() const { return side * side; }  //!< of a slab
 };
 
-/// One pair event the search files: particles lo < hi meet at time t (steps).
+/// One pair event the search files.
 struct Pair {
-  int lo, hi;
-  double t;
+  int lo;    //!< the lower particle index
+  int hi;    //!< the higher
+  double t;  //!< the pair time (steps)
 };
 
 /// One step's working arrays (pointers into memory the host class owns).
 struct StepArrays {
-  int *key_in, *id_in;    //!< per entry k * N + i: its bucket (slab * cells + cell), particle i
-  int *key_out, *id_out;  //!< the same, sorted by bucket
+  int* key_in;   //!< per entry k * N + i: its bucket, slab * cells + cell
+  int* id_in;    //!< ... its particle i
+  int* key_out;  //!< the keys, sorted
+  int* id_out;   //!< the particles, in the sorted keys' order
   int* start;             //!< slabs * cells + 1: bucket b holds entries [start[b], start[b + 1])
   Pair* list;             //!< the pairs filed this step
   int capacity;           //!< room in `list`
   int* partner;           //!< the plan: Plan::kFree, Plan::kWall, or the other particle
   double* ptime;          //!< the plan's pair time
-  unsigned long long *best_t, *best_pair;  //!< a round's earliest pair of each particle: bits of
-                                           //!< its time, then lo << 32 | hi
+  unsigned long long* best_t;     //!< in a round: each particle's earliest pair time (bits)
+  unsigned long long* best_pair;  //!< ... the smallest lo << 32 | hi at that time
   Flags* flags;           //!< see Flags
 };
 
@@ -58,8 +61,7 @@ __device__ inline double slab_mid(int k, const Grid& g) { return (k + 0.5) / g.s
 
 /// The slab that holds time `t` (0 <= t < 1).
 __device__ inline int slab_of(double t, const Grid& g) {
-  const int k = static_cast<int>(t * g.slabs);
-  return k < g.slabs ? k : g.slabs - 1;
+  return min(static_cast<int>(t * g.slabs), g.slabs - 1);
 }
 
 /// The cell of coordinate `v` along one axis, clamped to [0, side - 1] (0 for not-a-number):

@@ -27,17 +27,17 @@
 namespace plab {
 namespace {
 
-constexpr double kAlpha = 0.5;  //!< slabs per sqrt(N) mean speed / L
+constexpr double kAlpha = 0.5;  //!< slabs per sqrt(N) mean speed / L (--sweep-alpha sets another)
 constexpr long long kMostEntries = 1 << 27;  //!< (slab, particle) entries at most (and 64 slabs)
 constexpr long long kCheckEvery = 32;        //!< steps between two looks at the flags
 
 /// A run of stage 06 on the GPU (cuda::DeviceStepper holds the particles, flags and timer).
 class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
  public:
-  CudaStepper(const Box& box, const Particles& p, std::string device)
+  CudaStepper(const Box& box, const Particles& p, std::string device, double alpha)
       : DeviceStepper(std::move(device), box, p, cuda::Queue::kOwnStream), list_(n_ + 1024),
         partner_(n_), ptime_(n_), best_t_(n_), best_pair_(n_) {
-    choose_grid(p);
+    choose_grid(p, alpha);
     entries_ = static_cast<int>(static_cast<long long>(n_) * grid_.slabs);
     for (auto* v : {&key_in_, &id_in_, &key_out_, &id_out_}) v->resize(entries_);
     start_.resize(static_cast<std::size_t>(grid_.slabs) * grid_.cells() + 1);
@@ -81,16 +81,16 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     }
   }
 
-  /// kAlpha sqrt(N) v / L slabs for the mean speed v, and cells as wide as the reach of a
+  /// alpha sqrt(N) v / L slabs for the mean speed v, and cells as wide as the reach of a
   /// particle of that speed (kernels::reach_of()), at most about 4N a slab. Without a finite
   /// mean speed, one slab and one cell (every pair is tested).
-  void choose_grid(const Particles& p) {
+  void choose_grid(const Particles& p, double alpha) {
     double sum = 0;
     for (int i = 0; i < n_; ++i) sum += std::sqrt(p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i]);
     const double v = n_ > 0 ? sum / n_ : 0, L = box_.L, n = std::max(n_, 1);
     const bool known = std::isfinite(v) && std::isfinite(L) && L > 0;
     const double most = static_cast<double>(std::clamp(kMostEntries / std::max(n_, 1), 1LL, 64LL));
-    grid_.slabs = known ? static_cast<int>(std::clamp(std::ceil(kAlpha * std::sqrt(n) * v / L), 1.0,
+    grid_.slabs = known ? static_cast<int>(std::clamp(std::ceil(alpha * std::sqrt(n) * v / L), 1.0,
                                                       most))
                         : 1;
     grid_.reach = 2 * box_.r + 1e-6 * (L + box_.r);
@@ -125,7 +125,8 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
 std::unique_ptr<Stepper> make_gpu_stepper(const Box& box, Particles& p,
                                           const StageOptions& options) {
   if (options.device == Device::kAuto && !cuda::missing_device().empty()) return nullptr;
-  return std::make_unique<CudaStepper>(box, p, cuda::require_device());
+  return std::make_unique<CudaStepper>(box, p, cuda::require_device(),
+                                       options.sweep_alpha > 0 ? options.sweep_alpha : kAlpha);
 }
 
 }  // namespace plab

@@ -33,23 +33,26 @@ struct Grid {
   [[nodiscard]] __host__ __device__ int cells() const { return side * side; }  //!< of a slab
 };
 
-/// One pair event the search files: particles lo < hi meet at time t (steps).
+/// One pair event the search files.
 struct Pair {
-  int lo, hi;
-  double t;
+  int lo;    //!< the lower particle index
+  int hi;    //!< the higher
+  double t;  //!< the pair time (steps)
 };
 
 /// One step's working arrays (pointers into memory the host class owns).
 struct StepArrays {
-  int *key_in, *id_in;    //!< per entry k * N + i: its bucket (slab * cells + cell), particle i
-  int *key_out, *id_out;  //!< the same, sorted by bucket
+  int* key_in;   //!< per entry k * N + i: its bucket, slab * cells + cell
+  int* id_in;    //!< ... its particle i
+  int* key_out;  //!< the keys, sorted
+  int* id_out;   //!< the particles, in the sorted keys' order
   int* start;             //!< slabs * cells + 1: bucket b holds entries [start[b], start[b + 1])
   Pair* list;             //!< the pairs filed this step
   int capacity;           //!< room in `list`
   int* partner;           //!< the plan: Plan::kFree, Plan::kWall, or the other particle
   double* ptime;          //!< the plan's pair time
-  unsigned long long *best_t, *best_pair;  //!< a round's earliest pair of each particle: bits of
-                                           //!< its time, then lo << 32 | hi
+  unsigned long long* best_t;     //!< in a round: each particle's earliest pair time (bits)
+  unsigned long long* best_pair;  //!< ... the smallest lo << 32 | hi at that time
   Flags* flags;           //!< see Flags
 };
 
@@ -58,8 +61,7 @@ __device__ inline double slab_mid(int k, const Grid& g) { return (k + 0.5) / g.s
 
 /// The slab that holds time `t` (0 <= t < 1).
 __device__ inline int slab_of(double t, const Grid& g) {
-  const int k = static_cast<int>(t * g.slabs);
-  return k < g.slabs ? k : g.slabs - 1;
+  return min(static_cast<int>(t * g.slabs), g.slabs - 1);
 }
 
 /// The cell of coordinate `v` along one axis, clamped to [0, side - 1] (0 for not-a-number):
@@ -109,29 +111,24 @@ __global__ void start_step(int n, StepArrays a) {
   if (i == 0) a.flags->pairs = 0;
 }
 
-// EXERCISE 4: the binning. Kernel `bin`, one thread per particle i and slab k (k = blockIdx.y):
-// entry k * N + i gets id_in = i and key_in = its bucket, k * g.cells() + row * g.side + column
-// of its position at the slab's midpoint (slab_mid(), cell_index()). Kernel `cell_starts`, one
-// thread per entry e of the sorted keys (key_out): start[b] = e for every bucket b after the
-// previous entry's key up to e's own (empty buckets included); the last entry also sets every
-// later bucket, up to start[slabs * cells], to the number of entries.
+// EXERCISE 4: the binning. Kernel `bin`, a thread per particle i and slab k = blockIdx.y: entry
+// k * N + i gets id_in = i and key_in = k * g.cells() + row * g.side + column of its position
+// at the slab's midpoint. Kernel `cell_starts(a, g, entries)`, a thread per sorted entry e:
+// start[b] = e for the buckets b after the previous entry's key up to e's own; the last entry
+// also sets the later ones, up to start[slabs * cells], to `entries`.
 
-// EXERCISE 5: the neighbour search. Kernel `find_pairs(p, box, a, g, entries)`, one thread per
-// sorted entry e (particle i = id_out[e], slab k = key_out[e] / g.cells()): every entry of slab
-// k in the cells within reach_of() of i's midpoint position, along both axes (cells of a row
-// are contiguous: one run of entries a row, from start[...first cell] to start[...last + 1]).
-// For each other particle j that i files (files_pair()): model::pair_time() with the lower
-// index first; file() it when it is in the step, meets in slab k (slab_of(): so once) and
-// comes before both walls (model::before_walls(), wall_of()).
+// EXERCISE 5: the neighbour search. Kernel `find_pairs(p, box, a, g, entries)`, a thread per
+// sorted entry (particle i, slab k): the entries of slab k in the cells within reach_of() of
+// i's midpoint (a row's cells are one run of entries). Each j that i files (files_pair()):
+// model::pair_time(), lower index first; file() it when in the step, in slab k (slab_of()) and
+// before both walls (model::before_walls(), wall_of()).
 
-// EXERCISE 6: the sparse selection. Kernel `select_pairs(a)` in one block of kSelectThreads
-// (nothing when flags->overflow; m = flags->pairs pairs in `list`): rounds, until no pair has
-// both particles free (partner == Plan::kFree). A round, barriers between its parts: (1) each
-// pair with both particles free lowers best_t of both to its time's bits (atomicMin;
-// __double_as_longlong, t >= 0); (2) each such pair whose time is a particle's best_t lowers
-// that particle's best_pair to lo << 32 | hi; (3) a pair that is best_pair of both particles
-// is accepted (partner, ptime of both); (4) every pair's particles get kNone again, and
-// __syncthreads_or() tells whether a pair with both particles free is left. Walls: apply.
+// EXERCISE 6: the sparse selection. Kernel `select_pairs(a)`, one block (nothing when
+// flags->overflow): rounds over the flags->pairs pairs of `list` until none has both particles
+// free (Plan::kFree). A round, with barriers: (1) each free pair lowers best_t of both particles
+// to its time's bits (atomicMin); (2) each free pair at a particle's best_t lowers its best_pair
+// to lo << 32 | hi; (3) a pair that is best_pair of both is accepted (partner, ptime); (4) the
+// bests back to kNone, and __syncthreads_or() says whether a free pair is left.
 
 /// Applies the plan (plab::apply_one()'s code): a particle no pair took hits its wall when its
 /// wall time is in the step. Nothing when the step was stopped.
