@@ -27,7 +27,7 @@
 namespace plab {
 namespace {
 
-constexpr double kAlpha = 0.5;  //!< slabs per sqrt(N) mean speed / L (--sweep-alpha sets another)
+constexpr double kAlpha = 1.0;  //!< slabs per sqrt(N) mean speed / L (--sweep-alpha sets another)
 constexpr long long kMostEntries = 1 << 27;  //!< (slab, particle) entries at most (and 64 slabs)
 constexpr long long kCheckEvery = 32;        //!< steps between two looks at the flags
 
