@@ -217,7 +217,8 @@ def copy_files(kit, head, work, say, through=None):
         shutil.copy2(src, dst)
     shutil.copy2(full / STUDENT_README, release / "README.md")
     for why, paths in sorted(dropped.items()):
-        tops = sorted({p.split("/")[0] + "/" if p.startswith(("solutions/", ".ci/")) else p
+        tops = sorted({p.split("/")[0] + "/" if p.startswith(("solutions/", ".ci/")) else
+                       "/".join(p.split("/")[:2]) + "/" if p.startswith("stages/") else p
                        for p in paths})
         say(f"left out ({why}): {', '.join(tops)}")
     if through is not None:
