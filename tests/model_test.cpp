@@ -292,27 +292,6 @@ TEST(ContinuousTime, ContactTimeFromAnyOrigin) {
   EXPECT_EQ(m::contact_time_from<double>(5, 2, 5, 1, 0, 1, 10, 5, -1, 0, 0, r), kInf);
 }
 
-TEST(ContinuousTime, ContactResponseExchangesNormalComponents) {
-  double vxi = 1, vyi = 0, vxj = -1, vyj = 0;  // head-on along x: the velocities swap
-  m::contact_response<double>(0, 0, vxi, vyi, 2, 0, vxj, vyj);
-  EXPECT_EQ(vxi, -1.0);
-  EXPECT_EQ(vxj, 1.0);
-  EXPECT_EQ(vyi, 0.0);
-  EXPECT_EQ(vyj, 0.0);
-  vxi = 1, vyi = 0, vxj = 0, vyj = 0;  // d = (-1, -1): b = -1, f = -1/2
-  m::contact_response<double>(0, 0, vxi, vyi, 1, 1, vxj, vyj);
-  EXPECT_EQ(vxi, 0.5);
-  EXPECT_EQ(vyi, -0.5);
-  EXPECT_EQ(vxj, 0.5);
-  EXPECT_EQ(vyj, 0.5);
-  vxi = 1, vyi = 0, vxj = -1, vyj = 0;  // normal along y, velocities along x: unchanged
-  m::contact_response<double>(0, 0, vxi, vyi, 0, 2, vxj, vyj);
-  EXPECT_EQ(vxi, 1.0);
-  EXPECT_EQ(vxj, -1.0);
-  EXPECT_EQ(vyi, 0.0);
-  EXPECT_EQ(vyj, 0.0);
-}
-
 TEST(Reflect, FlipsTheAxesHit) {
   double vx = 3, vy = -4;
   m::reflect<double>(vx, vy, true, false);

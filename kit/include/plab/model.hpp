@@ -323,23 +323,4 @@ PLAB_HD inline Real contact_time_from(Real t0, Real xi, Real yi, Real vxi, Real 
   return contact_time(dx, dy, vxi - vxj, vyi - vyj, r);
 }
 
-/// The elastic collision of two equal disks at contact, continuous-time variant: the velocity
-/// components along the line of centres \f$ d = p_i - p_j \f$ are exchanged, in one projection,
-/// \f[ f = \frac{d \cdot (v_i - v_j)}{|d|^2},\qquad
-///     v_i \leftarrow v_i - f\,d,\qquad v_j \leftarrow v_j + f\,d. \f]
-/// Not pair_event()'s form (unit normal and tangent, zeros stored as +0.0), which rounds
-/// differently: the exact stage's golden files depend on this one. Positions are not moved.
-template <class Real>
-PLAB_HD inline void contact_response(Real xi, Real yi, Real& vxi, Real& vyi,
-                                     Real xj, Real yj, Real& vxj, Real& vyj) {
-  const Real dx = xi - xj;
-  const Real dy = yi - yj;
-  const Real b = dx * (vxi - vxj) + dy * (vyi - vyj);
-  const Real f = b / (dx * dx + dy * dy);
-  vxi = vxi - f * dx;
-  vyi = vyi - f * dy;
-  vxj = vxj + f * dx;
-  vyj = vyj + f * dy;
-}
-
 }  // namespace plab::model
