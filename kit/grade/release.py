@@ -28,8 +28,10 @@ import sys
 import tempfile
 
 # Tracked paths that are the instructor's, never a student's: the solutions, the CI, the student
-# README's own source (it becomes README.md), and the instructor's README (replaced).
-INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "README.md")
+# README's own source (it becomes README.md), the instructor's README (replaced), and the page of
+# the kit's engine (handouts/engine.md: how kit/instructor/engine's fast stages work).
+INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "handouts/engine.md",
+                   "README.md")
 # Files that belong to nobody's copy even when tracked by mistake: logs, build folders, scratch.
 SCRATCH = ("*.log", "*.partial", "*.orig", "*.rej", "*.swp", "*~", "*.pyc", "__pycache__/*",
            "build/*", "build-*/*", ".configure.log")

@@ -18,8 +18,8 @@
 //            wall time is never accepted), by the team (plan_team.hpp), then apply.
 //         Memory O(N + candidates + cells), shared by the threads: no N x N anything, and no
 //         copy per thread (but in small scenes). Slab k is sorted from slab k - 1's order, which is nearly right
-//         already, so the sort's writes stay close together (handout 06, "Many cores").
-//  READ   handouts/06-broadphase.md     TEST   ./plab test --impl student --stage 06
+//         already, so the sort's writes stay close together (handouts/engine.md, "Many cores").
+//  READ   handouts/engine.md            TEST   ./plab test --impl engine --stage 06
 // =================================================================================================
 #include <omp.h>
 

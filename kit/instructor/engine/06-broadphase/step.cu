@@ -13,7 +13,7 @@
 //         host from the first state; particles that get faster than v_cut search wider, so it
 //         stays exact for any speed. A step with more pairs than the list holds stops the batch
 //         on the device, and the host redoes it with a longer list.
-//  READ   handouts/06-broadphase.md     TEST   ./plab test --stage 06 (on a GPU machine)
+//  READ   handouts/engine.md    TEST   ./plab test --impl engine --stage 06 (on a GPU machine)
 // =================================================================================================
 #include <algorithm>
 #include <memory>
