@@ -35,7 +35,9 @@ TEST(Grid, CellsClampAndKeepTheOrder) {
   std::uniform_real_distribution<double> coordinate(-20, 30);
   for (int k = 0; k < 1000; ++k) {
     const double a = coordinate(rng), b = coordinate(rng);
-    if (a <= b) EXPECT_LE(g.index_of(a), g.index_of(b)) << a << " " << b;
+    if (a <= b) {
+      EXPECT_LE(g.index_of(a), g.index_of(b)) << a << " " << b;
+    }
   }
   int lo = -1, hi = -1;
   g.indices_within(4.5, 1.2, lo, hi);

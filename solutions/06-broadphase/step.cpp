@@ -107,9 +107,9 @@ void BroadPhase::search(const Box& box, const Particles& p, int k) {
   // EXERCISE 2: the neighbour search. In parallel over the entries: particle i searches every cell
   // within d of its midpoint position along both axes (g_.indices_within()), where d covers any
   // partner no faster than i: they are at most 2r + h(|v_i| + |v_j|) <= 2r + 2h|v_i| apart, plus
-  // the margin for rounding. Test each partner no faster than i (equal speeds: the higher index)
-  // with model.md's pair time, and keep the event if it is in the step, before both walls and in
-  // this slab (the same pair may be near in other slabs too).
+  // the margin for rounding. Test each partner within d and no faster than i (equal speeds: the
+  // higher index) with model.md's pair time, and keep the event if it is in the step, before both
+  // walls and in this slab (the same pair may be near in other slabs too).
   const int taking = start_[g_.cells()];
 #pragma omp parallel
   {
@@ -124,6 +124,8 @@ void BroadPhase::search(const Box& box, const Particles& p, int k) {
       for (int row = y0; row <= y1; ++row) {
         const int to = start_[row * g_.side + x1 + 1];
         for (int b = start_[row * g_.side + x0]; b < to; ++b) {
+          const double dx = x_[b] - x_[a], dy = y_[b] - y_[a];
+          if (!(dx * dx + dy * dy <= d * d)) continue;  // too far apart to meet in this slab
           const int j = id_[b];
           if (!(speed2_[j] < speed2_[i] || (speed2_[j] == speed2_[i] && j > i))) continue;
           const model::Event e = pair_candidate(box, p, std::min(i, j), std::max(i, j));

@@ -82,7 +82,7 @@ void BroadPhase::bin([[maybe_unused]] const Particles& p, [[maybe_unused]] int k
   // one that takes no part); then count the particles of each cell, turn the counts into each
   // cell's first entry (prefix sums: start_), and scatter each particle to its cell's next free
   // entry (id_, and its midpoint position in x_, y_).
-  PLAB_EXERCISE(1, "bin the slab's particles into cells (a counting sort)");
+  PLAB_EXERCISE(1, "bin the slab's particles into cells with a counting sort");
 }
 
 /// Slab k's pairs: each pair that meets in slab k (model.md's pair time, before both walls), once,
