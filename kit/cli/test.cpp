@@ -47,9 +47,9 @@ void add_test(CLI::App& app) {
   auto stage = std::make_shared<std::string>();
   auto long_too = std::make_shared<bool>(false);
   auto* c = app.add_subcommand("test", "Run the test suite (GoogleTest through CTest). Default: "
-                                       "the kit, the solutions and the starting-point checks in "
-                                       "the instructor's copy; the kit and your stages otherwise.");
-  c->add_option("--impl", *impl, "solution or student (default as for run)");
+                                       "the kit, the solutions, the engine and the starting-point "
+                                       "checks in the instructor's copy; the kit and your stages otherwise.");
+  c->add_option("--impl", *impl, "solution, student or engine (default as for run)");
   c->add_option("--stage", *stage, "only this stage's tests, e.g. 01");
   c->add_flag("--long", *long_too, "also the long tests (large scenes, several minutes)");
   auto fuzz = std::make_shared<bool>(false);
@@ -75,7 +75,7 @@ void add_test(CLI::App& app) {
     if (!stage->empty()) {
       args.insert(args.end(), {"-L", "^stage" + two_digits(*stage) + "$", "-L", "^" + which + "$"});
     } else if (which == "solution") {
-      args.insert(args.end(), {"-L", "^(kit|solution|starting-point)$"});
+      args.insert(args.end(), {"-L", "^(kit|solution|starting-point|engine)$"});
     } else {
       args.insert(args.end(), {"-L", "^(kit|student)$"});
     }

@@ -35,10 +35,12 @@ import tempfile
 
 # Tracked paths that are the instructor's, never a student's: the solutions, the CI, the student
 # README's own source (it becomes README.md), the instructor-only code, the instructor's README
-# (replaced), and the measurement logs of the reference solutions (the handouts ask the student to
-# measure).
+# (replaced), the instructor's pages (the measurement logs of the reference solutions and of the
+# kit's engine: the handouts ask the student to measure) and the similarity test's submissions
+# (independent stage 03 solutions).
 INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "README.md",
-                   "handouts/measurements.md")
+                   "handouts/measurements.md", "handouts/engine.md", "handouts/engine-gpu.md",
+                   "handouts/engine-08.md", "tests/similar/")
 # Files that belong to nobody's copy even when tracked by mistake: logs, build folders, scratch.
 SCRATCH = ("*.log", "*.partial", "*.orig", "*.rej", "*.swp", "*~", "*.pyc", "__pycache__/*",
            "build/*", "build-*/*", ".configure.log")
