@@ -1,6 +1,7 @@
 # plab_add_stage()
 #
-# Called from each stage folder's CMakeLists.txt (stages/NN-name or solutions/NN-name). What the
+# Called from each stage folder's CMakeLists.txt (stages/NN-name or solutions/NN-name, and the
+# instructor-only engines, kit/instructor/engine/NN-name: implementation `engine`). What the
 # stage is comes from the folder's stage.json (docs/ARCHITECTURE.md lists its keys):
 #   sources       the stage's sources (they define plab::make_stepper(), see stage.hpp)
 #   cuda_sources  a CPU stage's GPU path, compiled when nvcc is found (else the kit's stand-in
@@ -69,6 +70,8 @@ function(plab_add_stage)
   string(SUBSTRING ${folder} 3 -1 name)
   if(tree STREQUAL "solutions")
     set(impl solution)
+  elseif(tree STREQUAL "engine")
+    set(impl engine)  # kit/instructor/engine/NN-name: the stage's fast version, instructor-only
   else()
     set(impl student)
   endif()
