@@ -13,6 +13,8 @@ std::string two_digits(const std::string& stage) {
 }
 
 void check_impl(const std::string& impl) {
+  if (impl == "engine" && fs::is_directory(fs::path(source_dir()) / tree_of(impl)))
+    return;  // the instructor's kit: the engines, kit/instructor/engine
   if (impl != "solution" && impl != "student")
     throw std::runtime_error("--impl must be 'solution' or 'student', not '" + impl + "'");
 }
@@ -24,7 +26,7 @@ std::string require_stage(const std::string& id, const std::string& impl) {
     exists = exists || s.id == id;
     known += (known.empty() ? "" : ", ") + s.id;
   }
-  const std::string tree = impl == "solution" ? "solutions/" : "stages/";
+  const std::string tree = tree_of(impl) + "/";
   if (!exists)
     throw std::runtime_error("there is no stage " + id + " in " + tree + " (stages: " +
                              (known.empty() ? "none" : known) + ")");

@@ -23,8 +23,12 @@ std::string source_dir() { return PLAB_SOURCE_DIR; }
 std::string build_dir() { return PLAB_BINARY_DIR; }
 std::string bin_dir() { return fs::read_symlink("/proc/self/exe").parent_path().string(); }
 
+std::string tree_of(const std::string& impl) {
+  return impl == "solution" ? "solutions" : impl == "engine" ? "kit/instructor/engine" : "stages";
+}
+
 std::vector<StageDir> stages(const std::string& impl) {
-  const fs::path root = fs::path(source_dir()) / (impl == "solution" ? "solutions" : "stages");
+  const fs::path root = fs::path(source_dir()) / tree_of(impl);
   std::vector<StageDir> found;
   if (!fs::is_directory(root)) return found;
   for (const auto& entry : fs::directory_iterator(root)) {
@@ -40,7 +44,7 @@ nlohmann::json stage_declares(const std::string& id, const std::string& impl,
                               const std::string& key) {
   for (const StageDir& s : stages(impl)) {
     if (s.id != id) continue;
-    const fs::path file = fs::path(source_dir()) / (impl == "solution" ? "solutions" : "stages") /
+    const fs::path file = fs::path(source_dir()) / tree_of(impl) /
                           (s.id + "-" + s.name) / "stage.json";
     std::ifstream in(file);
     if (!in) return nullptr;
