@@ -32,7 +32,7 @@ double fastest_anywhere(const Ranks& r, const Local& s) {
   // EXERCISE 1 (a): every rank needs the same reach, so the fastest speed of the whole scene:
   // combine fastest_here(s) of every rank with one MPI_Allreduce (MPI_DOUBLE, MPI_MAX, r.comm).
   (void)r, (void)s;
-  PLAB_EXERCISE(1, "the halo: the fastest speed over every rank (MPI_Allreduce)");
+  PLAB_EXERCISE(1, "the halo: the fastest speed over every rank, with MPI_Allreduce");
 }
 
 /// 1b. The halo exchange: sends out[q] to every other rank q and returns in[q], what rank q sent
@@ -46,21 +46,21 @@ std::vector<std::vector<Record>> exchange_halo(const Ranks& r,
   // sizeof(Record) bytes; use another tag). Every rank takes part at every d, even with nothing
   // to send: why would a rank that skips an empty message make the others wait for ever?
   (void)r, (void)out;
-  PLAB_EXERCISE(1, "the halo exchange (MPI_Sendrecv, rank by rank)");
+  PLAB_EXERCISE(1, "the halo exchange, rank by rank, with MPI_Sendrecv");
 }
 
 /// 2a. Gives every ghost its owner's value: sends value[k] of each owned k in s.sent_to[q] to
 /// rank q, and receives rank q's values into value[s.ghosts_from[q] .. s.ghosts_from[q + 1]).
 /// Both sides know the counts from the halo.
 template <class T>
-void share_with_ghosts(const Ranks& r, const Local& s, std::vector<T>& value) {
+void to_ghosts(const Ranks& r, const Local& s, std::vector<T>& value) {
   // EXERCISE 2 (a): for every other rank q, pack value[k] of each k in s.sent_to[q] into a buffer
   // of its own, MPI_Isend it to q (MPI_BYTE, size * sizeof(T)), and MPI_Irecv q's values
   // straight into value[s.ghosts_from[q]] (s.ghosts_from[q + 1] - s.ghosts_from[q] of them); post
   // nothing for an empty list (both sides know it is empty), then MPI_Waitall on every request.
   // Why must the buffers live until MPI_Waitall returns?
   (void)r, (void)s, (void)value;
-  PLAB_EXERCISE(2, "the rounds across ranks: the ghosts' values (MPI_Isend, MPI_Irecv)");
+  PLAB_EXERCISE(2, "the rounds across ranks: the ghosts' values, with MPI_Isend and MPI_Irecv");
 }
 
 /// 2b. Whether `left` is true on any rank (every rank gets the answer).
@@ -68,7 +68,7 @@ bool any_rank_left(const Ranks& r, bool left) {
   // EXERCISE 2 (b): the rounds end when no rank has an open particle: one MPI_Allreduce of an
   // int (MPI_LOR). What happens if one rank leaves the loop while another goes on?
   (void)r, (void)left;
-  PLAB_EXERCISE(2, "the rounds across ranks: any rank still open (MPI_Allreduce)");
+  PLAB_EXERCISE(2, "the rounds across ranks: any rank still open, with MPI_Allreduce");
 }
 
 /// 3. Migration: sends out[q] to rank q (any rank, however far), appends what arrives to the
@@ -79,7 +79,7 @@ void migrate(const Ranks& r, const std::vector<std::vector<Record>>& out, Local&
   // MPI_Alltoall the sizes (one int to each rank); from what comes back, the receive offsets;
   // MPI_Alltoallv the records (MPI_BYTE); then s.push() each record received and set s.owned.
   (void)r, (void)out, (void)s;
-  PLAB_EXERCISE(3, "migration: particles to their new owners (MPI_Alltoall, MPI_Alltoallv)");
+  PLAB_EXERCISE(3, "migration: particles to their new owners, with MPI_Alltoall and MPI_Alltoallv");
 }
 
 /// Stage 03's rounds across ranks: each owned particle's event (`t` = never for none), the same
@@ -91,9 +91,9 @@ std::vector<model::Event> choose_events(const Ranks& r, const Local& s,
   std::vector<char> resolved(s.size(), 0);
   std::vector<model::Event> best(s.size(), none), chosen(s.owned, none);
   for (bool open = true; open;) {
-    share_with_ghosts(r, s, resolved);  // whom the ghosts' owners resolved last round
+    to_ghosts(r, s, resolved);  // whom the ghosts' owners resolved last round
     choose_earliest(s, wall, cand, resolved, best);
-    share_with_ghosts(r, s, best);  // what the ghosts chose
+    to_ghosts(r, s, best);  // what the ghosts chose
     open = any_rank_left(r, accept_mutual(s, cand, best, resolved, chosen));
   }
   return chosen;
