@@ -59,7 +59,7 @@ std::vector<std::vector<Record>> exchange_halo(const Ranks& r,
 /// rank q, and receives rank q's values into value[s.ghosts_from[q] .. s.ghosts_from[q + 1]).
 /// Both sides know the counts from the halo.
 template <class T>
-void share_with_ghosts(const Ranks& r, const Local& s, std::vector<T>& value) {
+void to_ghosts(const Ranks& r, const Local& s, std::vector<T>& value) {
   std::vector<std::vector<T>> out(r.ranks);
   std::vector<MPI_Request> requests;
   for (int q = 0; q < r.ranks; ++q) {
@@ -120,9 +120,9 @@ std::vector<model::Event> choose_events(const Ranks& r, const Local& s,
   std::vector<char> resolved(s.size(), 0);
   std::vector<model::Event> best(s.size(), none), chosen(s.owned, none);
   for (bool open = true; open;) {
-    share_with_ghosts(r, s, resolved);  // whom the ghosts' owners resolved last round
+    to_ghosts(r, s, resolved);  // whom the ghosts' owners resolved last round
     choose_earliest(s, wall, cand, resolved, best);
-    share_with_ghosts(r, s, best);  // what the ghosts chose
+    to_ghosts(r, s, best);  // what the ghosts chose
     open = any_rank_left(r, accept_mutual(s, cand, best, resolved, chosen));
   }
   return chosen;
