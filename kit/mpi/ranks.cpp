@@ -50,10 +50,31 @@ Ranks the_ranks;
 /// The stage's step (set by mpi_stage() on rank 0 and serve() on the others).
 DistStepFn the_step = nullptr;
 
+/// Rank 0 tells every rank the next command (a non-blocking broadcast, which next_command()
+/// receives).
+void send_command(int command, MPI_Comm comm) {
+  MPI_Request request;
+  MPI_Ibcast(&command, 1, MPI_INT, 0, comm, &request);
+  PMPI_Wait(&request, MPI_STATUS_IGNORE);
+}
+
+/// The next command from rank 0, on every other rank. It waits asleep, testing every 100 us:
+/// MPI's own waits spin, and a rank that spins between commands would use a core's time while
+/// rank 0 works alone, so that each rank's CPU time (measured from outside: /proc/PID/stat,
+/// `time`) shows the work it does in its steps, waits for the other ranks inside a step included.
+int next_command(MPI_Comm comm) {
+  int command = kExit, done = 0;
+  MPI_Request request;
+  MPI_Ibcast(&command, 1, MPI_INT, 0, comm, &request);
+  for (PMPI_Test(&request, &done, MPI_STATUS_IGNORE); !done;
+       PMPI_Test(&request, &done, MPI_STATUS_IGNORE))
+    usleep(100);
+  return command;
+}
+
 /// Ends MPI on rank 0 when the program ends: the other ranks leave serve() and end too.
 void finish() {
-  int command = kExit;
-  MPI_Bcast(&command, 1, MPI_INT, 0, the_ranks.comm);
+  send_command(kExit, the_ranks.comm);
   MPI_Finalize();
 }
 
@@ -191,8 +212,7 @@ class DistStepper final : public Stepper {
     command(kStart, &p);
   }
   ~DistStepper() override {
-    int c = kStop;
-    MPI_Bcast(&c, 1, MPI_INT, 0, r_.comm);
+    send_command(kStop, r_.comm);
   }
   void step() override { command(kStep, nullptr); }
   void read(Particles& p) override { command(kRead, &p); }
@@ -208,7 +228,7 @@ class DistStepper final : public Stepper {
  private:
   void command(int c, Particles* all) {
     try {
-      MPI_Bcast(&c, 1, MPI_INT, 0, r_.comm);
+      send_command(c, r_.comm);
       act(c, r_, run_, all);
     } catch (const std::exception& e) {
       if (r_.ranks == 1) throw;
@@ -243,8 +263,7 @@ int serve(DistStepFn step) {
   if (r.rank == 0) return -1;  // rank 0 goes on as the runner
   Run run;
   for (;;) {
-    int command = 0;
-    MPI_Bcast(&command, 1, MPI_INT, 0, r.comm);
+    const int command = next_command(r.comm);
     if (command == kExit) break;
     try {
       if (command == kStop) run = Run{};
