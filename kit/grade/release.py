@@ -28,8 +28,10 @@ import sys
 import tempfile
 
 # Tracked paths that are the instructor's, never a student's: the solutions, the CI, the student
-# README's own source (it becomes README.md), and the instructor's README (replaced).
-INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "README.md")
+# README's own source (it becomes README.md), the instructor's README (replaced), and the engines'
+# pages (their measurements; the engines themselves are in kit/instructor/).
+INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "README.md",
+                   "handouts/engine-08.md")
 # Files that belong to nobody's copy even when tracked by mistake: logs, build folders, scratch.
 SCRATCH = ("*.log", "*.partial", "*.orig", "*.rej", "*.swp", "*~", "*.pyc", "__pycache__/*",
            "build/*", "build-*/*", ".configure.log")
