@@ -26,6 +26,7 @@ inline double fastest_here(const Local& s) {
 /// How far apart, in x and in y, two particles can be at the start of a step and still meet in
 /// it: \f$2 v_{max} + 2r\f$ (each moves at most \f$v_{max}\f$), plus the pair time's rounding
 /// margin \f$m = 10^{-6} (L + v_{max} + r)\f$ on each side, widened by a billionth.
+/// \param box  the box and radius
 /// \param vmax the fastest speed of any particle on any rank
 inline double reach_of(const Box& box, double vmax) {
   const double margin = 1e-6 * (box.L + vmax + box.r);
