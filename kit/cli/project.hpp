@@ -34,6 +34,7 @@ nlohmann::json stage_declares(const std::string& id, const std::string& impl, co
 /// `needs_mpi`; throws for any other.
 std::vector<std::string> on_ranks(const std::string& id, const std::string& impl, int ranks,
                                   std::vector<std::string> program_and_args);
+
 /// `solution` when the kit has `solutions/` (the instructor's copy), `student` otherwise.
 std::string default_impl();
 /// The program that runs stage `id` of `impl` (it may not exist if the stage did not compile).
