@@ -322,6 +322,7 @@ const int copied = copy_before_main();
 }  // namespace
 """,
     "next-state": r"""
+#include <cmath>
 #include <iostream>
 #include <sys/mman.h>
 namespace {
@@ -538,10 +539,17 @@ def case_mpi():
 
 
 def case_control():
-    """The same attacks without the sandbox must win: the checks above can fail."""
+    """The same attacks without the sandbox must win: the checks above can fail. (The sandbox
+    alone is measured: the rubric's idea tests, which the oracle's slow step would fail, are
+    left out, and so is the race check.)"""
+    rubric = json.loads((kit / "kit/grade/rubric.json").read_text())
+    for conf in rubric["stages"].values():
+        conf.pop("idea", None)
+    no_ideas = scratch / "rubric-without-ideas.json"
+    no_ideas.write_text(json.dumps(rubric))
     tests, doc, _ = grade("redteam-control", submission("redteam-control", {
         "01": "read-golden", "02": "call-oracle", "03": "include-path", "08": "before-main"}),
-        "01,02,03,08", "--no-sandbox")
+        "01,02,03,08", "--no-sandbox", "--no-races", "--rubric", str(no_ideas))
     for stage, attack in (("01", "read-golden"), ("02", "call-oracle"), ("03", "include-path"),
                           ("08", "before-main")):
         got = sum(t["score"] for t in correctness(tests, stage).values())
