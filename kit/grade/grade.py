@@ -192,12 +192,13 @@ class Grader:
                     f"which can read {', '.join(seen)}. Make the kit private first "
                     f"(chmod -R go-rwx {self.kit} {self.kit_build}; the Gradescope setup.sh does).")
             copies = isolation.readable_copies(skip=[self.kit / "solutions", self.kit_build,
-                                                     self.scratch])
+                                                     self.scratch, pathlib.Path(
+                                                         self.a.submission).resolve()])
             if copies:
                 raise Refused(
                     f"no namespaces here, so student code would run as uid {isolation.SANDBOX_UID}, "
                     f"which can read other copies of the kit's answers: {', '.join(copies[:6])}"
-                    f"{' ...' if len(copies) > 6 else ''}. Remove them or make them private "
+                    f"{' ...' if len(copies) > 6 else ''}; remove them or make them private "
                     "(chmod -R go-rwx FOLDER) first.")
             self.notes.append(
                 f"sandbox without namespaces: student code runs as uid {isolation.SANDBOX_UID} and "
