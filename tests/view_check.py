@@ -39,6 +39,9 @@ if missing:
 if scratch.exists():
     shutil.rmtree(scratch)
 scratch.mkdir(parents=True)
+# The browser's and its driver's scratch files go under ours, removed at the end.
+(scratch / "tmp").mkdir()
+os.environ["TMPDIR"] = str(scratch / "tmp")
 
 
 def run(*args):

@@ -233,6 +233,9 @@ void explain_golden(const FirstFailure& f, const Dataset& d, const Manifest& m, 
   if (!diff.particle.empty()) std::printf("    %s --explain %s\n", run.c_str(), explain.c_str());
   std::printf("  draw it:\n    ./plab render %s --diff %s mine.out --out %s-diff.gif\n",
               scene.c_str(), golden.c_str(), d.name.c_str());
+  std::printf("  see it in the browser (play, click a disk, the first difference marked):\n"
+              "    ./plab view %s --stage %s --impl %s --compare %s --out %s-view.html\n",
+              scene.c_str(), f.id.c_str(), f.impl.c_str(), golden.c_str(), d.name.c_str());
 }
 
 /// The same for a generated scene of the stage-against-stage test (its `plab gen` line).
@@ -253,6 +256,9 @@ void explain_generated(const FirstFailure& f, const Found& diff) {
     std::printf("    %s --explain %lld:%s\n", run.c_str(), step > 0 ? step - 1 : 0,
                 diff.particle.c_str());
   std::printf("  draw it:\n    ./plab render scene.in --diff expected.out mine.out --out diff.gif\n");
+  std::printf("  see it in the browser (play, click a disk, the first difference marked):\n"
+              "    ./plab view scene.in --stage %s --impl %s --compare expected.out --out "
+              "diff.html\n", f.id.c_str(), f.impl.c_str());
 }
 
 /// The page about the first failing case: what differs, why the scene exists, and how to see it.

@@ -4,12 +4,14 @@
 /// `--compare`, where two runs first differ. The page is kit/view/viewer.html with the script
 /// kit/view/viewer.js and the run's data inlined: nothing is loaded from anywhere when it opens.
 ///
-/// The data are packed as binary (base64 in the page): per kept step and particle the position
-/// as two float32 and the velocity as two int16 scaled by the run's largest component (12 bytes),
-/// the events of the kept steps (particle, partner, time in the step) and, with --compare, the
-/// particles that differ at each kept step (compared exactly, as doubles, here). Past --max-mb
-/// of data the page keeps every k-th step (and always the first differing step and the one
-/// before it, and the last); it says so in its header.
+/// The data are packed as binary (base64 in the page, 4/3 of their size): per kept step and
+/// particle the position as two float32 and the velocity as two int16 scaled by the run's largest
+/// component (12 bytes; 24 with --compare), the events of the kept steps (particle, partner, time
+/// in the step: 10 bytes each) and, with --compare, the particles that differ at each kept step
+/// (compared exactly, as doubles, here; at most 2000 named a step). Past --max-mb (default 100)
+/// of data the page keeps every k-th step (and always the first differing step, the one before
+/// it, and the last); its header says so. The report's scene (N = 10^4, 500 steps, 2.3 million
+/// events) fits whole.
 #include <cstring>
 #include <map>
 #include <numeric>
@@ -42,7 +44,7 @@ bool looks_like_output(const std::string& text) {
 struct ViewEvent {
   long long step;
   std::int32_t particle, partner;
-  float t;
+  double t;
 };
 
 /// The partner and time of every event of `events`, from the printed states of each step's start
@@ -76,7 +78,7 @@ std::vector<ViewEvent> describe(const std::vector<EventRecord>& events,
       ViewEvent v{step, static_cast<std::int32_t>(i), events[e].wall ? -1 : -2, NAN};
       if (p && i < p->x.size()) {
         if (events[e].wall) {
-          v.t = static_cast<float>(model::wall_time(p->x[i], p->y[i], p->vx[i], p->vy[i], L, r));
+          v.t = model::wall_time(p->x[i], p->y[i], p->vx[i], p->vy[i], L, r);
         } else {
           double best = INFINITY;
           const double x0 = p->x[i] - 2 * r - 2 * reach, x1 = p->x[i] + 2 * r + 2 * reach;
@@ -92,8 +94,7 @@ std::vector<ViewEvent> describe(const std::vector<EventRecord>& events,
             const double miss = q ? std::hypot(p->vx[i] + p->vx[j] - q->vx[i] - q->vx[j],
                                                p->vy[i] + p->vy[j] - q->vy[i] - q->vy[j])
                                   : t;
-            if (miss < best) best = miss, v.partner = static_cast<std::int32_t>(j),
-                             v.t = static_cast<float>(t);
+            if (miss < best) best = miss, v.partner = static_cast<std::int32_t>(j), v.t = t;
           }
         }
       }
@@ -179,7 +180,7 @@ void add_view(CLI::App& app) {
   struct Args {
     std::string input, scene, stage = "02", impl, compare, events, out;
     long long steps = -1;
-    double max_mb = 64;
+    double max_mb = 100;
   };
   auto a = std::make_shared<Args>();
   auto* c = app.add_subcommand(
@@ -267,7 +268,9 @@ void add_view(CLI::App& app) {
     for (const OutputBlock& b : run.blocks)
       if (other.blocks.empty() || other.by_step.count(b.step)) steps.push_back(b.step);
     if (steps.empty()) throw std::runtime_error("the two outputs share no step");
-    const double per_step = double(n) * 12 * (other.blocks.empty() ? 1 : 2);
+    const auto described = describe(events, run.by_step, scene.box.L, scene.box.r);
+    const double per_step = double(n) * 12 * (other.blocks.empty() ? 1 : 2) +
+                            10.0 * double(described.size()) / double(steps.size());
     const auto budget = static_cast<std::size_t>(std::max(1.0, a->max_mb * 1e6 / per_step));
     const std::size_t k = (steps.size() + budget - 1) / budget;
     long long first_step = first ? std::atoll(first->step.c_str()) : -1;
@@ -284,21 +287,22 @@ void add_view(CLI::App& app) {
               {"printed", steps.size()}, {"max_mb", a->max_mb}};
     meta["runs"] = Json::array({pack_run(blob, mine, n, run.label)});
 
-    // Events of the kept steps, with partners and times, sorted by step.
-    const auto described = describe(events, run.by_step, scene.box.L, scene.box.r);
-    std::vector<std::int32_t> ev_frame, ev_particle, ev_partner;
-    std::vector<float> ev_time;
-    std::map<long long, std::int32_t> frame_of;
-    for (std::size_t f = 0; f < kept.size(); ++f) frame_of[kept[f]] = static_cast<int>(f);
-    for (const ViewEvent& e : described) {
-      const auto f = frame_of.find(e.step);
-      if (f == frame_of.end()) continue;
-      ev_frame.push_back(f->second);
-      ev_particle.push_back(e.particle);
-      ev_partner.push_back(e.partner);
-      ev_time.push_back(e.t);
+    // Events of the kept steps, with partners and times (in 65534ths of the step; 65535: not
+    // known), as runs of one frame each: frame f's are ev_start[f] .. ev_start[f + 1] - 1.
+    std::vector<std::int32_t> ev_start{0}, ev_particle, ev_partner;
+    std::vector<std::uint16_t> ev_time;
+    for (std::size_t e = 0, f = 0; f < kept.size(); ++f) {
+      while (e < described.size() && described[e].step < kept[f]) ++e;
+      for (; e < described.size() && described[e].step == kept[f]; ++e) {
+        const ViewEvent& v = described[e];
+        ev_particle.push_back(v.particle);
+        ev_partner.push_back(v.partner);
+        ev_time.push_back(v.t >= 0 && v.t < 1 ? static_cast<std::uint16_t>(std::lround(v.t * 65534))
+                                               : std::uint16_t{65535});
+      }
+      ev_start.push_back(static_cast<std::int32_t>(ev_particle.size()));
     }
-    meta["events"] = {{"given", !events_path.empty()}, {"frame", pack(blob, ev_frame)},
+    meta["events"] = {{"given", !events_path.empty()}, {"start", pack(blob, ev_start)},
                       {"particle", pack(blob, ev_particle)}, {"partner", pack(blob, ev_partner)},
                       {"time", pack(blob, ev_time)}};
 

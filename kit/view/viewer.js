@@ -22,15 +22,14 @@
     label: r.label, vscale: r.vscale,
     pos: typed(Float32Array, r.pos), vel: typed(Int16Array, r.vel),
   }));
+  // The events of frame f are evStart[f] .. evStart[f + 1] - 1: particle, partner (-1 a wall,
+  // -2 a pair whose partner was not found), time in 65534ths of the step (65535: not known).
+  const evStart = typed(Int32Array, meta.events.start);
   const ev = {
-    frame: typed(Int32Array, meta.events.frame), particle: typed(Int32Array, meta.events.particle),
-    partner: typed(Int32Array, meta.events.partner), time: typed(Float32Array, meta.events.time),
+    particle: typed(Int32Array, meta.events.particle), partner: typed(Int32Array, meta.events.partner),
+    time: typed(Uint16Array, meta.events.time), frame: new Int32Array(meta.events.particle[1]),
   };
-  const evStart = new Int32Array(F + 1);  // events of frame f: evStart[f] .. evStart[f + 1] - 1
-  for (let e = 0, f = 0; f <= F; f++) {
-    while (e < ev.frame.length && ev.frame[e] < f) e++;
-    evStart[f] = e;
-  }
+  for (let f = 0; f < F; f++) ev.frame.fill(f, evStart[f], evStart[f + 1]);
   const cmp = meta.compare && {
     offsets: typed(Int32Array, meta.compare.offsets), which: typed(Int32Array, meta.compare.which),
     counts: typed(Int32Array, meta.compare.counts), first: meta.compare.first || null,
@@ -234,7 +233,7 @@
     return { x: r.pos[b], y: r.pos[b + 1], vx: r.vel[b] * r.vscale, vy: r.vel[b + 1] * r.vscale };
   }
   function eventText(e) {
-    const t = Number.isFinite(ev.time[e]) ? ` at t = ${ev.time[e].toFixed(4)}` : "";
+    const t = ev.time[e] !== 65535 ? ` at t = ${(ev.time[e] / 65534).toFixed(4)}` : "";
     if (ev.partner[e] === -1) return `wall${t}`;
     if (ev.partner[e] === -2) return "pair (partner not found)";
     return `pair with <a class="jump" data-select="${ev.partner[e]}">${ev.partner[e]}</a>${t}`;
