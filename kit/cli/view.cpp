@@ -197,7 +197,8 @@ void add_view(CLI::App& app) {
   c->add_option("--stage", a->stage, "stage that runs a scene")->capture_default_str();
   c->add_option("--impl", a->impl, "solution or student (default as for run)");
   c->add_option("--steps", a->steps, "steps to run a scene for (default: the scene's S)");
-  c->add_option("--compare", a->compare, "another print-mode output of the same scene")
+  c->add_option("--compare", a->compare, "the expected print-mode output of the same scene (a "
+                                         "golden file): what the input is compared with")
       ->check(CLI::ExistingFile);
   c->add_option("--events", a->events, "the events file of the input output (the runner's "
                                        "--events); a scene's run records its own")
@@ -260,7 +261,7 @@ void add_view(CLI::App& app) {
         throw std::runtime_error(a->compare + " has " +
                                  std::to_string(other.blocks.front().particles.size()) +
                                  " particles, " + a->input + " " + std::to_string(n));
-      first = first_difference(run_text, other_text);
+      first = first_difference(other_text, run_text);  // the compared output is the expected one
     }
 
     // The steps kept: every k-th printed step (of both runs with --compare) within the budget.
@@ -325,8 +326,8 @@ void add_view(CLI::App& app) {
                  {"counts", pack(blob, counts)}};
       if (first)
         compare["first"] = {{"step", first_step}, {"particle", first->particle},
-                            {"field", first->field}, {"a", first->expected},
-                            {"b", first->actual}, {"lines", first->differing_lines}};
+                            {"field", first->field}, {"a", first->actual},
+                            {"b", first->expected}, {"lines", first->differing_lines}};
     }
     meta["compare"] = compare;
 

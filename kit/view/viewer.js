@@ -62,7 +62,7 @@
     title += cmp.first
         ? `<br>first difference: <a class="jump" id="first-link">step ${cmp.first.step}</a>, ` +
           `particle ${esc(cmp.first.particle)}, ${esc(cmp.first.field)}: ` +
-          `${esc(cmp.first.a)} (first run) against ${esc(cmp.first.b)} (compared run); ` +
+          `${esc(cmp.first.a)} in the first run, ${esc(cmp.first.b)} expected (the compared run); ` +
           `${cmp.first.lines} lines differ`
         : "<br>the two runs are equal";
   }
