@@ -23,7 +23,8 @@ plab, datasets, scratch = sys.argv[1], pathlib.Path(sys.argv[2]), pathlib.Path(s
 
 browser = shutil.which("chromium") or shutil.which("chromium-browser")
 driver = shutil.which("chromedriver")
-missing = [name for name, found in (("chromium", browser), ("chromium-driver", driver)) if not found]
+missing = [name for name, found in (("chromium", browser), ("chromium-driver", driver))
+           if not found]
 try:
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service

@@ -310,14 +310,16 @@ void add_view(CLI::App& app) {
     if (!other.blocks.empty()) {
       for (long long s : kept) theirs.push_back(other.by_step[s]);
       meta["runs"].push_back(pack_run(blob, theirs, n, other.label));
-      // The differing particles of each kept step, compared exactly (at most 2000 a step).
+      // The differing particles of each kept step, compared bit for bit (-0 is not 0, as in the
+      // texts plab diff compares), at most 2000 named a step.
+      const auto same = [](double x, double y) { return std::memcmp(&x, &y, sizeof x) == 0; };
       std::vector<std::int32_t> offsets{0}, which, counts;
       for (std::size_t f = 0; f < kept.size(); ++f) {
         const Particles &p = mine[f]->particles, &q = theirs[f]->particles;
         std::int32_t count = 0;
         for (std::size_t i = 0; i < n; ++i)
-          if (p.x[i] != q.x[i] || p.y[i] != q.y[i] || p.vx[i] != q.vx[i] || p.vy[i] != q.vy[i] ||
-              p.pc[i] != q.pc[i] || p.wc[i] != q.wc[i] || std::signbit(p.x[i]) != std::signbit(q.x[i]))
+          if (!same(p.x[i], q.x[i]) || !same(p.y[i], q.y[i]) || !same(p.vx[i], q.vx[i]) ||
+              !same(p.vy[i], q.vy[i]) || p.pc[i] != q.pc[i] || p.wc[i] != q.wc[i])
             if (++count <= 2000) which.push_back(static_cast<std::int32_t>(i));
         counts.push_back(count);
         offsets.push_back(static_cast<std::int32_t>(which.size()));

@@ -26,7 +26,8 @@
   // -2 a pair whose partner was not found), time in 65534ths of the step (65535: not known).
   const evStart = typed(Int32Array, meta.events.start);
   const ev = {
-    particle: typed(Int32Array, meta.events.particle), partner: typed(Int32Array, meta.events.partner),
+    particle: typed(Int32Array, meta.events.particle),
+    partner: typed(Int32Array, meta.events.partner),
     time: typed(Uint16Array, meta.events.time), frame: new Int32Array(meta.events.particle[1]),
   };
   for (let f = 0; f < F; f++) ev.frame.fill(f, evStart[f], evStart[f + 1]);
@@ -56,13 +57,15 @@
                         `${meta.max_mb} MB of run data)` : "") +
       " &middot; " + key(COLOUR.none, "no event") + key(COLOUR.wall, "wall") +
       key(COLOUR.pair, "pair") +
-      (runs.length > 1 ? key(COLOUR.differs, "differs") + key(COLOUR.other, "the compared run") : "") +
+      (runs.length > 1 ? key(COLOUR.differs, "differs") + key(COLOUR.other, "the compared run")
+                       : "") +
       (meta.events.given ? "" : " &middot; no events file");
   if (cmp) {
     title += cmp.first
         ? `<br>first difference: <a class="jump" id="first-link">step ${cmp.first.step}</a>, ` +
           `particle ${esc(cmp.first.particle)}, ${esc(cmp.first.field)}: ` +
-          `${esc(cmp.first.a)} in the first run, ${esc(cmp.first.b)} expected (the compared run); ` +
+          `${esc(cmp.first.a)} in the first run, ${esc(cmp.first.b)} expected ` +
+          "(the compared run); " +
           `${cmp.first.lines} lines differ`
         : "<br>the two runs are equal";
   }
@@ -219,8 +222,9 @@
     if (drawTimes.length > 400) drawTimes.shift();
     const sorted = drawTimes.slice().sort((a, b) => a - b);
     $("step-label").textContent = `step ${meta.steps[f]} (frame ${f + 1} of ${F})`;
+    const median = sorted[sorted.length >> 1];
     $("status").textContent =
-        `drawing a frame: ${dt.toFixed(1)} ms (median ${sorted[sorted.length >> 1].toFixed(1)} ms ` +
+        `drawing a frame: ${dt.toFixed(1)} ms (median ${median.toFixed(1)} ms ` +
         `over the last ${sorted.length}) · ${bytes.length.toLocaleString()} bytes of run data ` +
         `· zoom: wheel, pan: drag, click a disk for what it does`;
     info();
@@ -276,7 +280,10 @@
   $("info").addEventListener("click", (e) => {
     const a = e.target.closest("a.jump");
     if (!a) return;
-    if (a.dataset.select !== undefined) { state.selected = Number(a.dataset.select); state.dirty = true; }
+    if (a.dataset.select !== undefined) {
+      state.selected = Number(a.dataset.select);
+      state.dirty = true;
+    }
     if (a.dataset.frame !== undefined) setFrame(Number(a.dataset.frame));
   });
 
