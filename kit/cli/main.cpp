@@ -1,5 +1,5 @@
 /// \file cli/main.cpp
-/// \brief `plab`: the kit's command line (run, gen, diff, read, golden, test, docs, demo, bench, render).
+/// \brief `plab`: the kit's command line (run, gen, diff, read, golden, test, docs, demo, bench, render, view).
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   plab::cli::add_report(app);
   plab::cli::add_similar(app);
   plab::cli::add_render(app);
+  plab::cli::add_view(app);
   plab::cli::add_grade(app);
   plab::cli::add_release(app);
   plab::cli::add_gradescope(app);
