@@ -32,7 +32,8 @@ void add_accuracy(CLI::App& app) {
     const Manifest m = load_manifest(source_dir() + "/datasets");
     if (m.exact_stage.empty()) throw std::runtime_error("the manifest names no exact stage");
     std::vector<std::string> args{"python3", source_dir() + "/kit/accuracy/accuracy.py",
-                                  "--stepped", require_stage(a->stepped, engine ? "engine" : "solution"),
+                                  "--stepped",
+                                  require_stage(a->stepped, engine ? "engine" : "solution"),
                                   "--exact", require_stage(m.exact_stage, "solution"),
                                   "--plab", bin_dir() + "/plab", "--datasets", source_dir() + "/datasets",
                                   "--work", build_dir() + "/accuracy", "--max-k", std::to_string(a->max_k),

@@ -14,7 +14,8 @@ std::string two_digits(const std::string& stage) {
 
 void check_impl(const std::string& impl) {
   if (impl != "solution" && impl != "student" && impl != "engine")
-    throw std::runtime_error("--impl must be 'solution', 'student' or 'engine', not '" + impl + "'");
+    throw std::runtime_error("--impl must be 'solution', 'student' or 'engine', not '" + impl +
+                             "'");
 }
 
 std::string require_stage(const std::string& id, const std::string& impl) {

@@ -48,7 +48,8 @@ void add_test(CLI::App& app) {
   auto long_too = std::make_shared<bool>(false);
   auto* c = app.add_subcommand("test", "Run the test suite (GoogleTest through CTest). Default: "
                                        "the kit, the solutions, the engine and the starting-point "
-                                       "checks in the instructor's copy; the kit and your stages otherwise.");
+                                       "checks in the instructor's copy; the kit and your stages "
+                                       "otherwise.");
   c->add_option("--impl", *impl, "solution, student or engine (default as for run)");
   c->add_option("--stage", *stage, "only this stage's tests, e.g. 01");
   c->add_flag("--long", *long_too, "also the long tests (large scenes, several minutes)");

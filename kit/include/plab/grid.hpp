@@ -92,7 +92,8 @@ inline Grid choose(const Box& box, const std::vector<double>& speed2,
   }
   double cut2 = 0;
   if (!sample.empty() && max2 == max2) {
-    auto at = sample.begin() + static_cast<std::ptrdiff_t>(0.9 * static_cast<double>(sample.size()));
+    const auto quantile = static_cast<std::ptrdiff_t>(0.9 * static_cast<double>(sample.size()));
+    const auto at = sample.begin() + quantile;
     std::nth_element(sample.begin(), at, sample.end());
     cut2 = *at;
   }
@@ -108,7 +109,7 @@ inline Grid choose(const Box& box, const std::vector<double>& speed2,
   g.slabs = static_cast<int>(std::clamp(slabs, 1.0, 256.0));
   g.half = 0.5 / g.slabs;
   const double cell = (g.reach + 2 * g.margin + 2 * g.half * v_cut) * (1 + 1e-9);
-  const int most = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(std::max(active, 1)))));
+  const int most = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(active))));
   g.side = std::clamp(static_cast<int>(std::min(std::floor(box.L / cell), 1e9)), 1, most);
   g.inv_cell = g.side / box.L;
   return g;

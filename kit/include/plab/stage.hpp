@@ -53,7 +53,8 @@ namespace plab {
 struct StageInfo {
   std::string id;     //!< the two-digit number ("06")
   std::string name;   //!< the folder's name after the number ("broadphase")
-  std::string impl;   //!< which tree this library was built from: "solution" or "student"
+  std::string impl;   //!< which tree this library was built from: "solution", "student" or
+                      //!< "engine" (kit/instructor/engine)
   std::string model;  //!< "stepped" (model.md's model) or "exact" (continuous time: stage 07,
                       //!< its own golden files and tests)
   bool needs_gpu = false;   //!< runs only on a CUDA device (stages 04, 05)
@@ -62,7 +63,7 @@ struct StageInfo {
   long long test_max_n = 0;             //!< the largest scene its golden tests run
   std::vector<std::string> test_sizes;  //!< the dataset sizes its golden tests run
   std::vector<std::string> switches;    //!< changes that StageOptions::off can turn off (05)
-  std::vector<std::string> simd;        //!< narrower vector paths its tests also run (06)
+  std::vector<std::string> simd;        //!< narrower vector paths its tests also run (06 engine)
   bool mpi = false;                     //!< runs on several processes started by mpirun (08)
   int (*worker)() = nullptr;            //!< with `mpi`: plab::stage_worker()
 };
@@ -89,7 +90,8 @@ struct StageOptions {
   Device device = Device::kAuto;  //!< `--device auto|cpu|gpu`
   Real real = Real::kDouble;      //!< `--real double|float`
   std::string simd;               //!< `--simd portable|avx2`: narrower vectors than the widest
-                                  //!< the CPU has ("": the widest; stage 06's pair test)
+                                  //!< the CPU has ("": the widest; the pair test of stage
+                                  //!< 06's engine)
   std::vector<std::string> off;   //!< `--off a,b`: the stage's changes to turn off, to measure
                                   //!< what each buys (stage 05: graph, streams, branchless)
   double sweep_alpha = 0;         //!< `--sweep-alpha A`: stage 06's GPU grid, slabs per
