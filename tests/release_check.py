@@ -121,6 +121,8 @@ def weekly(plab, clone, scratch):
     check(not later, f"the week-03 release holds later stages' files: {later[:5]}")
     index = (out / "handouts" / "index.md").read_text()
     check(not re.search(r"^\| 0[4-9] \|", index, re.M), "the week-03 index lists later stages")
+    readme = (out / "README.md").read_text()
+    check(not re.search(r"^\| 0[4-9] \|", readme, re.M), "the week-03 README lists later stages")
     check(not re.search(r"ref handout_0[4-9]", " ".join(
         p.read_text(errors="replace") for p in out.rglob("*.md"))),
           "the week-03 release refers to a later stage's handout")

@@ -162,10 +162,12 @@ LATER_REF = re.compile(r"(?:\[([^\]]*)\]\(@ref handout_([0-9][0-9])\))|(?:[\\@]r
 
 
 def cut_later_stages(release, through):
-    """A weekly release: the index's table rows of later stages go, and every reference to a later
-    stage's handout (not shipped) becomes plain text, so that the docs build without warnings."""
-    index = release / "handouts" / "index.md"
-    if index.exists():
+    """A weekly release: the table rows of later stages go (the index's and the README's), and
+    every reference to a later stage's handout (not shipped) becomes plain text, so that the docs
+    build without warnings."""
+    for index in (release / "handouts" / "index.md", release / "README.md"):
+        if not index.exists():
+            continue
         lines = [l for l in index.read_text().splitlines(keepends=True)
                  if not ((m := re.match(r"\| ([0-9][0-9]) \|", l)) and int(m.group(1)) > through)]
         index.write_text("".join(lines))
