@@ -66,7 +66,7 @@ mutant.write_text("".join(
                       for k, v in enumerate(line.split()[2:])) + "\n"
     if line.startswith("9 7 ") else line for line in expected.read_text().splitlines(True)))
 compare = scratch / "compare.html"
-said = run("view", expected, "--scene", scene, "--compare", mutant, "--out", compare)
+said = run("view", mutant, "--scene", scene, "--compare", expected, "--out", compare)
 assert "step 9, particle 7, field x" in said, said
 
 options = webdriver.ChromeOptions()

@@ -348,7 +348,7 @@ void add_view(CLI::App& app) {
       std::printf("%s\n", first ? first->describe().c_str() : "the two outputs are equal");
     std::printf("wrote %s: %zu particles, %zu of %zu steps%s, %.1f MB\n", out.c_str(), n,
                 kept.size(), steps.size(),
-                k > 1 ? (" (every " + std::to_string(k) + "th, past --max-mb)").c_str() : "",
+                k > 1 ? (" (one in " + std::to_string(k) + ", past --max-mb)").c_str() : "",
                 page.size() / 1e6);
   });
 }

@@ -53,7 +53,7 @@
   let title = `<b>${esc(runs[0].label)}</b>` +
       (runs.length > 1 ? ` compared with <b>${esc(runs[1].label)}</b>` : "") +
       ` &middot; N = ${N}, L = ${L}, r = ${R}, ${F} steps shown` +
-      (meta.every > 1 ? ` (every ${meta.every}th of ${meta.printed}: the page holds at most ` +
+      (meta.every > 1 ? ` (one in ${meta.every} of ${meta.printed}: the page holds at most ` +
                         `${meta.max_mb} MB of run data)` : "") +
       " &middot; " + key(COLOUR.none, "no event") + key(COLOUR.wall, "wall") +
       key(COLOUR.pair, "pair") +
