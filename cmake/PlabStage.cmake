@@ -1,7 +1,9 @@
 # plab_add_stage()
 #
-# Called from each stage folder's CMakeLists.txt (stages/NN-name or solutions/NN-name). What the
-# stage is comes from the folder's stage.json (docs/ARCHITECTURE.md lists its keys):
+# Called from each stage folder's CMakeLists.txt (stages/NN-name: impl `student`, solutions/NN-name:
+# `solution`, or kit/instructor/engine/NN-name: `engine`, the kit's instructor-only fast version of
+# a stage, linked with plab::instructor). What the stage is comes from the folder's stage.json
+# (docs/ARCHITECTURE.md lists its keys):
 #   sources       the stage's sources (they define plab::make_stepper(), see stage.hpp)
 #   cuda_sources  a CPU stage's GPU path, compiled when nvcc is found (else the kit's stand-in
 #                 kit/src/no_gpu_path.cpp: the stage runs on the CPU)
@@ -69,6 +71,8 @@ function(plab_add_stage)
   string(SUBSTRING ${folder} 3 -1 name)
   if(tree STREQUAL "solutions")
     set(impl solution)
+  elseif(tree STREQUAL "engine")
+    set(impl engine)
   else()
     set(impl student)
   endif()
@@ -129,6 +133,9 @@ function(plab_add_stage)
   set(lib plab_stage_${id}_${impl})
   add_library(${lib} STATIC ${sources} ${info_cpp})
   target_link_libraries(${lib} PUBLIC plab::kit)
+  if(impl STREQUAL "engine")
+    target_link_libraries(${lib} PUBLIC plab::instructor)  # the answers' headers it may use
+  endif()
   target_compile_definitions(${lib} PRIVATE PLAB_STAGE_ID="${id}")
   if(needs_gpu)
     target_link_libraries(${lib} PUBLIC plab::cuda)

@@ -321,6 +321,53 @@ int copy_before_main() {
 const int copied = copy_before_main();
 }  // namespace
 """,
+    "next-state": r"""
+#include <cmath>
+#include <iostream>
+#include <sys/mman.h>
+namespace {
+// The one-step test's states come on stdin (--step-from-each /dev/stdin): read them before the
+// runner, hand it the same bytes back (a memfd as fd 0), and answer each start with the state
+// that follows it in the input.
+std::vector<std::vector<std::vector<double>>> blocks;
+int load() {
+  bool one = false;
+  for (const auto& a : my_args()) one |= a == "--step-from-each";
+  if (!one) return 0;
+  std::string text((std::istreambuf_iterator<char>(std::cin)), std::istreambuf_iterator<char>());
+  const int fd = memfd_create("states", 0);
+  if (write(fd, text.data(), text.size()) < 0) return 0;
+  lseek(fd, 0, SEEK_SET);
+  dup2(fd, 0);
+  std::istringstream in(text);
+  std::string line;
+  long long last = -1;
+  while (std::getline(in, line)) {
+    std::istringstream l(line);
+    long long k, i;
+    double x, y, vx, vy;
+    if (!(l >> k >> i >> x >> y >> vx >> vy)) continue;
+    if (k != last) { blocks.emplace_back(); last = k; }
+    blocks.back().push_back({x, y, vx, vy});
+  }
+  return 1;
+}
+const int loaded = load();
+}  // namespace
+namespace plab {
+void step(const Box&, Particles& p) {
+  for (std::size_t b = 0; b + 1 < blocks.size(); ++b) {
+    const auto& s = blocks[b];
+    if (s.empty() || std::abs(s[0][0] - p.x[0]) > 1e-6 || std::abs(s[0][1] - p.y[0]) > 1e-6) continue;
+    const auto& next = blocks[b + 1];
+    for (std::size_t i = 0; i < p.x.size() && i < next.size(); ++i) {
+      p.x[i] = next[i][0]; p.y[i] = next[i][1]; p.vx[i] = next[i][2]; p.vy[i] = next[i][3];
+    }
+    return;
+  }
+}
+}  // namespace plab
+""",
     "fork-bomb": r"""
 namespace plab {
 void step(const Box&, Particles&) {
@@ -492,10 +539,17 @@ def case_mpi():
 
 
 def case_control():
-    """The same attacks without the sandbox must win: the checks above can fail."""
+    """The same attacks without the sandbox must win: the checks above can fail. (The sandbox
+    alone is measured: the rubric's idea tests, which the oracle's slow step would fail, are
+    left out, and so is the race check.)"""
+    rubric = json.loads((kit / "kit/grade/rubric.json").read_text())
+    for conf in rubric["stages"].values():
+        conf.pop("idea", None)
+    no_ideas = scratch / "rubric-without-ideas.json"
+    no_ideas.write_text(json.dumps(rubric))
     tests, doc, _ = grade("redteam-control", submission("redteam-control", {
         "01": "read-golden", "02": "call-oracle", "03": "include-path", "08": "before-main"}),
-        "01,02,03,08", "--no-sandbox")
+        "01,02,03,08", "--no-sandbox", "--no-races", "--rubric", str(no_ideas))
     for stage, attack in (("01", "read-golden"), ("02", "call-oracle"), ("03", "include-path"),
                           ("08", "before-main")):
         got = sum(t["score"] for t in correctness(tests, stage).values())
@@ -504,8 +558,154 @@ def case_control():
               f"{got} of {most} correctness points")
 
 
+def patched(name, sid, source, edits, skip_why):
+    """A submission of one stage folder: `source` (a kit folder: solutions/NN-x or stages/NN-x)
+    with each (old, new) text edit applied to step.cpp, or None when an edit's old text is not
+    there (the solution changed shape: the case is skipped with `skip_why`)."""
+    root = scratch / name / "stages" / FOLDERS[sid]
+    shutil.copytree(kit / source, root)
+    step = root / "step.cpp"
+    text = step.read_text()
+    for old, new in edits:
+        if old not in text:
+            print(f"SKIP {name}: {skip_why} (no {old[:60]!r} in {source}/step.cpp)", flush=True)
+            return None
+        text = text.replace(old, new)
+    step.write_text(text)
+    return root
+
+
+def case_ideas():
+    """Each stage's idea, measured outside its code: a stage that skips it scores nothing, however
+    right its outputs. 02 with stage 01's O(N^3) selection, 03 serial (its OpenMP pragmas gone),
+    06 with stage 03's O(N^2) rounds, 08 with rank 0 stepping every particle."""
+    name = "redteam-ideas"
+    root = scratch / name
+    shutil.rmtree(root, ignore_errors=True)
+    (root / "stages").mkdir(parents=True)
+    shutil.copytree(kit / "solutions/02-heap", root / "stages/02-heap")
+    shutil.copy2(kit / "solutions/01-naive/step.cpp", root / "stages/02-heap/step.cpp")
+    patched(name, "03", "solutions/03-openmp", [("#pragma omp", "// (serial) #pragma omp")], "")
+    naive06 = root / "stages" / "06-broadphase"
+    shutil.copytree(kit / "solutions/06-broadphase", naive06)
+    shutil.copy2(kit / "solutions/03-openmp/step.cpp", naive06 / "step.cpp")
+    # Stage 08: the rounds' step renamed, and a step that sends every particle to rank 0, steps
+    # them there alone (a one-rank world) and sends each back to its owner.
+    serial = patched(name, "08", "solutions/08-mpi", [(
+        "void step(const Box& box, const Ranks& r, Local& s) {",
+        "void real_step(const Box& box, const Ranks& r, Local& s) {"), (
+        "}  // namespace plab::dist\n", """
+void step(const Box& box, const Ranks& r, Local& s) {
+  std::vector<std::vector<Record>> out(r.ranks), back(r.ranks);
+  for (int k = 0; k < s.owned; ++k) out[0].push_back(s.record(k));
+  Local all;
+  for (const Record& rec : all_to_all(r, out)) all.push(rec);
+  all.owned = all.size();
+  if (r.rank == 0) {
+    Ranks one = r;
+    one.comm = MPI_COMM_SELF;
+    one.ranks = 1;
+    real_step(box, one, all);
+  }
+  for (int k = 0; k < all.owned; ++k) back[r.owner_of(all.p.x[k])].push_back(all.record(k));
+  Local mine;
+  for (const Record& rec : all_to_all(r, back)) mine.push(rec);
+  mine.owned = mine.size();
+  s = std::move(mine);
+}
+}  // namespace plab::dist
+""")], "stage 08's solution no longer has the shape the serial patch needs")
+    stages = "02,03,06" + (",08-ranks3" if serial else "")  # 08's idea test runs with any entry
+    tests, doc, _ = grade(name, root, stages)
+    for key in stages.split(","):
+        sid = key[:2]
+        idea = next((t for n, t in tests.items() if n.startswith(f"{sid}: idea")), None)
+        mine = correctness(tests, key)
+        got = sum(t["score"] for t in mine.values())
+        broken = [t["output"] for t in mine.values() if "does not compile" in t["output"]]
+        check("ideas", bool(mine), f"stage {key} was graded ({len(mine)} correctness tests)")
+        check("ideas", not broken, f"stage {sid}'s shortcut compiles: {broken[:1]}")
+        check("ideas", idea is not None and idea["status"] == "failed" and got == 0,
+              f"stage {sid} without its idea scored {got} on correctness; its idea test: "
+              f"{(idea or {}).get('output', 'none')[:300]!r}")
+
+
+def case_shortcuts():
+    """One grading: stage 01 answers the one-step test from its input (the state after each start,
+    when the input had it), stage 02 is the solution but skips the work on the timed scene (N =
+    the rubric's performance N), stage 03 is the untouched starting point (race points for it?)."""
+    name = "redteam-shortcuts"
+    root = submission(name, {"01": "next-state"})
+    shutil.rmtree(root / "stages" / FOLDERS["03"])
+    shutil.copytree(kit / "stages" / FOLDERS["03"], root / "stages" / FOLDERS["03"])
+    n = json.loads((kit / "kit/grade/rubric.json").read_text())["performance"]["scene"]["n"]
+    patched_02 = root / "stages" / FOLDERS["02"] / "step.cpp"
+    text = patched_02.read_text()
+    entry = "  return cpu_stage(box, p, options, {step});"
+    if entry in text:
+        patched_02.write_text(text.replace(entry, "  return cpu_stage(box, p, options, {skip_timed});")
+                              .replace("/// Stage 02's entry point", f"""
+void skip_timed(const Box& box, Particles& p) {{
+  if (p.x.size() == {n}) return;  // the timed scene: no work, the start state printed
+  step(box, p);
+}}
+
+/// Stage 02's entry point"""))
+    tests, doc, _ = grade(name, root, "01,02,03")
+    one = tests.get("01: one step at a time on a hidden dense box", {})
+    check("next-state", one.get("score", 1) == 0,
+          f"the one-step test gave the answer-copying stage 01 {one.get('score')} of "
+          f"{one.get('max_score')}: {one.get('output', '')[:160]!r}")
+    perf = tests.get("02: performance", {})
+    if entry in text:
+        check("skip-timed", perf.get("score", 1) == 0 and "differs" in perf.get("output", ""),
+              f"stage 02 that skips the timed scene got {perf.get('score')} performance points: "
+              f"{perf.get('output', '')[:160]!r}")
+        got = sum(t["score"] for t in correctness(tests, "02").values())
+        most = sum(t["max_score"] for t in correctness(tests, "02").values())
+        check("skip-timed", got == most, f"its correctness stays full ({got} of {most})")
+    else:
+        print("SKIP skip-timed: stage 02's solution has no plain cpu_stage entry", flush=True)
+    race = next((t for n, t in tests.items() if n.startswith("03: data races")), None)
+    total = sum(t["score"] for n, t in tests.items() if n.startswith("03:"))
+    check("races-for-nothing", race is not None and race["score"] == 0 and total == 0,
+          f"the untouched starting point of stage 03 scored {total} ({(race or {}).get('output')!r})")
+
+
+def case_links():
+    """Links in an upload: a stage folder that is a link to the kit's solution, a step.cpp that is a
+    link to the solution's; empty and all-link zips get the short message."""
+    import zipfile
+    name = "redteam-links"
+    root = scratch / name
+    shutil.rmtree(root, ignore_errors=True)
+    (root / "stages" / FOLDERS["01"]).mkdir(parents=True)
+    (root / "stages" / FOLDERS["02"]).symlink_to(kit / "solutions" / FOLDERS["02"])
+    (root / "stages" / FOLDERS["01"] / "step.cpp").symlink_to(
+        kit / "solutions" / FOLDERS["01"] / "step.cpp")
+    tests, doc, stdout = grade(name, root, "01,02")
+    got = sum(t["score"] for t in tests.values())
+    check("links", got == 0, f"a linked stage folder and a linked step.cpp scored {got} "
+          f"({doc['output'].splitlines()[1][:200]!r})")
+    for label, members in (("empty", []), ("all-links", ["stages/02-heap", "step.cpp"])):
+        archive = scratch / f"{name}-{label}.zip"
+        with zipfile.ZipFile(archive, "w") as z:
+            for m in members:
+                info = zipfile.ZipInfo(m)
+                info.external_attr = (0o120777 << 16)
+                z.writestr(info, str(kit / "solutions" / FOLDERS["02"]))
+        out = scratch / f"{name}-{label}.json"
+        done = subprocess.run([plab, "grade", "--submission", archive, "--out", out, "--seed",
+                               str(SEED), "--scratch", scratch], capture_output=True, text=True)
+        said = json.loads(out.read_text())["tests"][0]["output"] if out.exists() else ""
+        check("links", done.returncode == 2 and "Traceback" not in done.stdout + done.stderr
+              and 2 <= len(said.splitlines()) <= 4,
+              f"the {label} zip: exit {done.returncode}, message {said!r}")
+
+
 CASES = {"copy": case_copy, "escape": case_escape, "processes": case_processes,
-         "oracle": case_oracle, "mpi": case_mpi, "control": case_control}
+         "oracle": case_oracle, "mpi": case_mpi, "control": case_control, "ideas": case_ideas,
+         "shortcuts": case_shortcuts, "links": case_links}
 scratch.mkdir(parents=True, exist_ok=True)
 try:
     for name, case in CASES.items():

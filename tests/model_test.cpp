@@ -9,6 +9,11 @@
 #include "plab/generate.hpp"
 #include "plab/model.hpp"
 
+#if __has_include("plab/branchless.hpp")  // instructor only (kit/instructor): stage 05's answer
+#include "plab/branchless.hpp"
+#define PLAB_HAVE_BRANCHLESS 1
+#endif
+
 namespace m = plab::model;
 
 namespace {
@@ -129,6 +134,7 @@ TEST(WallEvent, RestingAxisNeverReflects) {
   EXPECT_TRUE(same_bits(p.vx, 0.0));
 }
 
+#ifdef PLAB_HAVE_BRANCHLESS
 TEST(WallEvent, BranchlessGivesTheSameBits) {
   // The hand cases above, then many random states, including exact corners and resting axes.
   plab::SplitMix64 rng(42);
@@ -155,6 +161,7 @@ TEST(WallEvent, BranchlessGivesTheSameBits) {
   }
   EXPECT_GT(corners, 1000);  // the corner branch was really exercised
 }
+#endif
 
 TEST(PairEvent, HeadOnExchangesVelocities) {
   P i{9, 10, 2, 0}, j{11.5, 10, -2, 0};  // meet at t = 0.125 at x = 9.25 and 11.25
@@ -283,27 +290,6 @@ TEST(ContinuousTime, ContactTimeFromAnyOrigin) {
   EXPECT_EQ(m::contact_time_from<double>(4, 2, 5, 1, 0, 1, 10, 5, -1, 0, 0, r), 0.0);
   // From t0 = 5: centres 6 and 5, they have passed: receding, never.
   EXPECT_EQ(m::contact_time_from<double>(5, 2, 5, 1, 0, 1, 10, 5, -1, 0, 0, r), kInf);
-}
-
-TEST(ContinuousTime, ContactResponseExchangesNormalComponents) {
-  double vxi = 1, vyi = 0, vxj = -1, vyj = 0;  // head-on along x: the velocities swap
-  m::contact_response<double>(0, 0, vxi, vyi, 2, 0, vxj, vyj);
-  EXPECT_EQ(vxi, -1.0);
-  EXPECT_EQ(vxj, 1.0);
-  EXPECT_EQ(vyi, 0.0);
-  EXPECT_EQ(vyj, 0.0);
-  vxi = 1, vyi = 0, vxj = 0, vyj = 0;  // d = (-1, -1): b = -1, f = -1/2
-  m::contact_response<double>(0, 0, vxi, vyi, 1, 1, vxj, vyj);
-  EXPECT_EQ(vxi, 0.5);
-  EXPECT_EQ(vyi, -0.5);
-  EXPECT_EQ(vxj, 0.5);
-  EXPECT_EQ(vyj, 0.5);
-  vxi = 1, vyi = 0, vxj = -1, vyj = 0;  // normal along y, velocities along x: unchanged
-  m::contact_response<double>(0, 0, vxi, vyi, 0, 2, vxj, vyj);
-  EXPECT_EQ(vxi, 1.0);
-  EXPECT_EQ(vxj, -1.0);
-  EXPECT_EQ(vyi, 0.0);
-  EXPECT_EQ(vyj, 0.0);
 }
 
 TEST(Reflect, FlipsTheAxesHit) {

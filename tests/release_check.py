@@ -16,7 +16,14 @@
    line as written in the release with ./plab, as tests/readme_check.py runs README.md's: the
    test before `$EDITOR` fails with "EXERCISE 1 (...) is not done yet", every other line exits 0;
 5. a commit whose stages/01-naive is not the starting point: the release fails part-way and
-   leaves no folder behind (neither the target nor its temporary folder).
+   leaves no folder behind (neither the target nor its temporary folder);
+6. a weekly release (--through 03): stages 01-03 and their handouts and specs only, no later
+   stage's file, the index without later rows, its docs built (no reference to a later handout
+   left), and the same proof that its docs publish no solution.
+
+The docs (2 and 6): Doxygen's input, as the release says it, is the release's handouts, kit/include
+and stages/ only (no solutions/, no kit/instructor/), and the HTML has no page of an
+instructor-only header (greedy.hpp, plan_team.hpp, oracle.hpp) and no solution's line.
 
 The scratch folder is removed whatever the outcome.
 
@@ -86,7 +93,39 @@ def released_allow_dirty(plab, clone, scratch):
           "--allow-dirty shipped an uncommitted change")
     check(not (out / "stages/02-heap/notes.txt").exists(), "--allow-dirty shipped an untracked file")
     print(f"--allow-dirty: released HEAD {head[:12]}, without the uncommitted change and file")
+    docs_input(r.stdout)
     return out
+
+
+def docs_input(said):
+    """The release's docs read the release's own files only: never solutions/ or kit/instructor/."""
+    line = next((l for l in said.splitlines() if l.startswith("docs input (Doxygen INPUT):")), None)
+    check(line is not None, f"the release does not say what its docs were built from:\n{said}")
+    inputs = line.split(":", 1)[1].split()
+    check(inputs and all(not i.startswith(("/", "solutions")) and "instructor" not in i
+                         for i in inputs), f"the release's docs read more than the release: {line}")
+    check("stages" in inputs and "solutions" not in inputs, f"the docs' input is not stages/: {line}")
+    print(f"the docs' input is the release's own: {' '.join(inputs)}")
+
+
+def weekly(plab, clone, scratch):
+    """plab release --through 03: stages 01..03 only, and docs that still build."""
+    out = scratch / "week-03"
+    r = run(plab, "release", "--kit", clone, "--out", out, "--allow-dirty", "--through", "3")
+    docs_input(r.stdout)
+    stages = sorted(p.name[:2] for p in (out / "stages").glob("[0-9][0-9]-*"))
+    check(stages == ["01", "02", "03"], f"the week-03 release holds stages {stages}")
+    later = [p.relative_to(out).as_posix() for p in out.rglob("*")
+             if p.is_file() and re.match(r"(stages|handouts|tests/spec)/(0[4-9]|[1-9][0-9])-",
+                                         p.relative_to(out).as_posix())]
+    check(not later, f"the week-03 release holds later stages' files: {later[:5]}")
+    index = (out / "handouts" / "index.md").read_text()
+    check(not re.search(r"^\| 0[4-9] \|", index, re.M), "the week-03 index lists later stages")
+    check(not re.search(r"ref handout_0[4-9]", " ".join(
+        p.read_text(errors="replace") for p in out.rglob("*.md"))),
+          "the week-03 release refers to a later stage's handout")
+    docs_and_reference(out)
+    print("--through 03: stages 01-03 with their handouts and specs only; docs built from them")
 
 
 def ships_only_students_files(clone, out):
@@ -127,6 +166,9 @@ def docs_and_reference(out):
     html = " ".join(p.read_text(errors="replace") for p in (out / "docs" / "html").glob("*.html"))
     for line in ("mine.push_back", "heap.push"):  # solution-only lines of stages 02, 03 and 06
         check(line not in html, f"the release's docs show a solution's '{line}'")
+    for page in ("greedy_8hpp.html", "plan__team_8hpp.html", "oracle_8hpp.html"):
+        check(not (out / "docs" / "html" / page).exists(),
+              f"the release's docs document an instructor-only header ({page})")
     sources = " ".join(p.read_text(errors="replace") for p in (out / "stages").rglob("*.cpp"))
     check("heap.push" not in sources, "the release's stages/ hold a solution's line")
     reference = out / "kit" / "reference" / "bin" / "plab-reference"
@@ -221,6 +263,8 @@ def main():
         release_tests(out, kit)
         student_quick_start(out, clone, kit, scratch)
         failed_part_way(a.plab, clone, kit, scratch)
+        git(clone, "reset", "-q", "--hard", "HEAD~1")  # the starting points again
+        weekly(a.plab, clone, scratch)
     finally:
         if a.keep:
             print(f"kept {scratch}")

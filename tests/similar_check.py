@@ -15,6 +15,12 @@ import subprocess
 import sys
 import zipfile
 
+try:
+    import copydetect  # noqa: F401  (what plab similar runs; ./plab installs it)
+except ImportError:
+    print("skipped: copydetect is not installed (python3 -m pip install copydetect)")
+    sys.exit(77)
+
 plab, kit, scratch = sys.argv[1], pathlib.Path(sys.argv[2]), pathlib.Path(sys.argv[3])
 shutil.rmtree(scratch, ignore_errors=True)
 cls = scratch / "class"

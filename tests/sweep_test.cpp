@@ -12,6 +12,7 @@
 #include <omp.h>
 #endif
 
+#include "plab/greedy.hpp"
 #include "plab/model.hpp"
 #include "plab/plan.hpp"
 #include "plab/plan_team.hpp"

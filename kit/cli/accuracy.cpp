@@ -25,10 +25,14 @@ void add_accuracy(CLI::App& app) {
   c->add_option("--csv", a->csv, "write the table as CSV here");
   c->add_option("--plot", a->plot, "draw time against error here (PNG or SVG)");
   c->callback([a] {
+    // The stepped stage's float path: the kit's engine (kit/instructor/engine) where it has that
+    // stage, else its solution.
+    bool engine = false;
+    for (const StageDir& s : stages("engine")) engine = engine || s.id == a->stepped;
     const Manifest m = load_manifest(source_dir() + "/datasets");
     if (m.exact_stage.empty()) throw std::runtime_error("the manifest names no exact stage");
     std::vector<std::string> args{"python3", source_dir() + "/kit/accuracy/accuracy.py",
-                                  "--stepped", require_stage(a->stepped, "solution"),
+                                  "--stepped", require_stage(a->stepped, engine ? "engine" : "solution"),
                                   "--exact", require_stage(m.exact_stage, "solution"),
                                   "--plab", bin_dir() + "/plab", "--datasets", source_dir() + "/datasets",
                                   "--work", build_dir() + "/accuracy", "--max-k", std::to_string(a->max_k),

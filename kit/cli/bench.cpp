@@ -40,7 +40,7 @@ void add_bench(CLI::App& app) {
               "with the report's speeds (2500 .. 5000) unless --speed says otherwise");
   c->add_option("--speed", a->speed, "MIN:MAX speeds (default: model.md's L/8 .. L/4, or 2500:5000 "
                                      "with --fixed-density)");
-  c->add_option("--impl", a->impl, "solution or student (default as for run)");
+  c->add_option("--impl", a->impl, "solution, student or engine (default as for run)");
   c->add_option("--csv", a->csv, "also write the table as CSV to this file");
   c->callback([a] {
     const std::string impl = a->impl.empty() ? default_impl() : a->impl;

@@ -13,7 +13,7 @@ void add_built(CLI::App& app) {
                                         "with the compiler's first error (every stage test needs "
                                         "this check: a stage is never tested with an old binary).");
   c->add_option("--stage", *id, "stage number, e.g. 01")->required();
-  c->add_option("--impl", *impl, "solution or student (default as for run)");
+  c->add_option("--impl", *impl, "solution, student or engine (default as for run)");
   c->add_option("--target", *targets, "also these build targets (e.g. the stage's test program)");
   c->callback([id, impl, targets] {
     const std::string which = impl->empty() ? default_impl() : *impl;

@@ -10,6 +10,7 @@ namespace plab::cli {
 void add_run(CLI::App& app);     //!< `plab run`: simulate a scene with one stage
 void add_built(CLI::App& app);   //!< `plab built`: is a stage built from its current code?
 void add_render(CLI::App& app);  //!< `plab render`: animate a run, or two outputs side by side
+void add_view(CLI::App& app);    //!< `plab view`: a run (or two compared) as one offline HTML page
 void add_grade(CLI::App& app);   //!< `plab grade`: the autograder
 void add_release(CLI::App& app);  //!< `plab release`: the student version of the kit
 void add_gradescope(CLI::App& app);  //!< `plab gradescope`: the autograder zip

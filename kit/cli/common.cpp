@@ -13,8 +13,8 @@ std::string two_digits(const std::string& stage) {
 }
 
 void check_impl(const std::string& impl) {
-  if (impl != "solution" && impl != "student")
-    throw std::runtime_error("--impl must be 'solution' or 'student', not '" + impl + "'");
+  if (impl != "solution" && impl != "student" && impl != "engine")
+    throw std::runtime_error("--impl must be 'solution', 'student' or 'engine', not '" + impl + "'");
 }
 
 std::string require_stage(const std::string& id, const std::string& impl) {
@@ -24,7 +24,7 @@ std::string require_stage(const std::string& id, const std::string& impl) {
     exists = exists || s.id == id;
     known += (known.empty() ? "" : ", ") + s.id;
   }
-  const std::string tree = impl == "solution" ? "solutions/" : "stages/";
+  const std::string tree = impl_tree(impl) + "/";
   if (!exists)
     throw std::runtime_error("there is no stage " + id + " in " + tree + " (stages: " +
                              (known.empty() ? "none" : known) + ")");

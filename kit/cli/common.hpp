@@ -33,7 +33,8 @@ extern int g_status;
 
 /// "1" -> "01": a stage number as the kit names its folders and targets.
 std::string two_digits(const std::string& stage);
-/// Throws unless `impl` is "solution" or "student".
+/// Throws unless `impl` is "solution", "student" or "engine" (the kit's instructor-only fast
+/// versions in kit/instructor/engine, where a stage has one).
 void check_impl(const std::string& impl);
 /// The stage program, or a clear error saying why there is none (no such stage, not built, or
 /// not built from its current code).

@@ -1,5 +1,5 @@
 /// \file cli/main.cpp
-/// \brief `plab`: the kit's command line (run, gen, diff, read, golden, test, docs, demo, bench, render).
+/// \brief `plab`: the kit's command line (run, gen, diff, read, golden, test, docs, demo, bench, render, view).
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   plab::cli::add_test(app);
   plab::cli::add_diff(app);
   plab::cli::add_render(app);
+  plab::cli::add_view(app);
   plab::cli::add_report(app);
   plab::cli::add_bench(app);
   plab::cli::add_gen(app);

@@ -23,8 +23,14 @@ std::string source_dir() { return PLAB_SOURCE_DIR; }
 std::string build_dir() { return PLAB_BINARY_DIR; }
 std::string bin_dir() { return fs::read_symlink("/proc/self/exe").parent_path().string(); }
 
+std::string impl_tree(const std::string& impl) {
+  if (impl == "solution") return "solutions";
+  if (impl == "engine") return "kit/instructor/engine";
+  return "stages";
+}
+
 std::vector<StageDir> stages(const std::string& impl) {
-  const fs::path root = fs::path(source_dir()) / (impl == "solution" ? "solutions" : "stages");
+  const fs::path root = fs::path(source_dir()) / impl_tree(impl);
   std::vector<StageDir> found;
   if (!fs::is_directory(root)) return found;
   for (const auto& entry : fs::directory_iterator(root)) {
@@ -40,7 +46,7 @@ nlohmann::json stage_declares(const std::string& id, const std::string& impl,
                               const std::string& key) {
   for (const StageDir& s : stages(impl)) {
     if (s.id != id) continue;
-    const fs::path file = fs::path(source_dir()) / (impl == "solution" ? "solutions" : "stages") /
+    const fs::path file = fs::path(source_dir()) / impl_tree(impl) /
                           (s.id + "-" + s.name) / "stage.json";
     std::ifstream in(file);
     if (!in) return nullptr;

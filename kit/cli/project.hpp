@@ -21,7 +21,11 @@ struct StageDir {
   std::string id;    //!< two digits, e.g. `01`
   std::string name;  //!< e.g. `naive`
 };
-/// The stages of one tree (`solution` or `student`), in order.
+/// The folder (under the source folder) of one tree's stages: `solutions` (impl `solution`),
+/// `stages` (`student`) or `kit/instructor/engine` (`engine`: the kit's instructor-only fast
+/// versions, handouts/engine.md).
+std::string impl_tree(const std::string& impl);
+/// The stages of one tree (`solution`, `student` or `engine`), in order.
 std::vector<StageDir> stages(const std::string& impl);
 /// A key of a stage's `stage.json` (null when the stage or the key is missing).
 nlohmann::json stage_declares(const std::string& id, const std::string& impl, const std::string& key);
@@ -30,6 +34,7 @@ nlohmann::json stage_declares(const std::string& id, const std::string& impl, co
 /// `needs_mpi`; throws for any other.
 std::vector<std::string> on_ranks(const std::string& id, const std::string& impl, int ranks,
                                   std::vector<std::string> program_and_args);
+
 /// `solution` when the kit has `solutions/` (the instructor's copy), `student` otherwise.
 std::string default_impl();
 /// The program that runs stage `id` of `impl` (it may not exist if the stage did not compile).

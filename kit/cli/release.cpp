@@ -8,6 +8,7 @@ void add_release(CLI::App& app) {
   struct Args {
     std::string out, kit;
     bool allow_dirty = false;
+    int through = 0;
   };
   auto a = std::make_shared<Args>();
   auto* c = app.add_subcommand("release", "Write the student version of the kit into a new folder, "
@@ -19,6 +20,10 @@ void add_release(CLI::App& app) {
   c->add_flag("--allow-dirty", a->allow_dirty,
               "release HEAD's stages/ even when stages/ has uncommitted changes (they are left "
               "out, and named)");
+  c->add_option("--through", a->through,
+                 "a weekly release: stages 01..NN only, with their handouts (a later stage's "
+                 "given files may hold an earlier stage's answer); default: every stage")
+      ->check(CLI::Range(1, 99));
   c->add_option("--kit", a->kit, "the kit checkout to release (default: this one)")
       ->check(CLI::ExistingDirectory);
   c->callback([a] {
@@ -28,6 +33,7 @@ void add_release(CLI::App& app) {
                                   "--kit-source", a->kit.empty() ? source_dir() : a->kit,
                                   "--out", a->out};
     if (a->allow_dirty) args.push_back("--allow-dirty");
+    if (a->through > 0) args.insert(args.end(), {"--through", std::to_string(a->through)});
     g_status = run_program(args);
   });
 }

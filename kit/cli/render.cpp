@@ -19,7 +19,7 @@ void add_render(CLI::App& app) {
   c->add_option("scene", a->scene, "scene file (with --diff: only its L and r are used)")
       ->required()->check(CLI::ExistingFile);
   c->add_option("--stage", a->stage, "stage that runs the scene")->capture_default_str();
-  c->add_option("--impl", a->impl, "solution or student (default as for run)");
+  c->add_option("--impl", a->impl, "solution, student or engine (default as for run)");
   c->add_option("--steps", a->steps, "FIRST:LAST steps to draw (default 0:20; with --diff, "
                                      "around the first difference)");
   c->add_option("--follow", a->follow, "highlight this particle and draw its path");

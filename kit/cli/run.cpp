@@ -18,8 +18,9 @@ void add_run(CLI::App& app) {
                                       "a timing summary to stderr.");
   c->add_option("--stage", a->stage, "stage number, e.g. 01")->required();
   c->add_option("--impl", a->impl,
-                "solution (solutions/) or student (stages/); default: solution when solutions/ "
-                "exists, otherwise student");
+                "solution (solutions/), student (stages/) or engine (kit/instructor/engine/: the "
+                "kit's fast version, instructor only); default: solution when solutions/ exists, "
+                "otherwise student");
   c->add_option("--threads", a->threads, "threads for stages that use them");
   c->add_option("--ranks", a->ranks,
                 "processes for a stage that runs on several (08): mpirun starts them, more than "

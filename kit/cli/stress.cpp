@@ -20,7 +20,7 @@ void add_stress(CLI::App& app) {
                 "pair-time formula's error in ulps. Exits 1 on any violation.");
   c->add_option("--stages", a->stages, "stages (default: every stepped stage built; a CUDA stage "
                                        "is skipped without a GPU)")->delimiter(',');
-  c->add_option("--impl", a->impl, "solution or student (default as for run)");
+  c->add_option("--impl", a->impl, "solution, student or engine (default as for run)");
   c->add_option("--only", a->only, "only these scenes")->delimiter(',');
   c->add_option("--long-steps", a->long_steps, "steps of the long run")->capture_default_str();
   c->add_option("--pairs", a->pairs, "pairs of each kind for the pair-time check")

@@ -47,24 +47,35 @@ void add_test(CLI::App& app) {
   auto stage = std::make_shared<std::string>();
   auto long_too = std::make_shared<bool>(false);
   auto* c = app.add_subcommand("test", "Run the test suite (GoogleTest through CTest). Default: "
-                                       "the kit, the solutions and the starting-point checks in "
-                                       "the instructor's copy; the kit and your stages otherwise.");
-  c->add_option("--impl", *impl, "solution or student (default as for run)");
+                                       "the kit, the solutions, the engine and the starting-point "
+                                       "checks in the instructor's copy; the kit and your stages otherwise.");
+  c->add_option("--impl", *impl, "solution, student or engine (default as for run)");
   c->add_option("--stage", *stage, "only this stage's tests, e.g. 01");
   c->add_flag("--long", *long_too, "also the long tests (large scenes, several minutes)");
   auto fuzz = std::make_shared<bool>(false);
   c->add_flag("--fuzz", *fuzz, "also the fuzz tests: stage against stage on scenes from fresh "
                                "random seeds (printed with any failure), not the fixed ones");
-  c->callback([impl, stage, long_too, fuzz] {
+  auto races = std::make_shared<bool>(false);
+  c->add_flag("--races", *races, "instead of the tests: build the stage (--stage 03 or 06) with "
+                                 "ThreadSanitizer and run it with 3 threads; prints the first "
+                                 "data race, with the file and line of both accesses");
+  c->callback([impl, stage, long_too, fuzz, races] {
     const std::string which = impl->empty() ? default_impl() : *impl;
     check_impl(which);
+    if (*races) {
+      if (stage->empty()) throw std::runtime_error("--races needs --stage (03 or 06)");
+      g_status = run_program({"python3", source_dir() + "/kit/grade/race_check.py", "--source",
+                              source_dir(), "--build", build_dir(), "--stage", two_digits(*stage),
+                              "--impl", which});
+      return;
+    }
     std::vector<std::string> args{"ctest", "--test-dir", build_dir(), "--output-on-failure",
                                   "-j", "2"};
     const std::string log = build_dir() + "/test-logs/plab-test.log";
     if (!stage->empty()) {
       args.insert(args.end(), {"-L", "^stage" + two_digits(*stage) + "$", "-L", "^" + which + "$"});
     } else if (which == "solution") {
-      args.insert(args.end(), {"-L", "^(kit|solution|starting-point)$"});
+      args.insert(args.end(), {"-L", "^(kit|solution|starting-point|engine)$"});
     } else {
       args.insert(args.end(), {"-L", "^(kit|student)$"});
     }

@@ -231,8 +231,12 @@ void explain_golden(const FirstFailure& f, const Dataset& d, const Manifest& m, 
   std::printf("  reproduce it:\n    %s --out mine.out\n    ./plab diff %s mine.out\n", run.c_str(),
               golden.c_str());
   if (!diff.particle.empty()) std::printf("    %s --explain %s\n", run.c_str(), explain.c_str());
-  std::printf("  draw it:\n    ./plab render %s --diff %s mine.out --out %s-diff.gif\n",
+  // Two lines, a label and a command each (the report stays short): a GIF, and a page to play,
+  // click and compare in the browser.
+  std::printf("  draw it:  ./plab render %s --diff %s mine.out --out %s-diff.gif\n",
               scene.c_str(), golden.c_str(), d.name.c_str());
+  std::printf("  play it:  ./plab view %s --stage %s --impl %s --compare %s --out %s.html\n",
+              scene.c_str(), f.id.c_str(), f.impl.c_str(), golden.c_str(), d.name.c_str());
 }
 
 /// The same for a generated scene of the stage-against-stage test (its `plab gen` line).
@@ -252,7 +256,9 @@ void explain_generated(const FirstFailure& f, const Found& diff) {
   if (!diff.particle.empty())
     std::printf("    %s --explain %lld:%s\n", run.c_str(), step > 0 ? step - 1 : 0,
                 diff.particle.c_str());
-  std::printf("  draw it:\n    ./plab render scene.in --diff expected.out mine.out --out diff.gif\n");
+  std::printf("  draw it:  ./plab render scene.in --diff expected.out mine.out --out diff.gif\n");
+  std::printf("  play it:  ./plab view scene.in --stage %s --impl %s --compare expected.out --out "
+              "diff.html\n", f.id.c_str(), f.impl.c_str());
 }
 
 /// The page about the first failing case: what differs, why the scene exists, and how to see it.

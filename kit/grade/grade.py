@@ -136,6 +136,7 @@ class Stage:
         self.exact = conf.get("golden") == "exact"
         self.env = {"PLAB_DEVICE": conf["device"]} if "device" in conf else {}
         self.ranks = int(conf.get("ranks", 1))  # a stage on several processes: mpirun starts them
+        self.idea = conf.get("idea")  # the stage's idea test (Grader.idea_test), or None
         self.title = f"stage {key}"
 
 
@@ -157,6 +158,7 @@ class Grader:
         self.results.extra.update(seed=self.seed, replay=f"./plab grade --submission "
                                   f"{a.submission} --seed {self.seed}")
         self.notes = self.results.notes
+        self.idea_failed, self.idea_done = {}, set()  # stage folder -> why its idea test failed
         self.notes.append(f"hidden scenes from seed {self.seed} (replay: ./plab grade "
                           f"--submission SUBMISSION --seed {self.seed})")
         self.isolate()
@@ -178,13 +180,32 @@ class Grader:
         if mode == "user":
             private = [self.kit / "solutions", self.kit / "datasets" / "golden",
                        self.kit_build / "bin", self.kit / "kit" / "grade" / "rubric.json",
-                       self.private]
+                       self.kit / "kit" / "instructor", self.private]
+            # No namespaces: the sandbox's uid reads every file others may read. The kit's
+            # answers (its solutions, goldens, builds) lose group and other permissions here,
+            # where the grader may change them, before anything is checked.
+            isolation.make_private(private[:-1] + [self.kit_build])
             seen = isolation.private_readable(private)
             if seen:
                 raise Refused(
                     f"no namespaces here, so student code would run as uid {isolation.SANDBOX_UID}, "
                     f"which can read {', '.join(seen)}. Make the kit private first "
                     f"(chmod -R go-rwx {self.kit} {self.kit_build}; the Gradescope setup.sh does).")
+            copies = isolation.readable_copies(skip=[self.kit / "solutions", self.kit_build,
+                                                     self.scratch, pathlib.Path(
+                                                         self.a.submission).resolve()])
+            if copies:
+                raise Refused(
+                    f"no namespaces here, so student code would run as uid {isolation.SANDBOX_UID}, "
+                    f"which can read other copies of the kit's answers: {', '.join(copies[:6])}"
+                    f"{' ...' if len(copies) > 6 else ''}; remove them or make them private "
+                    "(chmod -R go-rwx FOLDER) first.")
+            self.notes.append(
+                f"sandbox without namespaces: student code runs as uid {isolation.SANDBOX_UID} and "
+                "can still read every world-readable file of this machine (the system, /tmp, other "
+                "users' public files) and reach the network; no copy of the kit's answers was "
+                "found readable (searched 6 folders deep from /)")
+            print(self.notes[-1], flush=True)
         self.sandbox = isolation.Sandbox(self.scratch, self.rubric["limits"], mode)
         self.results.extra["sandbox"] = mode
         self.notes.append(f"sandbox: {isolation.NAMES[mode]}")
@@ -280,8 +301,10 @@ class Grader:
 
     # -- running student code --------------------------------------------------------------------
     def run_program(self, program, scene, args, seconds, cap, st, stdin_text=None, env=None,
-                    memory=True):
-        """Runs a stage program in the sandbox on one scene, under its neutral names."""
+                    memory=True, watch=False, ranks=None):
+        """Runs a stage program in the sandbox on one scene, under its neutral names (`ranks`:
+        how many processes mpirun starts, default the stage's; `watch`: Run.cpu)."""
+        ranks = st.ranks if ranks is None else ranks
         run_dir = pathlib.Path(tempfile.mkdtemp(prefix="run-", dir=self.sandbox.box))
         os.chmod(run_dir, 0o755)
         shutil.copyfile(scene, run_dir / "scene.in")
@@ -292,13 +315,13 @@ class Grader:
         if stdin_text is not None:  # read through a pipe, never a file the program could reopen
             argv = ["/plab/stage", "/plab/scene.in", *[a if a != "STDIN" else "/dev/stdin"
                                                        for a in args]]
-        if st.ranks > 1:  # every rank in the same sandbox, under the same limits
+        if ranks > 1:  # every rank in the same sandbox, under the same limits
             argv = [shutil.which("mpirun") or "mpirun", "--quiet", "--oversubscribe", "-np",
-                    str(st.ranks), *argv]
+                    str(ranks), *argv]
         log = pathlib.Path(tempfile.mkdtemp(prefix="log-", dir=self.private))
         return self.sandbox.run(argv, ro, {"/plab/out": out}, "/plab/out", seconds, cap,
                                 gpu=st.gpu, env=env or st.env, log_dir=log, stdin_text=stdin_text,
-                                memory=memory)
+                                memory=memory, watch=watch)
 
     # -- one stage -------------------------------------------------------------------------------
     def expected_for(self, st, scene, out):
@@ -336,6 +359,14 @@ class Grader:
                           (how, "hidden.in", "expected.out")))
         return tests
 
+    def add_correctness(self, st, test, score, points, passed, text, hidden=False, seconds=0.0):
+        """A correctness test's result; none of its points when the stage's idea test failed."""
+        failed = self.idea_failed.get(st.sid)
+        if failed and score:
+            text = (f"counts 0 (it would earn {score:g}): {failed}\n{text}")
+            score, passed = 0, False
+        self.results.add(test, score, points, passed, text, hidden, seconds)
+
     def grade_stage(self, st, program):
         if isinstance(program, str):
             self.notes.append(f"{st.title}: {program.splitlines()[0]}")
@@ -343,8 +374,13 @@ class Grader:
         stopped = None  # why later runs of this stage are not started (a time-out)
         folder = self.private / f"stage{st.key}"
         folder.mkdir()
+        if st.sid not in self.idea_done:  # once per stage folder, before its correctness tests
+            self.idea_done.add(st.sid)
+            idea = next((e for e in self.entries([st.sid]) if e.idea), None)
+            if idea is not None:
+                self.idea_test(idea, program, folder)
         tests = self.public_tests(st) + self.hidden_tests(st, folder)
-        all_right = True
+        all_right, any_right = True, False
         for name, scene, expected, points, hidden, how in tests:
             test = f"{st.key}: {'hidden' if hidden else 'public'} {name}"
             if isinstance(program, str) or stopped:
@@ -360,24 +396,118 @@ class Grader:
             verdict = self.verdict(st, run, scene, expected, how)
             if run.reason and "time limit" in run.reason:
                 stopped = f"an earlier test of stage {st.key} ran out of time ({name})"
-            self.results.add(test, points if verdict is None else 0, points, verdict is None,
-                             verdict or "same text as the reference, bit for bit", hidden,
-                             run.seconds)
+            self.add_correctness(st, test, points if verdict is None else 0, points,
+                                 verdict is None, verdict or "same text as the reference, bit for bit",
+                                 hidden, run.seconds)
             all_right &= verdict is None
-        self.one_step(st, program, stopped, folder)
-        if st.conf.get("races") and self.a.races:
-            self.race_check(st, program, folder)
+            any_right |= verdict is None
+        all_right &= self.one_step(st, program, stopped, folder)
+        correct = all_right and not stopped and not self.idea_failed.get(st.sid)
+        if st.conf.get("races") and not self.a.no_races:
+            self.race_check(st, program, folder, correct, any_right)
         if st.conf.get("performance"):
-            self.performance(st, program, all_right and not stopped)
+            self.performance(st, program, correct)
 
-    def race_check(self, st, program, folder):
+    # -- the stage's idea, measured outside its code -----------------------------------------------
+    def idea_test(self, st, program, folder):
+        """The stage's idea, measured by the grader outside the student's code (rubric: the
+        stage's "idea"); a failure takes every correctness point of the stage folder.
+          scale:   a hidden scene too large for the idea the stage replaces (stage 02: O(N^3)
+                   selection; 06: O(N^2) pair tests), under a time limit that the kit's solution
+                   meets many times over, with the reference's output;
+          threads: the stage on `threads` OpenMP threads (waiting passively): at least two
+                   threads each used `share` of the program's CPU time (read from /proc);
+          ranks:   the stage under mpirun on `ranks` processes: every rank used `share` of the
+                   ranks' CPU time (read from /proc), so rank 0 does not step everything."""
+        idea = st.idea
+        test = f"{st.sid}: idea ({idea['what']})"
+        if isinstance(program, str):
+            self.results.add(test, 0, 0, False, f"not run: stage {st.sid} {program.splitlines()[0]}")
+            self.idea_failed[st.sid] = f"stage {st.sid} {program.splitlines()[0]}"
+            return
+        sc = idea["scene"]
+        scene = folder / "idea.in"
+        self.kit_programs.gen(scene, "--n", sc["n"], "--l", sc["L"], "--r", sc["r"], "--steps",
+                              sc["steps"], "--mode", "perf", "--seed",
+                              (self.seed * 13 + int(st.sid)) % 2**32)
+        own = self.solution(st.sid)  # the stage's own solution: the same bits, its speed
+        start = time.time()
+        r = subprocess.run([own, scene, "--quiet", "--threads", str(idea.get("threads", 1)),
+                            "--out", folder / "idea.out"], capture_output=True, text=True,
+                           env=dict(os.environ, **st.env))
+        own_seconds = time.time() - start
+        if r.returncode != 0:
+            raise RuntimeError(f"the kit's solution of stage {st.sid} failed on {scene}: {r.stderr}")
+        expected = (folder / "idea.out").read_text()
+        kind = idea["kind"]
+        limit = max(idea.get("seconds", 0), idea.get("multiple", 0) * own_seconds)
+        threads = str(idea.get("threads", st.threads))
+        env = dict(st.env, OMP_WAIT_POLICY="passive") if kind == "threads" else st.env
+        run = self.run_program(program, scene, ["--quiet", "--threads", threads, "--out",
+                                                "/plab/out/out.txt"], limit,
+                               max(self.rubric["limits"]["output_min_mb"] * 2**20,
+                                   4 * len(expected)), st, env=env, watch=kind != "scale",
+                               ranks=idea.get("ranks", st.ranks))
+        what = f"hidden scene N = {sc['n']}, L = {sc['L']}, S = {sc['steps']}"
+        problem = None
+        if run.reason and "time limit" in run.reason:
+            problem = (f"it did not finish the {what} in {limit:.0f} s (the kit's solution takes "
+                       f"{own_seconds:.2f} s): {idea['hint']}")
+        elif run.reason or run.rc != 0:
+            problem = f"the run on the {what} {run.reason or 'exited ' + str(run.rc)}: " \
+                      f"{run.stderr.strip()[-300:]}"
+        elif run.read_output() != expected:
+            problem = f"its output on the {what} differs from the reference's"
+        text = f"the {what}: {run.seconds:.2f} s (the kit's solution: {own_seconds:.2f} s)"
+        if problem is None and kind != "scale":
+            problem, text = self.work_shared(idea, run, text)
+        if problem:
+            self.idea_failed[st.sid] = f"the idea test of stage {st.sid} failed: {problem}"
+        self.results.add(test, 0, 0, problem is None, problem or text, False, run.seconds)
+
+    def work_shared(self, idea, run, text):
+        """(problem or None, text) of a watched run: who did the work, threads or ranks."""
+        share = idea["share"]
+        if idea["kind"] == "threads":
+            pids = {pid for pid, _ in run.cpu}
+            if len(pids) != 1:
+                return f"expected one process, saw {len(pids)}", text
+            parts = sorted(run.cpu.values(), reverse=True)
+            who = "threads"
+        else:
+            per_rank = {}
+            for (pid, _), seconds in run.cpu.items():
+                per_rank[pid] = per_rank.get(pid, 0) + seconds
+            parts = sorted(per_rank.values(), reverse=True)
+            who = "ranks"
+        total = sum(parts)
+        shown = ", ".join(f"{x:.2f}" for x in parts[:8])
+        text += f"; CPU seconds of its {who}: {shown} (total {total:.2f})"
+        if total < idea["min_cpu_seconds"]:
+            return None, text + " (too little to judge: not held against it)"
+        need = 2 if idea["kind"] == "threads" else idea["ranks"]
+        real = [x for x in parts if x >= share * total]
+        if len(real) < need:
+            return (f"{len(real)} of its {who} did a real share of the work (at least "
+                    f"{100 * share:.0f}% of its CPU time each); {need} must. CPU seconds of its "
+                    f"{who}: {shown} (total {total:.2f}). {idea['hint']}"), text
+        return None, text
+
+    def race_check(self, st, program, folder, correct, any_right):
         """The stage built again with ThreadSanitizer (clang, LLVM's OpenMP and Archer), in the
         sandbox, and run on a hidden crowded scene with 3 threads: the first data race with file
         and line. A race found costs the rubric's races_points (a racy program is wrong even when
         the race did not change a printed bit on this machine); visible, so that the student
-        learns where it is. Not checked (no clang here, the build failed): no points either way."""
+        learns where it is. Not checked (no clang here, the build failed): no points either way.
+        Run once the stage passes a correctness test (a race is reported to a stage still
+        being fixed); its points only when every correctness test (and the idea test) passed:
+        no race in a program that does nothing is worth nothing."""
         test = f"{st.key}: data races (ThreadSanitizer, 3 threads)"
         points = self.rubric["correctness"].get("races_points", 0)
+        if not any_right:
+            self.results.add(test, 0, points, False, "not checked: the stage passes no "
+                             "correctness test yet (its points need every one passed)")
+            return
         problem = races.toolchain_problem()
         if isinstance(program, str) or problem:
             why = problem or f"stage {st.sid} {program.splitlines()[0]}"
@@ -427,9 +557,12 @@ class Grader:
             self.results.add(test, 0, 0, False, "not checked: the ThreadSanitizer run "
                              f"{run.reason or 'exited ' + str(run.rc)}: {report.strip()[-300:]}")
         else:
-            self.results.add(test, points, points, True, "no data race found (3 threads, "
-                             f"schedules {' and '.join(races.SCHEDULES)}, one hidden scene of "
-                             f"N = {h['n']}, {h['steps']} steps)", False, run.seconds)
+            text = (f"no data race found (3 threads, schedules {' and '.join(races.SCHEDULES)}, "
+                    f"one hidden scene of N = {h['n']}, {h['steps']} steps)")
+            if not correct:
+                text = "0 points: every correctness test (and the idea test) must pass; " + text
+            self.results.add(test, points if correct else 0, points, correct, text, False,
+                             run.seconds)
 
 
     def ref_seconds(self, st, scene):
@@ -501,11 +634,22 @@ class Grader:
         if isinstance(program, str) or stopped:
             why = f"stage {st.sid} {program}" if isinstance(program, str) else stopped
             self.results.add(test, 0, points, False, f"not run: {why}")
-            return
+            return False
         scene = folder / "one-step.in"
         self.kit_programs.gen(scene, "--n", h["n"], "--l", h["L"], "--r", h["r"], "--steps",
                               h["steps"], "--seed", (self.seed * 7 + int(st.sid)) % 2**32)
-        states = self.expected_for(st, scene, folder / "one-step.states")
+        states = self.expected_for(st, scene, folder / "one-step.full")
+        # Every other state (steps 0, 2, 4, ...), each a start: the state a step must reach is
+        # never in the input (the run's own output would otherwise be the next block).
+        blocks, kept = {}, []
+        for line in states.splitlines():
+            words = line.split()
+            blocks.setdefault(words[0], []).append(" ".join(words[:6]))
+        for k, lines in blocks.items():
+            if int(k) % 2 == 0 and int(k) < int(h["steps"]):
+                kept += lines
+        states = "\n".join(kept) + "\n"
+        (folder / "one-step.states").write_text(states)
         reference = self.solution(st.reference)
         ref = subprocess.run([reference, scene, "--step-from-each", folder / "one-step.states"],
                              capture_output=True, text=True, check=True).stdout
@@ -526,12 +670,15 @@ class Grader:
         right = [m["step"] for m in steps if m["equal"]]
         wrong = sorted(set(want) - set(right))
         score = points * len(right) / max(1, len(want))
-        text = f"{len(right)} of {len(want)} steps right when each starts from the correct state"
+        text = (f"{len(right)} of {len(want)} steps right when each starts from the correct state "
+                "(every other step's start given)")
         if run.reason or run.rc:
             text += f"; the run {run.reason or 'exited ' + str(run.rc)}: {run.stderr.strip()[-300:]}"
         elif wrong:
             text += f"; wrong: steps {', '.join(map(str, wrong[:12]))}{' ...' if len(wrong) > 12 else ''}"
-        self.results.add(test, score, points, not wrong and not run.rc, text, False, run.seconds)
+        ok = not wrong and not run.rc and not run.reason
+        self.add_correctness(st, test, score, points, ok, text, False, run.seconds)
+        return ok
 
     def performance(self, st, program, correct):
         perf = self.rubric["performance"]
@@ -542,11 +689,19 @@ class Grader:
             return
         s = perf["scene"]
         scene = self.private / f"perf-{st.key}.in"
+        # The grading's secret seed: a program cannot recognise the timed scene and skip the work
         self.kit_programs.gen(scene, "--n", s["n"], "--l", s["L"], "--r", s["r"], "--steps",
-                              s["steps"], "--mode", "perf", "--seed", 1)
+                              s["steps"], "--mode", "perf", "--seed",
+                              (self.seed * 31 + int(st.sid) + 1) % 2**32)
         limits = self.rubric["limits"]
         own = self.solution(st.sid)
         kit_prog = own if own.exists() else self.solution(self.manifest["reference_stage"])
+        r = subprocess.run([kit_prog, scene, "--quiet", "--threads", st.threads, "--out",
+                            self.private / f"perf-{st.key}.out"], capture_output=True, text=True,
+                           env=dict(os.environ, **st.env))
+        if r.returncode != 0:
+            raise RuntimeError(f"the reference failed on {scene}: {r.stderr}")
+        expected = (self.private / f"perf-{st.key}.out").read_text()
         ref_prog = self.sandbox.shared_dir("bin") / f"reference-{st.key}"  # the sandbox's uid
         shutil.copyfile(kit_prog, ref_prog)  # may not read the kit's build folder
         os.chmod(ref_prog, 0o755)
@@ -556,14 +711,17 @@ class Grader:
         # falls on both alike; the reference runs in the same sandbox, paying its costs alike.
         ref, mine = [], []
         try:
-            self.timed_runs(st, program, ref_prog, scene, args, cap, ref, mine)
+            self.timed_runs(st, program, ref_prog, scene, args, cap, ref, mine, expected)
         finally:
             ref_prog.unlink()  # no later stage may find a correct program beside its own
         if len(mine) < perf["runs"]:
             return
         self.score_performance(st, test, ref, mine)
 
-    def timed_runs(self, st, program, ref_prog, scene, args, cap, ref, mine):
+    def timed_runs(self, st, program, ref_prog, scene, args, cap, ref, mine, expected):
+        """Alternate runs of the reference and the submission; each of the submission's outputs
+        is compared with the reference's like any other run's (a fast wrong program earns
+        nothing)."""
         limits, perf = self.rubric["limits"], self.rubric["performance"]
         test = f"{st.key}: performance"
         for _ in range(perf["runs"]):
@@ -577,6 +735,11 @@ class Grader:
             if r.rc != 0 or r.reason:
                 self.results.add(test, 0, perf["points"], False,
                                  f"the timed run {r.reason or 'exited ' + str(r.rc)}")
+                return
+            if r.read_output() != expected:
+                self.results.add(test, 0, perf["points"], False,
+                                 "the timed run's output differs from the reference's (the "
+                                 "timed scene is a hidden one: every run must be right)")
                 return
             mine.append(r.seconds)
 
@@ -654,7 +817,10 @@ def main():
     ap.add_argument("--scratch", default="")
     ap.add_argument("--keep", action="store_true")
     ap.add_argument("--races", action="store_true",
-                    help="also build the OpenMP stages with ThreadSanitizer and report the first race")
+                    help="(the default) build the stages whose rubric marks races again with "
+                         "ThreadSanitizer and report the first race")
+    ap.add_argument("--no-races", action="store_true",
+                    help="skip the ThreadSanitizer check (its points are then not given)")
     ap.add_argument("--sandbox", choices=("auto", "bwrap", "user"), default="auto",
                     help="how student code is isolated (default: the strongest that works)")
     ap.add_argument("--no-sandbox", action="store_true",

@@ -10,7 +10,13 @@ yet", exit code 3). The release is made in a temporary folder beside OUT and ren
 end: one that fails part-way leaves nothing behind. No hidden-test seed is stored anywhere in the
 kit: `plab grade` takes it at grading time.
 
-  release.py --kit-source DIR --out DIR [--allow-dirty]
+  release.py --kit-source DIR --out DIR [--allow-dirty] [--through NN] [--files-only]
+
+--through NN makes a weekly release: stages 01..NN only, with their handouts and specs (a given
+file of a later stage may hold an earlier stage's answer, so a week's copy holds nothing past its
+week); the index's rows of later stages are left out and references to their handouts become
+plain text. --files-only writes the files a release ships and stops (no build, no check, no
+reference program, no docs): what the shortcut tests (tests/shortcut_check.py) compile against.
 
 It refuses when stages/ has uncommitted changes or untracked files, unless --allow-dirty is given:
 then it releases HEAD's stages/ and names the changes it left out.
@@ -28,8 +34,13 @@ import sys
 import tempfile
 
 # Tracked paths that are the instructor's, never a student's: the solutions, the CI, the student
-# README's own source (it becomes README.md), and the instructor's README (replaced).
-INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "README.md")
+# README's own source (it becomes README.md), the instructor-only code, the instructor's README
+# (replaced), the instructor's pages (the measurement logs of the reference solutions and of the
+# kit's engine: the handouts ask the student to measure) and the similarity test's submissions
+# (independent stage 03 solutions).
+INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "README.md",
+                   "handouts/measurements.md", "handouts/engine.md", "handouts/engine-gpu.md",
+                   "handouts/engine-08.md", "tests/similar/")
 # Files that belong to nobody's copy even when tracked by mistake: logs, build folders, scratch.
 SCRATCH = ("*.log", "*.partial", "*.orig", "*.rej", "*.swp", "*~", "*.pyc", "__pycache__/*",
            "build/*", "build-*/*", ".configure.log")
@@ -70,8 +81,17 @@ def git(kit, *args):
     return run(["git", "-C", kit, *args], f"git {args[0]}", text=True).stdout
 
 
-def left_out(path, ignored):
+def stage_of(path):
+    """The stage a path belongs to (stages/NN-*, handouts/NN-*.md, tests/spec/NN-*), or None."""
+    m = re.match(r"(?:stages/|handouts/|tests/spec/)([0-9][0-9])-", path)
+    return int(m.group(1)) if m else None
+
+
+def left_out(path, ignored, through=None):
     """Why a tracked file of HEAD is not shipped (None: it is)."""
+    stage = stage_of(path)
+    if through is not None and stage is not None and stage > through:
+        return f"a stage after week {through:02d}"
     for prefix in INSTRUCTOR_ONLY:
         if path == prefix or (prefix.endswith("/") and path.startswith(prefix)):
             return "instructor only"
@@ -138,8 +158,35 @@ def check_starting_points(release, build):
     return said
 
 
-def build_release(kit, head, work, say):
-    """Writes the release into work / "release" and returns that folder."""
+LATER_REF = re.compile(r"(?:\[([^\]]*)\]\(@ref handout_([0-9][0-9])\))|(?:[\\@]ref handout_([0-9][0-9]))")
+
+
+def cut_later_stages(release, through):
+    """A weekly release: the index's table rows of later stages go, and every reference to a later
+    stage's handout (not shipped) becomes plain text, so that the docs build without warnings."""
+    index = release / "handouts" / "index.md"
+    if index.exists():
+        lines = [l for l in index.read_text().splitlines(keepends=True)
+                 if not ((m := re.match(r"\| ([0-9][0-9]) \|", l)) and int(m.group(1)) > through)]
+        index.write_text("".join(lines))
+
+    def plain(m):
+        stage = int(m.group(2) or m.group(3))
+        if stage <= through:
+            return m.group(0)
+        return m.group(1) if m.group(1) is not None else f"handout {stage:02d} (a later week)"
+
+    for f in release.rglob("*"):
+        if f.is_file() and f.suffix in (".md", ".hpp", ".cpp", ".cuh", ".cu", ".h"):
+            text = f.read_text(errors="replace")
+            new = LATER_REF.sub(plain, text)
+            if new != text:
+                f.write_text(new)
+
+
+def copy_files(kit, head, work, say, through=None):
+    """Writes the files of the release (from HEAD) into work / "release"; returns (the full HEAD
+    tree, the release folder)."""
     full, release = work / "head", work / "release"
     full.mkdir()
     tar = subprocess.run(["git", "-C", str(kit), "archive", "--format=tar", head],
@@ -160,7 +207,7 @@ def build_release(kit, head, work, say):
         fail(f"HEAD has no {STUDENT_README} (the release's README)")
     dropped = {}
     for f in files:
-        why = left_out(f, ignored)
+        why = left_out(f, ignored, through)
         if why:
             dropped.setdefault(why, []).append(f)
             continue
@@ -172,10 +219,19 @@ def build_release(kit, head, work, say):
         shutil.copy2(src, dst)
     shutil.copy2(full / STUDENT_README, release / "README.md")
     for why, paths in sorted(dropped.items()):
-        tops = sorted({p.split("/")[0] + "/" if p.startswith(("solutions/", ".ci/")) else p
+        tops = sorted({p.split("/")[0] + "/" if p.startswith(("solutions/", ".ci/")) else
+                       "/".join(p.split("/")[:2]) + "/" if p.startswith("stages/") else p
                        for p in paths})
         say(f"left out ({why}): {', '.join(tops)}")
+    if through is not None:
+        cut_later_stages(release, through)
+        say(f"weekly release: stages 01..{through:02d} only")
+    return full, release
 
+
+def build_release(kit, head, work, say, through=None):
+    """Writes the release into work / "release" and returns that folder."""
+    full, release = copy_files(kit, head, work, say, through)
     build = work / "build-release"
     say("building the release's starting points to check them", flush=True)
     configure(release, build)
@@ -205,6 +261,18 @@ def build_release(kit, head, work, say):
 
     say("building the student docs from the release itself (Doxygen)", flush=True)
     run(["cmake", "--build", build, "--target", "docs"], "building the docs", text=True)
+    # The docs of a release must publish no solution: Doxygen reads the release's own handouts,
+    # kit/include and stages/ only (never solutions/ or kit/instructor/, which it does not have).
+    doxy_input = next((l.split("=", 1)[1].split() for l in
+                       (build / "docs" / "Doxyfile").read_text().splitlines()
+                       if l.startswith("INPUT ")), [])
+    shown = [str(pathlib.Path(i).relative_to(release)) if pathlib.Path(i).is_relative_to(release)
+             else i for i in doxy_input]
+    if any(not pathlib.Path(i).is_relative_to(release) or
+           pathlib.Path(i).relative_to(release).parts[:1] in (("solutions",),) or
+           "instructor" in pathlib.Path(i).parts for i in doxy_input):
+        fail(f"the release's docs would read files that are not the release's: {doxy_input}")
+    say(f"docs input (Doxygen INPUT): {' '.join(shown)}")
     shutil.copytree(build / "docs" / "html", release / "docs" / "html")
     return release
 
@@ -216,6 +284,10 @@ def main():
     ap.add_argument("--out", required=True, help="a new (or empty) folder")
     ap.add_argument("--allow-dirty", action="store_true",
                     help="release HEAD's stages/ even when stages/ has uncommitted changes")
+    ap.add_argument("--through", type=int, metavar="NN",
+                    help="a weekly release: stages 01..NN only (default: every stage)")
+    ap.add_argument("--files-only", action="store_true",
+                    help="only the files a release ships: no build, check, reference or docs")
     a = ap.parse_args()
     kit, out = pathlib.Path(a.kit_source).resolve(), pathlib.Path(a.out).resolve()
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
@@ -243,12 +315,18 @@ def main():
 
     work = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent))
     try:
-        release = build_release(kit, head, work, print)
+        if a.files_only:
+            release = copy_files(kit, head, work, print, a.through)[1]
+        else:
+            release = build_release(kit, head, work, print, a.through)
         if out.exists():
             out.rmdir()
         os.rename(release, out)
     finally:
         shutil.rmtree(work, ignore_errors=True)
+    if a.files_only:
+        print(f"release files (no build, no docs): {out}")
+        return
     print(f"docs: {out / 'docs' / 'html' / 'index.html'}")
     print(f"release ready: cd {out} && ./plab test --impl student   (fails until the exercises are done)")
 

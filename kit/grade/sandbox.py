@@ -74,11 +74,13 @@ NAMES = {"bwrap": "bubblewrap (mount, PID, network, IPC, UTS and user namespaces
 
 
 class Run:
-    """One run of an untrusted program, ended by its limits."""
+    """One run of an untrusted program, ended by its limits. `cpu`: when the run was watched,
+    {(process id, thread id): CPU seconds} of its program's threads (see `program_cpu()`)."""
 
-    def __init__(self, rc, seconds, reason, stdout, stderr, out_dir):
+    def __init__(self, rc, seconds, reason, stdout, stderr, out_dir, cpu=None):
         self.rc, self.seconds, self.reason = rc, seconds, reason
         self.stdout, self.stderr, self.out_dir = stdout, stderr, out_dir
+        self.cpu = cpu or {}
 
     def read_output(self, name="out.txt"):
         """The text of a file the program wrote into its output folder, or None. Never follows a
@@ -128,6 +130,51 @@ def _feed(pipe, text):
 
 def _root():
     return os.geteuid() == 0
+
+
+TICK = os.sysconf("SC_CLK_TCK")
+
+
+def program_cpu(root_pid, name="stage"):
+    """{(pid, tid): CPU seconds (user + system)} of every thread of the processes below
+    `root_pid` whose command name starts with `name` (a stage program runs as /plab/stage, or
+    under the grader's own name stageNN). Read from the host's /proc, outside the program: what
+    the kernel counted, whatever the program says. Threads that ended are not seen."""
+    parents, names = {}, {}
+    for entry in os.scandir("/proc"):
+        if not entry.name.isdigit():
+            continue
+        try:
+            text = pathlib.Path(f"/proc/{entry.name}/stat").read_text()
+        except OSError:
+            continue
+        comm_end = text.rfind(")")
+        fields = text[comm_end + 2:].split()
+        parents[int(entry.name)] = int(fields[1])
+        names[int(entry.name)] = text[text.find("(") + 1:comm_end]
+    below, todo = {root_pid}, [root_pid]  # the program itself, without a sandbox
+    while todo:
+        pid = todo.pop()
+        for child, parent in parents.items():
+            if parent == pid and child not in below:
+                below.add(child)
+                todo.append(child)
+    cpu = {}
+    for pid in below:
+        if not names.get(pid, "").startswith(name):
+            continue
+        try:
+            tasks = os.listdir(f"/proc/{pid}/task")
+        except OSError:
+            continue
+        for tid in tasks:
+            try:
+                text = pathlib.Path(f"/proc/{pid}/task/{tid}/stat").read_text()
+            except OSError:
+                continue
+            fields = text[text.rfind(")") + 2:].split()
+            cpu[pid, int(tid)] = (int(fields[11]) + int(fields[12])) / TICK
+    return cpu
 
 
 class Sandbox:
@@ -222,10 +269,11 @@ class Sandbox:
 
     # -- running -------------------------------------------------------------------------------
     def run(self, argv, ro, rw, chdir, seconds, output_bytes, gpu=False, memory=True, env=None,
-            log_dir=None, stdin_text=None):
+            log_dir=None, stdin_text=None, watch=False):
         """Runs `argv` in the sandbox with the limits; stdout and stderr go to files the program
-        cannot see, `stdin_text` (if any) comes through a pipe. Returns a Run; anything it
-        started is dead when this returns."""
+        cannot see, `stdin_text` (if any) comes through a pipe. `watch`: read the CPU time of
+        every thread of the program from /proc while it runs (Run.cpu). Returns a Run; anything
+        it started is dead when this returns."""
         line, cwd, environ = self.command(argv, ro, rw, chdir, gpu, env)
         pass_fds, args_fd = (), None
         if self.mode == "bwrap":  # bwrap's own arguments (the outside paths) through a pipe:
@@ -264,9 +312,13 @@ class Sandbox:
                 os.close(fd)
             if feed:
                 threading.Thread(target=_feed, args=(feed, stdin_text), daemon=True).start()
-            reason = None
+            reason, cpu = None, {}
             try:
-                proc.wait(timeout=seconds)
+                if watch:  # the last reading of each thread before it ended (every 50 ms)
+                    while proc.poll() is None and time.time() - start < seconds:
+                        cpu.update(program_cpu(proc.pid))
+                        time.sleep(0.05)
+                proc.wait(timeout=max(0.0, seconds - (time.time() - start)))
             except subprocess.TimeoutExpired:
                 reason = f"stopped after {seconds:.0f} s (the time limit): an endless loop?"
             finally:
@@ -288,7 +340,7 @@ class Sandbox:
         if reason is None and rc != 0 and ("bad_alloc" in stderr or "memory" in stderr.lower()):
             reason = f"ran out of memory (limit {self.limits['memory_mb']} MB)"
         out_dir = pathlib.Path(rw.get("/plab/out", log_dir)) if rw else log_dir
-        return Run(rc, took, reason, log_dir / "stdout", stderr, out_dir)
+        return Run(rc, took, reason, log_dir / "stdout", stderr, out_dir, cpu)
 
     def end_everything(self, proc):
         """Kills the program's process group and, under a dedicated uid, every process of that
@@ -365,3 +417,70 @@ def private_readable(paths):
         if pathlib.Path(p).exists() and subprocess.run(test, capture_output=True).returncode == 0:
             seen.append(str(p))
     return seen
+
+
+#: Where readable_copies() does not look: the system, and what is not files.
+_NOT_SEARCHED = {"/proc", "/sys", "/dev", "/usr", "/lib", "/lib32", "/lib64", "/libx32", "/bin",
+                 "/sbin", "/etc", "/boot", "/run", "/snap", "/var/lib", "/var/cache", "/var/log"}
+
+
+def _answers_below(top, depth, skip, found):
+    """Files below `top` (at most `depth` folders down) that hold a stage's answer: a built
+    solution (plab-run-NN-solution) or a solution's source (solutions/NN-name/*.cpp, .cu)."""
+    if depth < 0 or top in _NOT_SEARCHED or any(top == s or top.startswith(s + "/") for s in skip):
+        return
+    try:
+        entries = list(os.scandir(top))
+    except OSError:
+        return
+    for e in entries:
+        try:
+            if e.is_symlink():
+                continue
+            if e.is_dir():
+                if e.name not in (".git", "CMakeFiles", "node_modules", "__pycache__"):
+                    _answers_below(e.path, depth - 1, skip, found)
+            elif e.name.startswith("plab-run-") and e.name.endswith("-solution"):
+                found.append(e.path)
+            elif (e.name.endswith((".cpp", ".cu")) and
+                  os.path.basename(os.path.dirname(os.path.dirname(e.path))) == "solutions"):
+                found.append(e.path)
+        except OSError:
+            continue
+
+
+def readable_copies(skip=(), roots=("/",), depth=6):
+    """Answers the sandbox's uid could read anywhere on the machine (the unprivileged-user mode
+    has nothing but file permissions): built solutions and solutions' sources, outside `skip`
+    (the folders the grader made private itself). At most 20 paths."""
+    found = []
+    for root in roots:
+        _answers_below(root, depth, [str(s) for s in skip], found)
+    if not found or not _root():
+        return found[:20]
+    script = 'for f; do [ -r "$f" ] && echo "$f"; done'
+    seen = []
+    for i in range(0, len(found), 200):
+        seen += subprocess.run(["setpriv", f"--reuid={SANDBOX_UID}", f"--regid={SANDBOX_UID}",
+                                "--clear-groups", "sh", "-c", script, "sh", *found[i:i + 200]],
+                               capture_output=True, text=True).stdout.split()
+    return seen[:20]
+
+
+def make_private(paths):
+    """Takes every permission of group and others off `paths` (recursively) where this process
+    may (the kit's solutions, goldens and builds, in the unprivileged-user mode). Returns the
+    paths it could not change."""
+    failed = []
+    for top in paths:
+        top = pathlib.Path(top)
+        if not top.exists():
+            continue
+        for path in [top, *(top.rglob("*") if top.is_dir() else [])]:
+            try:
+                if not path.is_symlink():
+                    os.chmod(path, stat.S_IMODE(path.stat().st_mode) & 0o700)
+            except OSError:
+                failed.append(str(path))
+                break
+    return failed

@@ -2,6 +2,7 @@
 either, or one stage's files flat (taken when their banner names the stage, or when one stage is
 asked for). Anything else is a short message naming what was found and what is expected.
 """
+import os
 import pathlib
 import re
 import shutil
@@ -27,7 +28,13 @@ def sources(folder):
 def _unzip(archive, dest):
     """Unpacks a zip safely: no absolute paths, no '..', no links, at most ZIP_LIMIT bytes."""
     total = 0
-    with zipfile.ZipFile(archive) as z:
+    dest.mkdir(parents=True, exist_ok=True)  # a zip of nothing (or of links only) is an empty folder
+    try:
+        z = zipfile.ZipFile(archive)
+    except (zipfile.BadZipFile, OSError) as e:
+        raise UploadError(f"{archive.name} is not a zip that can be read ({e})\n{EXPECTED}\n"
+                          "re-upload your stages/ folder (or a zip of it)")
+    with z:
         for info in z.infolist():
             name = pathlib.PurePosixPath(info.filename)
             if name.is_absolute() or ".." in name.parts or "__MACOSX" in name.parts:
@@ -46,6 +53,36 @@ def _unzip(archive, dest):
             with z.open(info) as src, open(target, "wb") as out:
                 shutil.copyfileobj(src, out)
     return dest
+
+
+def _without_links(root, dest):
+    """A copy of the folder `root` with every symbolic link left out (a link to a file or a
+    folder: the kit's solutions/, say), read before anything else looks at the upload; only
+    folders, sources and zips are copied. Returns (the copy, the links left out)."""
+    dropped, total = [], 0
+    dest.mkdir(parents=True)
+    for here, dirs, files in os.walk(root, followlinks=False):
+        rel = pathlib.Path(here).relative_to(root)
+        for name in list(dirs):
+            if (pathlib.Path(here) / name).is_symlink() or name in ("build", ".git"):
+                dirs.remove(name)
+                if (pathlib.Path(here) / name).is_symlink():
+                    dropped.append(str(rel / name))
+                continue
+            (dest / rel / name).mkdir()
+        for name in files:
+            path = pathlib.Path(here) / name
+            if path.is_symlink():
+                dropped.append(str(rel / name))
+                continue
+            if path.suffix not in SOURCES + (".zip",) or not path.is_file():
+                continue
+            total += path.stat().st_size
+            if total > ZIP_LIMIT:
+                raise UploadError(f"the upload holds more than {ZIP_LIMIT // 2**20} MB of sources"
+                                  f"\n{EXPECTED}\nupload only your stages/")
+            shutil.copyfile(path, dest / rel / name)
+    return dest, dropped
 
 
 def _stage_folders(root, kit_folders):
@@ -70,8 +107,14 @@ def find_stages(submission, kit_folders, wanted, scratch):
     stage ids asked for (empty: whatever the upload has). Returns ({id: folder with the
     sources}, a note saying what layout was taken)."""
     root = pathlib.Path(submission)
+    dropped = []
+    if root.is_dir():  # links dropped before anything reads the upload
+        root, dropped = _without_links(root, scratch / "upload-copy")
     if root.is_file() and root.suffix == ".zip":
         root = _unzip(root, scratch / "upload")
+    elif not root.is_dir():
+        raise UploadError(f"found {root.name}, neither a folder nor a zip\n{EXPECTED}\n"
+                          "re-upload your stages/ folder (or the whole kit folder)")
     zips = [p for p in root.iterdir() if p.suffix == ".zip"] if root.is_dir() else []
     if root.is_dir() and len(zips) == 1 and not _stage_folders(root / "stages", kit_folders):
         others = [p for p in root.iterdir() if p != zips[0] and not p.name.startswith(".")]
@@ -82,6 +125,9 @@ def find_stages(submission, kit_folders, wanted, scratch):
             note = ""
     else:
         note = ""
+    if dropped:
+        note += (f"left out {len(dropped)} symbolic link(s) ({', '.join(dropped[:4])}"
+                 f"{' ...' if len(dropped) > 4 else ''}): upload the files themselves; ")
     # A single folder at the top (a zip of the kit folder, a folder uploaded whole): go in.
     for _ in range(2):
         entries = [p for p in root.iterdir() if not p.name.startswith((".", "__MACOSX"))]

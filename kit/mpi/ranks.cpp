@@ -1,16 +1,16 @@
 /// \file mpi/ranks.cpp
 /// \brief The kit's MPI plumbing (plab::mpi, stage 08's given part): MPI's start and end, the
-/// exchanges, and the run as the kit's driver sees it. Rank 0 runs the runner as every stage does; its plab::Stepper tells the other
-/// ranks what to do next (start from a scattered state, step, gather, stop), and they serve
-/// those commands from plab::dist::serve(), never reading a file or printing anything.
+/// scatter of the scene and the gather of the output, the count of every rank's messages, and the
+/// run as the kit's driver sees it. Rank 0 runs the runner as every stage does; its
+/// plab::Stepper tells the other ranks what to do next (start from a scattered state, step,
+/// gather, stop), and they serve those commands from plab::dist::serve(), never reading a file or
+/// printing anything.
 #include "plab/mpi/ranks.hpp"
 
 #include <unistd.h>
 
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <type_traits>
 #include <utility>
 
 namespace plab::dist {
@@ -20,23 +20,29 @@ namespace {
 /// What rank 0 asks of the others.
 enum Command : int { kStart, kStep, kRead, kTraffic, kStop, kExit };
 
-/// This process's messages so far: bytes it sent, seconds in exchanges and reductions.
+/// This process's messages so far: bytes it sent, seconds in exchanges and reductions (counted
+/// by the MPI_ functions at the end of this file).
 Stepper::Traffic traffic_here;
 
 /// Counts the time from its making to its end as time in messages.
 class InMessages {
  public:
-  InMessages() : t0_(std::chrono::steady_clock::now()) {}
-  ~InMessages() {
-    traffic_here.comm_seconds +=
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
-  }
+  InMessages() : t0_(PMPI_Wtime()) {}
+  ~InMessages() { traffic_here.comm_seconds += PMPI_Wtime() - t0_; }
   InMessages(const InMessages&) = delete;
   InMessages& operator=(const InMessages&) = delete;
 
  private:
-  std::chrono::steady_clock::time_point t0_;
+  double t0_;
 };
+
+/// Counts `count` items of `type` sent to rank `to` of `comm` (nothing to this rank itself).
+void count_sent(int count, MPI_Datatype type, int to, MPI_Comm comm) {
+  int me = 0, size = 0;
+  PMPI_Comm_rank(comm, &me);
+  PMPI_Type_size(type, &size);
+  if (to != me && to != MPI_PROC_NULL) traffic_here.bytes_sent += 1.0 * count * size;
+}
 
 /// The ranks of this process (set by start_mpi()).
 Ranks the_ranks;
@@ -44,10 +50,31 @@ Ranks the_ranks;
 /// The stage's step (set by mpi_stage() on rank 0 and serve() on the others).
 DistStepFn the_step = nullptr;
 
+/// Rank 0 tells every rank the next command (a non-blocking broadcast, which next_command()
+/// receives).
+void send_command(int command, MPI_Comm comm) {
+  MPI_Request request;
+  MPI_Ibcast(&command, 1, MPI_INT, 0, comm, &request);
+  PMPI_Wait(&request, MPI_STATUS_IGNORE);
+}
+
+/// The next command from rank 0, on every other rank. It waits asleep, testing every 100 us:
+/// MPI's own waits spin, and a rank that spins between commands would use a core's time while
+/// rank 0 works alone, so that each rank's CPU time (measured from outside: /proc/PID/stat,
+/// `time`) shows the work it does in its steps, waits for the other ranks inside a step included.
+int next_command(MPI_Comm comm) {
+  int command = kExit, done = 0;
+  MPI_Request request;
+  MPI_Ibcast(&command, 1, MPI_INT, 0, comm, &request);
+  for (PMPI_Test(&request, &done, MPI_STATUS_IGNORE); !done;
+       PMPI_Test(&request, &done, MPI_STATUS_IGNORE))
+    usleep(100);
+  return command;
+}
+
 /// Ends MPI on rank 0 when the program ends: the other ranks leave serve() and end too.
 void finish() {
-  int command = kExit;
-  MPI_Bcast(&command, 1, MPI_INT, 0, the_ranks.comm);
+  send_command(kExit, the_ranks.comm);
   MPI_Finalize();
 }
 
@@ -92,16 +119,38 @@ void scatter(const Ranks& r, const Particles* all, Local& s) {
     for (int i = 0; i < static_cast<int>(all->size()); ++i)
       out[r.owner_of(all->x[i])].push_back(
           {all->x[i], all->y[i], all->vx[i], all->vy[i], all->pc[i], all->wc[i], i});
+  std::vector<int> bytes(r.ranks), at(r.ranks);
+  std::vector<Record> send;
+  for (int q = 0; q < r.ranks; ++q) {
+    at[q] = static_cast<int>(send.size() * sizeof(Record));
+    bytes[q] = static_cast<int>(out[q].size() * sizeof(Record));
+    send.insert(send.end(), out[q].begin(), out[q].end());
+  }
+  int mine = 0;
+  MPI_Scatter(bytes.data(), 1, MPI_INT, &mine, 1, MPI_INT, 0, r.comm);
+  std::vector<Record> in(mine / sizeof(Record));
+  MPI_Scatterv(send.data(), bytes.data(), at.data(), MPI_BYTE, in.data(), mine, MPI_BYTE, 0,
+               r.comm);
   s = Local{};
-  for (const Record& rec : all_to_all(r, out)) s.push(rec);
+  for (const Record& rec : in) s.push(rec);
   s.owned = s.size();
 }
 
 /// Gathers every rank's owned particles into `all` on rank 0, in index order.
 void gather(const Ranks& r, const Local& s, Particles* all_on_0) {
-  std::vector<std::vector<Record>> out(r.ranks);
-  for (int k = 0; k < s.owned; ++k) out[0].push_back(s.record(k));
-  const std::vector<Record> got = all_to_all(r, out);
+  std::vector<Record> mine;
+  for (int k = 0; k < s.owned; ++k) mine.push_back(s.record(k));
+  const int bytes = static_cast<int>(mine.size() * sizeof(Record));
+  std::vector<int> counts(r.ranks), at(r.ranks);
+  MPI_Gather(&bytes, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, r.comm);
+  int total = 0;
+  for (int q = 0; q < r.ranks; ++q) {
+    at[q] = total;
+    total += counts[q];
+  }
+  std::vector<Record> got(r.rank == 0 ? total / sizeof(Record) : 0);
+  MPI_Gatherv(mine.data(), bytes, MPI_BYTE, got.data(), counts.data(), at.data(), MPI_BYTE, 0,
+              r.comm);
   if (r.rank != 0) return;
   Particles& all = *all_on_0;
   all.resize(got.size());
@@ -163,8 +212,7 @@ class DistStepper final : public Stepper {
     command(kStart, &p);
   }
   ~DistStepper() override {
-    int c = kStop;
-    MPI_Bcast(&c, 1, MPI_INT, 0, r_.comm);
+    send_command(kStop, r_.comm);
   }
   void step() override { command(kStep, nullptr); }
   void read(Particles& p) override { command(kRead, &p); }
@@ -180,7 +228,7 @@ class DistStepper final : public Stepper {
  private:
   void command(int c, Particles* all) {
     try {
-      MPI_Bcast(&c, 1, MPI_INT, 0, r_.comm);
+      send_command(c, r_.comm);
       act(c, r_, run_, all);
     } catch (const std::exception& e) {
       if (r_.ranks == 1) throw;
@@ -209,73 +257,13 @@ void Local::drop_ghosts() {
   id.resize(owned);
 }
 
-template <class T>
-std::vector<T> all_to_all(const Ranks& r, const std::vector<std::vector<T>>& out,
-                        std::vector<int>* from) {
-  static_assert(std::is_trivially_copyable_v<T>);
-  const InMessages timed;
-  const int n = r.ranks;
-  std::vector<int> send_bytes(n), recv_bytes(n), send_at(n), recv_at(n);
-  std::vector<char> send;
-  for (int q = 0; q < n; ++q) {
-    send_at[q] = static_cast<int>(send.size());
-    send_bytes[q] = static_cast<int>(out[q].size() * sizeof(T));
-    const char* data = reinterpret_cast<const char*>(out[q].data());
-    send.insert(send.end(), data, data + send_bytes[q]);
-  }
-  traffic_here.bytes_sent += static_cast<double>(send.size() - send_bytes[r.rank]);
-  MPI_Alltoall(send_bytes.data(), 1, MPI_INT, recv_bytes.data(), 1, MPI_INT, r.comm);
-  int total = 0;
-  for (int q = 0; q < n; ++q) {
-    recv_at[q] = total;
-    total += recv_bytes[q];
-  }
-  std::vector<T> in(total / sizeof(T));
-  MPI_Alltoallv(send.data(), send_bytes.data(), send_at.data(), MPI_BYTE, in.data(),
-                recv_bytes.data(), recv_at.data(), MPI_BYTE, r.comm);
-  if (from) {
-    from->assign(n + 1, 0);
-    for (int q = 0; q < n; ++q) (*from)[q + 1] = (*from)[q] + recv_bytes[q] / sizeof(T);
-  }
-  return in;
-}
-
-/// \cond
-template std::vector<Record> all_to_all(const Ranks&, const std::vector<std::vector<Record>>&,
-                                      std::vector<int>*);
-template std::vector<model::Event> all_to_all(const Ranks&,
-                                            const std::vector<std::vector<model::Event>>&,
-                                            std::vector<int>*);
-template std::vector<double> all_to_all(const Ranks&, const std::vector<std::vector<double>>&,
-                                      std::vector<int>*);
-template std::vector<int> all_to_all(const Ranks&, const std::vector<std::vector<int>>&,
-                                   std::vector<int>*);
-template std::vector<char> all_to_all(const Ranks&, const std::vector<std::vector<char>>&,
-                                    std::vector<int>*);
-/// \endcond
-
-double max_over_ranks(const Ranks& r, double v) {
-  const InMessages timed;
-  double m = v;
-  MPI_Allreduce(&v, &m, 1, MPI_DOUBLE, MPI_MAX, r.comm);
-  return m;
-}
-
-bool any_rank(const Ranks& r, bool v) {
-  const InMessages timed;
-  int mine = v ? 1 : 0, any = 0;
-  MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_LOR, r.comm);
-  return any != 0;
-}
-
 int serve(DistStepFn step) {
   the_step = step;
   const Ranks& r = start_mpi();
   if (r.rank == 0) return -1;  // rank 0 goes on as the runner
   Run run;
   for (;;) {
-    int command = 0;
-    MPI_Bcast(&command, 1, MPI_INT, 0, r.comm);
+    const int command = next_command(r.comm);
     if (command == kExit) break;
     try {
       if (command == kStop) run = Run{};
@@ -295,3 +283,103 @@ std::unique_ptr<Stepper> mpi_stage(const Box& box, Particles& p, DistStepFn step
 }
 
 }  // namespace plab::dist
+
+// -- The count of the stage's messages: MPI's profiling interface --------------------------------
+// These definitions take the place of the MPI library's for every call of the program (the
+// library's own is PMPI_...). The kit's plumbing above (commands, scatter, gather, the traffic's
+// reduction) uses calls that are not counted.
+
+using plab::dist::count_sent;
+using plab::dist::InMessages;
+using plab::dist::traffic_here;
+
+extern "C" {
+
+int MPI_Send(const void* buf, int count, MPI_Datatype type, int dest, int tag, MPI_Comm comm) {
+  const InMessages timed;
+  count_sent(count, type, dest, comm);
+  return PMPI_Send(buf, count, type, dest, tag, comm);
+}
+
+int MPI_Isend(const void* buf, int count, MPI_Datatype type, int dest, int tag, MPI_Comm comm,
+              MPI_Request* request) {
+  count_sent(count, type, dest, comm);
+  return PMPI_Isend(buf, count, type, dest, tag, comm, request);
+}
+
+int MPI_Sendrecv(const void* sendbuf, int sendcount, MPI_Datatype sendtype, int dest, int sendtag,
+                 void* recvbuf, int recvcount, MPI_Datatype recvtype, int source, int recvtag,
+                 MPI_Comm comm, MPI_Status* status) {
+  const InMessages timed;
+  count_sent(sendcount, sendtype, dest, comm);
+  return PMPI_Sendrecv(sendbuf, sendcount, sendtype, dest, sendtag, recvbuf, recvcount, recvtype,
+                       source, recvtag, comm, status);
+}
+
+int MPI_Recv(void* buf, int count, MPI_Datatype type, int source, int tag, MPI_Comm comm,
+             MPI_Status* status) {
+  const InMessages timed;
+  return PMPI_Recv(buf, count, type, source, tag, comm, status);
+}
+
+int MPI_Wait(MPI_Request* request, MPI_Status* status) {
+  const InMessages timed;
+  return PMPI_Wait(request, status);
+}
+
+int MPI_Waitall(int count, MPI_Request requests[], MPI_Status statuses[]) {
+  const InMessages timed;
+  return PMPI_Waitall(count, requests, statuses);
+}
+
+int MPI_Alltoall(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void* recvbuf,
+                 int recvcount, MPI_Datatype recvtype, MPI_Comm comm) {
+  const InMessages timed;
+  int size = 0;
+  PMPI_Comm_size(comm, &size);
+  for (int q = 0; q < size; ++q) count_sent(sendcount, sendtype, q, comm);
+  return PMPI_Alltoall(sendbuf, sendcount, sendtype, recvbuf, recvcount, recvtype, comm);
+}
+
+int MPI_Alltoallv(const void* sendbuf, const int sendcounts[], const int sdispls[],
+                  MPI_Datatype sendtype, void* recvbuf, const int recvcounts[],
+                  const int rdispls[], MPI_Datatype recvtype, MPI_Comm comm) {
+  const InMessages timed;
+  int size = 0;
+  PMPI_Comm_size(comm, &size);
+  for (int q = 0; q < size; ++q) count_sent(sendcounts[q], sendtype, q, comm);
+  return PMPI_Alltoallv(sendbuf, sendcounts, sdispls, sendtype, recvbuf, recvcounts, rdispls,
+                        recvtype, comm);
+}
+
+int MPI_Allreduce(const void* sendbuf, void* recvbuf, int count, MPI_Datatype type, MPI_Op op,
+                  MPI_Comm comm) {
+  const InMessages timed;
+  int size = 0, bytes = 0;
+  PMPI_Comm_size(comm, &size);
+  PMPI_Type_size(type, &bytes);
+  if (size > 1) traffic_here.bytes_sent += 1.0 * count * bytes;
+  return PMPI_Allreduce(sendbuf, recvbuf, count, type, op, comm);
+}
+
+int MPI_Allgather(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void* recvbuf,
+                  int recvcount, MPI_Datatype recvtype, MPI_Comm comm) {
+  const InMessages timed;
+  int size = 0;
+  PMPI_Comm_size(comm, &size);
+  for (int q = 0; q < size; ++q) count_sent(sendcount, sendtype, q, comm);
+  return PMPI_Allgather(sendbuf, sendcount, sendtype, recvbuf, recvcount, recvtype, comm);
+}
+
+int MPI_Allgatherv(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void* recvbuf,
+                   const int recvcounts[], const int displs[], MPI_Datatype recvtype,
+                   MPI_Comm comm) {
+  const InMessages timed;
+  int size = 0;
+  PMPI_Comm_size(comm, &size);
+  for (int q = 0; q < size; ++q) count_sent(sendcount, sendtype, q, comm);
+  return PMPI_Allgatherv(sendbuf, sendcount, sendtype, recvbuf, recvcounts, displs, recvtype,
+                         comm);
+}
+
+}  // extern "C"

@@ -9,7 +9,7 @@ namespace plab {
 void step_from_each(const Box& box, const std::vector<OutputBlock>& blocks,
                     const MakeStepper& make, std::FILE* out) {
   OutputWriter writer(out);
-  for (std::size_t k = 0; k + 1 < blocks.size(); ++k) {
+  for (std::size_t k = 0; k < blocks.size(); ++k) {
     Particles p = blocks[k].particles;
     const auto stage = make(box, p);
     stage->step();

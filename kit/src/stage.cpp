@@ -6,8 +6,30 @@
 #include <algorithm>
 #include <cstdlib>
 #include <sstream>
+#include <utility>
 
 namespace plab {
+namespace {
+
+/// The Stepper of a CPU stage whose step is an object (CpuStep): it owns the object, and with it
+/// the stage's working memory, for the run.
+class ObjectStepper final : public Stepper {
+ public:
+  /// Advances `p` itself (no copy), which must outlive the stepper.
+  ObjectStepper(std::unique_ptr<CpuStep> state, const Box& box, Particles& p)
+      : state_(std::move(state)), box_(box), p_(&p) {}
+  void step() override { state_->step(box_, *p_); }
+  void read(Particles& p) override {
+    if (&p != p_) p = *p_;
+  }
+
+ private:
+  std::unique_ptr<CpuStep> state_;
+  Box box_;
+  Particles* p_;
+};
+
+}  // namespace
 
 bool StageOptions::is_off(const std::string& change) const {
   return std::find(off.begin(), off.end(), change) != off.end();
@@ -43,6 +65,18 @@ std::unique_ptr<Stepper> cpu_stage(const Box& box, Particles& p, const StageOpti
   if (options.device == Device::kGpu)
     throw NoDevice("stage " + info.id + " has no GPU path (--device gpu)");
   return std::make_unique<HostStepper>(stage.step, box, p);
+}
+
+std::unique_ptr<Stepper> cpu_stage(const Box& box, Particles& p, const StageOptions& options,
+                                   std::unique_ptr<CpuStep> state, GpuStarter gpu) {
+  const StageInfo& info = stage_info();
+  if (options.real == Real::kFloat)
+    throw std::runtime_error("stage " + info.id + " has no float variant (--real float)");
+  if (options.device != Device::kCpu && gpu != nullptr)
+    if (auto g = gpu(box, p, options)) return g;
+  if (options.device == Device::kGpu)
+    throw NoDevice("stage " + info.id + " has no GPU path (--device gpu)");
+  return std::make_unique<ObjectStepper>(std::move(state), box, p);
 }
 
 }  // namespace plab

@@ -45,7 +45,8 @@ void step(const Box& box, Particles& p) {
   // EXERCISE 2: rounds until every particle is resolved. (a) In parallel, each unresolved
   // particle finds its earliest event: its wall, or a candidate pair with an unresolved partner.
   // (b) In parallel, each unresolved particle accepts its choice when it is a wall, no event, or
-  // a pair its partner chose too; each iteration writes only its own particle.
+  // a pair its partner chose too; each iteration writes only its own particle, and a reduction
+  // over the particles says whether another round is needed.
   Plan plan;
   plan.reset(n);
   std::vector<char> resolved(n, 0);

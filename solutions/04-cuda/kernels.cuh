@@ -42,7 +42,7 @@ __global__ void start_step(ParticlesView p, Box box, StepArrays a) {
   a.partner[i] = Plan::kFree;
 }
 
-// EXERCISE 1: find_pairs, one thread per particle i: every j != i whose pair event with i falls in
+// EXERCISE 2: find_pairs, one thread per particle i: every j != i whose pair event with i falls in
 // this step goes to i's slots (count them all; store the first cap; report a larger count).
 /// Particle `i`'s row of V3's matrix, kept sparse: every `j` whose pair event with `i` falls in
 /// this step goes to `i`'s slots. Each pair is computed by both of its particles, always as
@@ -65,7 +65,7 @@ __global__ void find_pairs(ParticlesView p, Box box, StepArrays a) {
   if (c > a.slots.cap) atomicMax(&a.flags->overflow, c);
 }
 
-// EXERCISE 2: a round in two kernels: choose (each unresolved particle's earliest event among its
+// EXERCISE 3: a round in two kernels: choose (each unresolved particle's earliest event among its
 // wall and its unresolved partners) and accept (a wall, no event, or a pair both chose).
 /// A round, first half: each unresolved particle's earliest event among its wall and its pairs
 /// with unresolved partners (or "none", which sorts after every real event).
@@ -104,7 +104,7 @@ __global__ void accept(int n, StepArrays a) {
   }
 }
 
-// EXERCISE 3: apply, one thread per particle; a pair is applied by its lower index.
+// EXERCISE 4: apply, one thread per particle; a pair is applied by its lower index.
 /// Applies the plan: a free move, a wall event, or a pair event (by its lower index, which
 /// writes both particles): plab::apply_one()'s own code, on the device.
 __global__ void apply(ParticlesView p, Box box, StepArrays a) {

@@ -1,10 +1,12 @@
 /// \file solutions/05-cuda-streams/kernels.cuh
-/// \brief Stage 05's kernels (device code only): the pair search split over a 2D grid with tiles in
-/// shared memory, every round of a step in one block, and the branchless wall event.
+/// \brief Stage 05's kernels (device code only): the branchless wall event (exercise 2), and,
+/// given, the pair search split over a 2D grid with tiles in shared memory and every round of a
+/// step in one block.
 #pragma once
 
+#include <type_traits>
+
 #include "plab/cuda/particles.hpp"
-#include "plab/cuda/rounds.cuh"
 #include "plab/cuda/slots.cuh"
 #include "plab/model.hpp"
 #include "plab/plan.hpp"
@@ -12,8 +14,6 @@
 
 namespace plab::kernels {
 
-using cuda::accept_one;
-using cuda::choose_one;
 using cuda::ParticlesView;
 using model::Event;
 
@@ -51,8 +51,6 @@ __global__ void wall_times(ParticlesView p, Box box, StepArrays a) {
   a.wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
 }
 
-// EXERCISE 1: find_pairs on a 2D grid: block (x, y) pairs x's 128 particles i with y's tile of 256
-// particles j (in shared memory), j > i only; each pair found goes to both particles' slots.
 /// The pair search on a 2D grid: block (x, y) pairs particles `i` of x's 128 with particles `j`
 /// of y's tile of 256, held in shared memory, and computes only `j > i` (blocks wholly below the
 /// diagonal return at once). A pair found goes to both particles' slots. Many more threads than
@@ -86,11 +84,44 @@ __global__ void find_pairs(ParticlesView p, Box box, StepArrays a) {
   }
 }
 
-// EXERCISE 2: resolve, every round of a step in one block of kResolveThreads threads.
+/// A round's first half for unresolved particle `i` (stage 04's choose): its earliest event
+/// among its wall and its pairs with unresolved partners, or `none`.
+__device__ inline void choose_one(int i, const StepArrays& a, const Event& none) {
+  Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
+  for (int s = 0; s < a.slots.count[i]; ++s) {
+    const int o = a.slots.other_at(i, s);
+    if (a.resolved[o]) continue;
+    const Event e = model::pair_event_key(a.slots.time_at(i, s), i < o ? i : o, i < o ? o : i);
+    if (model::key_less(e, b)) b = e;
+  }
+  a.best[i] = b;
+}
+
+/// A round's second half for unresolved particle `i` (stage 04's accept): takes a wall, no
+/// event, or a pair both particles chose. Returns false when `i` is left for the next round.
+__device__ inline bool accept_one(int i, const StepArrays& a) {
+  const Event e = a.best[i];
+  const int o = (e.lo == i) ? e.hi : e.lo;
+  if (!model::in_step(e.t)) {
+    a.resolved[i] = 1;
+  } else if (e.kind == model::kWall) {
+    a.partner[i] = Plan::kWall;
+    a.resolved[i] = 1;
+  } else if (a.best[o].kind == model::kPair && a.best[o].lo == e.lo && a.best[o].hi == e.hi) {
+    a.partner[i] = o;
+    a.ptime[i] = e.t;
+    a.resolved[i] = 1;
+  } else {
+    return false;
+  }
+  return true;
+}
+
 /// Every round of the step in one block, so that the host never waits: particles without pair
-/// events are decided at once (their wall, or nothing); the others go through rounds of the
-/// kit's choose_one() / accept_one() (cuda/rounds.cuh) separated by block barriers. Skips the step (and counts nothing) when a particle has
-/// more pair events than slots; the host then grows the slots and runs the step again.
+/// events are decided at once (their wall, or nothing); the others go through rounds of
+/// choose_one() / accept_one() separated by block barriers. Skips the step (and counts nothing)
+/// when a particle has more pair events than slots; the host then grows the slots and runs the
+/// step again.
 __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) {
   __shared__ int contested;
   if (a.flags->overflow) return;  // an earlier step is waiting for more slots
@@ -122,14 +153,39 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
   if (threadIdx.x == 0) a.flags->steps_done += 1;
 }
 
-/// Applies the plan (plab::apply_one()'s own code, on the device); `Branchless` picks model.md's
-/// branchless wall event (flip each axis whose time equals the earlier one) over the branchy
-/// one: the same bits, less divergence.
+/// The branchless wall event (model.md): \f$ e = \min(t_x, t_y) \f$, reflect every axis whose
+/// time equals \f$e\f$, then move \f$ \min(1, t_{later}) - e \f$, with \f$ t_{later} = 1 \f$ at a
+/// corner. The same operations on every path, so a warp does not split; the same bits as
+/// model::wall_event() (the tests compare them).
+struct BranchlessWall {
+  /// The wall event of particle `(x, y, vx, vy, wc)`, from its start-of-step state.
+  template <class Real>
+  PLAB_HD void operator()(Real& x, Real& y, Real& vx, Real& vy, long long& wc, Real L,
+                          Real r) const {
+    const model::WallTimesOf<Real> w = model::wall_times(x, y, vx, vy, L, r);
+    const Real e = model::wall_time(w);
+    const bool flip_x = (w.tx == e);
+    const bool flip_y = (w.ty == e);
+    const Real later = (flip_x && flip_y) ? Real(1) : (flip_x ? w.ty : w.tx);
+    const Real m = ((later < 1) ? later : Real(1)) - e;
+    x = x + e * vx;
+    y = y + e * vy;
+    model::reflect(vx, vy, flip_x, flip_y);
+    x = x + m * vx;
+    y = y + m * vy;
+    wc = wc + 1;
+  }
+};
+
+/// Applies the plan (plab::apply_one()'s own code, on the device); `Branchless` picks
+/// BranchlessWall over the kit's branchy model::wall_event() (BranchyWall): the same bits, less
+/// divergence.
 template <bool Branchless>
 __global__ void apply(ParticlesView p, Box box, StepArrays a) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= p.n || a.flags->overflow) return;
-  apply_planned<Branchless>(p, a.partner, a.ptime, i, box.L, box.r);
+  using Wall = std::conditional_t<Branchless, BranchlessWall, BranchyWall>;
+  apply_planned<Wall>(p, a.partner, a.ptime, i, box.L, box.r);
 }
 
 }  // namespace plab::kernels

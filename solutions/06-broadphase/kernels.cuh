@@ -1,287 +1,213 @@
 /// \file solutions/06-broadphase/kernels.cuh
-/// \brief Stage 06's kernels (device code only): the space-time grid built by a counting sort on
-/// the GPU (atomics, a CUB scan), a few slabs at a time, the pair search over neighbouring
-/// buckets filing compact candidates (cuda/candidates.cuh), then stage 05's rounds and branchless
-/// apply over them.
+/// \brief Stage 06's kernels (device code only): each particle hashed to a cell of a uniform grid
+/// in each time slab of the step, the cell starts of the sorted keys, the neighbour search
+/// filing the pairs that meet into one list, the mutual-earliest rounds over it, and apply.
 #pragma once
 
-#include <cooperative_groups.h>
-
 #include "plab/cuda/particles.hpp"
-#include "plab/cuda/rounds.cuh"
-#include "plab/cuda/candidates.cuh"
 #include "plab/model.hpp"
 #include "plab/plan.hpp"
 #include "plab/scene.hpp"
-#include "plab/sweep.hpp"
 
 namespace plab::kernels {
 
-using cuda::accept_one;
-using cuda::choose_one;
-using cuda::start_one;
 using cuda::ParticlesView;
-using model::Event;
-
-constexpr int kResolveThreads = 1024;  //!< the one block of resolve
+constexpr int kSelectThreads = 1024;          //!< the one block of select_pairs
+constexpr unsigned long long kNone = ~0ull;  //!< "no pair yet" in best_t and best_pair
 
 /// What the host reads after a batch of steps.
 struct Flags {
-  int overflow;          //!< pairs a step needed, when they did not fit the list (else 0)
+  int pairs;             //!< pairs filed this step
+  int overflow;          //!< pairs a step needed when the list had no room for them (else 0)
   long long steps_done;  //!< steps applied so far
-  int pairs;             //!< pairs filed this step (CompactView::file())
-  int contested;         //!< particles with pair events this step (listed by start_rounds)
-  int open[3];           //!< resolve_grid: someone left unresolved in round r (at r % 3)
-  int fast;              //!< fast entries the pass's search listed for a team search (the solution's
-                         //!< find_fast_pairs)
 };
 
-/// The grid of the batch and the slabs of one pass of the counting sort, as the kernels see it.
-/// A pass sorts and searches slabs [first, first + slabs) together: slab k's cells are buckets
-/// [(k - first) * cells, (k - first + 1) * cells), and its entries are counted at
-/// [(k - first) * n + i]. Large scenes take a few slabs a pass, so that the entries of one pass
-/// (not of the whole step) are what the memory holds.
-struct DeviceGrid {
-  sweep::Grid g;  //!< slabs, cells, v_cut
-  int cells;      //!< g.cells()
-  int first;      //!< the pass's first slab
-  int slabs;      //!< the pass's number of slabs
+/// The step split into `slabs` time slabs; in each, a particle is binned by its position at the
+/// slab's midpoint into side x side square cells covering the box (an entry: slab, particle).
+struct Grid {
+  int slabs;         //!< time slabs K of the step
+  int side;          //!< cells along each axis
+  double inv_cell;   //!< 1 / cell width
+  double reach;      //!< 2r + a rounding margin (length units)
+  double per_speed;  //!< a slab's width 1/K, plus a millionth for rounding
+  [[nodiscard]] __host__ __device__ int cells() const { return side * side; }  //!< of a slab
 };
 
-/// What the pair search reads of an entry, in one 32-byte sector (the scatter writes it at a
-/// random place: one sector, not four).
-struct alignas(32) Entry {
-  double x, y;    //!< midpoint position
-  double vx, vy;  //!< velocity
+/// One pair event the search files.
+struct Pair {
+  int lo;    //!< the lower particle index
+  int hi;    //!< the higher
+  double t;  //!< the pair time (steps)
 };
-
-/// Each particle's pair events of the step, compact (cuda/candidates.cuh).
-using Slots = cuda::CompactView;
 
 /// One step's working arrays (pointers into memory the host class owns).
 struct StepArrays {
-  double* wall;      //!< wall time of each particle
-  int* last;         //!< the last slab each particle takes part in (sweep::last_slab())
-  Slots slots;       //!< each particle's pair events of the step (count, list, rows)
-  Event* best;       //!< each unresolved particle's earliest event in the current round
-  char* resolved;    //!< 1 once a particle's event (or none) is decided
-  int* contested;    //!< the particles with at least one pair event
-  int* partner;      //!< the plan: Plan::kFree, Plan::kWall, or the other particle of its pair
-  double* ptime;     //!< the plan's pair time
-  int* filled;       //!< a pass's slabs * cells + 1: entries counted into each bucket
-  int* start;        //!< the same: bucket b holds entries [start[b], start[b + 1])
-  int* rank;         //!< per (slab of the pass, particle) at [(k - first) * n + i]: its place in
-                     //!< its bucket
-  int* entry_id;     //!< per entry (at most slabs of a pass * N): the particle
-  int* entry_k;      //!< ... its slab
-  Entry* entry;      //!< ... its midpoint position and velocity
-  Flags* flags;      //!< see Flags
+  int* key_in;   //!< per entry k * N + i: its bucket, slab * cells + cell
+  int* id_in;    //!< ... its particle i
+  int* key_out;  //!< the keys, sorted
+  int* id_out;   //!< the particles, in the sorted keys' order
+  int* start;             //!< slabs * cells + 1: bucket b holds entries [start[b], start[b + 1])
+  Pair* list;             //!< the pairs filed this step
+  int capacity;           //!< room in `list`
+  int* partner;           //!< the plan: Plan::kFree, Plan::kWall, or the other particle
+  double* ptime;          //!< the plan's pair time
+  unsigned long long* best_t;     //!< in a round: each particle's earliest pair time (bits)
+  unsigned long long* best_pair;  //!< ... the smallest lo << 32 | hi at that time
+  Flags* flags;           //!< see Flags
 };
 
-/// Wall times, the last slab of each particle, counters cleared.
-__global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
+/// Midpoint time of slab `k`.
+__device__ inline double slab_mid(int k, const Grid& g) { return (k + 0.5) / g.slabs; }
+
+/// The slab that holds time `t` (0 <= t < 1).
+__device__ inline int slab_of(double t, const Grid& g) {
+  return min(static_cast<int>(t * g.slabs), g.slabs - 1);
+}
+
+/// The cell of coordinate `v` along one axis, clamped to [0, side - 1] (0 for not-a-number):
+/// clamping never separates two neighbours.
+__device__ inline int cell_index(double v, const Grid& g) {
+  const double c = floor(v * g.inv_cell);
+  if (!(c > 0)) return 0;
+  return c >= g.side ? g.side - 1 : static_cast<int>(c);
+}
+
+/// How far along each axis a particle of velocity (vx, vy) searches around its midpoint
+/// position: two particles that meet in a slab are at most 2r + h(|v_a| + |v_b|) apart at its
+/// midpoint (h = 1/(2K)), so within the faster one's 2r + 2h|v|.
+__device__ inline double reach_of(double vx, double vy, const Grid& g) {
+  return (g.reach + sqrt(vx * vx + vy * vy) * g.per_speed) * (1 + 1e-9);
+}
+
+/// Whether particle i files its pair with j: the faster of the two (its reach covers the other),
+/// the lower index when both are as fast; so each pair is filed once.
+__device__ inline bool files_pair(const ParticlesView& p, int i, int j) {
+  const double vi = p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i];
+  const double vj = p.vx[j] * p.vx[j] + p.vy[j] * p.vy[j];
+  return vj < vi || (vj == vi && i < j);
+}
+
+/// Particle i's wall time (model.md).
+__device__ inline double wall_of(const ParticlesView& p, const Box& box, int i) {
+  return model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
+}
+
+/// Files the pair event (lo, hi, t); when the list is full, raises `overflow` to the pairs the
+/// step needs (the host grows the list and redoes the step).
+__device__ inline void file(const StepArrays& a, int lo, int hi, double t) {
+  const int q = atomicAdd(&a.flags->pairs, 1);
+  if (q < a.capacity)
+    a.list[q] = Pair{lo, hi, t};
+  else
+    atomicMax(&a.flags->overflow, q + 1);
+}
+
+/// Every particle free, no earliest pair, the list empty.
+__global__ void start_step(int n, StepArrays a) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  a.partner[i] = Plan::kFree;
+  a.best_t[i] = a.best_pair[i] = kNone;
+  if (i == 0) a.flags->pairs = 0;
+}
+
+/// The binning (grid: particles x slabs): entry k * N + i gets particle i and its bucket in
+/// slab k, the cell of its position at the slab's midpoint.
+__global__ void bin(ParticlesView p, StepArrays a, Grid g) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x, k = blockIdx.y;
   if (i >= p.n) return;
-  a.wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
-  a.last[i] = sweep::last_slab(sweep::path_end(a.wall[i]), d.g);
-  a.slots.count[i] = 0;
-  if (i == 0) {
-    a.flags->pairs = 0;
-    a.flags->contested = 0;
-    a.flags->open[0] = a.flags->open[1] = a.flags->open[2] = 0;
-  }
+  const double tm = slab_mid(k, g);
+  const double mx = p.x[i] + tm * p.vx[i], my = p.y[i] + tm * p.vy[i];
+  const long long e = static_cast<long long>(k) * p.n + i;
+  a.key_in[e] = k * g.cells() + cell_index(my, g) * g.side + cell_index(mx, g);
+  a.id_in[e] = i;
 }
 
-/// Particle i's midpoint position in slab k.
-__device__ inline void midpoint(const ParticlesView& p, int i, int k, const DeviceGrid& d,
-                                double& mx, double& my) {
-  const double tm = sweep::slab_mid(k, d.g);
-  mx = p.x[i] + tm * p.vx[i];
-  my = p.y[i] + tm * p.vy[i];
-}
-
-/// Particle i's bucket in slab k of the pass (its midpoint position's cell).
-__device__ inline int bucket_of(const ParticlesView& p, int i, int k, const DeviceGrid& d,
-                                double& mx, double& my) {
-  midpoint(p, i, k, d, mx, my);
-  return (k - d.first) * d.cells + sweep::cell_of(mx, my, d.g);
-}
-
-/// Counting sort, pass 1 (grid: particles x the pass's slabs): each particle that takes part in
-/// slab k counts itself into its bucket, and keeps its place there.
-__global__ void bin_count(ParticlesView p, StepArrays a, DeviceGrid d) {
-  const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  const int k = d.first + blockIdx.y;
-  if (i >= p.n || a.last[i] < k) return;
-  double mx, my;
-  const int b = bucket_of(p, i, k, d, mx, my);
-  a.rank[static_cast<long long>(blockIdx.y) * p.n + i] = atomicAdd(&a.filled[b], 1);
-}
-
-/// Counting sort, pass 2 (after the exclusive scan of `filled` into `start`): each entry to its
-/// place (its bucket found again, the same arithmetic), with what the search reads.
-__global__ void bin_scatter(ParticlesView p, StepArrays a, DeviceGrid d) {
-  const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  const int k = d.first + blockIdx.y;
-  if (i >= p.n || a.last[i] < k) return;
-  double mx, my;
-  const int b = bucket_of(p, i, k, d, mx, my);
-  const int e = a.start[b] + a.rank[static_cast<long long>(blockIdx.y) * p.n + i];
-  a.entry_id[e] = i;
-  a.entry_k[e] = k;
-  a.entry[e] = Entry{mx, my, p.vx[i], p.vy[i]};
-}
-
-/// Whether particles i and j pass the slab test in slab k (then slab k's search finds them).
-__device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, int k,
-                                        const DeviceGrid& d) {
-  double xi, yi, xj, yj;
-  midpoint(p, i, k, d, xi, yi);
-  midpoint(p, j, k, d, xj, yj);
-  return sweep::close_in_slab(xi - xj, yi - yj, p.vx[i] - p.vx[j], p.vy[i] - p.vy[j], d.g);
-}
-
-/// Entry e against entries [from, to) of its slab: the pairs that pass sweep::close_in_slab() get
-/// model.md's pair time, unless slab k - 1 found them already (a pair filed twice is harmless to
-/// the rounds, but it takes room), and are filed when the pair comes before both particles'
-/// walls. A team of `lanes` threads can share the run: this one takes every lanes-th entry from
-/// from + lane.
-__device__ inline void test_entries(const ParticlesView& p, const Box& box, const StepArrays& a,
-                                    const DeviceGrid& d, int e, int from, int to, int lane = 0,
-                                    int lanes = 1) {
-  const int i = a.entry_id[e], k = a.entry_k[e];
-  const Entry me = a.entry[e];
-  for (int f = from + lane; f < to; f += lanes) {
-    const Entry o = a.entry[f];
-    if (f == e || !sweep::close_in_slab(me.x - o.x, me.y - o.y, me.vx - o.vx, me.vy - o.vy, d.g))
-      continue;
-    const int j = a.entry_id[f];
-    if (k > 0 && close_in_slab_at(p, i, j, k - 1, d)) continue;  // found in slab k - 1
-    const int lo = i < j ? i : j, hi = i < j ? j : i;
-    const double t = model::pair_time(p.x[lo], p.y[lo], p.vx[lo], p.vy[lo], p.x[hi], p.y[hi],
-                                      p.vx[hi], p.vy[hi], box.r);
-    if (model::in_step(t) && model::before_walls(t, a.wall[lo], a.wall[hi]))
-      a.slots.file(lo, hi, t, &a.flags->pairs);
-  }
-}
-
-constexpr int kSearchThreads = 256;  //!< threads per block of find_pairs and find_fast_pairs
-constexpr int kFastTeam = 8;         //!< threads that search together for one fast entry
-
-/// The pair search, one thread per entry (as step.cpp, but for the fast entries): a slow entry
-/// against the later entries of its row up to the last column within its reach, then the
-/// columns within reach of the row above (two runs of entries of its slab). A fast entry
-/// searches about twice as many entries (every row within its reach): it is listed in `a.rank`
-/// (free once bin_scatter ran) for find_fast_pairs, so that the threads of a warp run loops of
-/// like length. At most 64 registers a thread (four blocks an SM).
-__global__ void __launch_bounds__(kSearchThreads, 4)
-    find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
-  namespace cg = cooperative_groups;
+/// After the sort, one thread per entry: the entry starts the buckets after the previous
+/// entry's up to its own (empty ones too); the last entry also ends every later bucket.
+__global__ void cell_starts(StepArrays a, Grid g, int entries) {
   const int e = blockIdx.x * blockDim.x + threadIdx.x;
-  if (e >= a.start[d.slabs * d.cells] || a.flags->overflow) return;
-  const Entry me = a.entry[e];
-  const sweep::Search q = sweep::search_of(me.vx, me.vy, d.g);
-  if (q.fast) {  // one atomic for the fast threads of the warp
-    const cg::coalesced_group fast = cg::coalesced_threads();
-    int first = 0;
-    if (fast.thread_rank() == 0) first = atomicAdd(&a.flags->fast, static_cast<int>(fast.size()));
-    a.rank[fast.shfl(first, 0) + static_cast<int>(fast.thread_rank())] = e;
-    return;
-  }
-  const int columns = d.g.columns;
-  const int* row = a.start + (a.entry_k[e] - d.first) * d.cells;  // this slab's cells
-  int x0, x1;
-  sweep::columns_within(me.x, q.d, d.g, x0, x1);
-  const int y = sweep::row_of(me.y, d.g);
-  test_entries(p, box, a, d, e, e + 1, row[y * columns + x1 + 1]);
-  if (y + 1 < d.g.rows)
-    test_entries(p, box, a, d, e, row[(y + 1) * columns + x0], row[(y + 1) * columns + x1 + 1]);
+  if (e >= entries) return;
+  const int key = a.key_out[e];
+  for (int b = (e == 0 ? 0 : a.key_out[e - 1] + 1); b <= key; ++b) a.start[b] = e;
+  if (e == entries - 1)
+    for (int b = key + 1; b <= g.slabs * g.cells(); ++b) a.start[b] = entries;
 }
 
-/// The search of the fast entries find_pairs listed (`flags->fast` of them in `a.rank`): a team
-/// of kFastTeam threads for each, sharing every run of entries within its reach, one run per
-/// row (a pair found twice is harmless); any grid, the teams stride over the list.
-__global__ void __launch_bounds__(kSearchThreads, 4)
-    find_fast_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
-  const int t = blockIdx.x * blockDim.x + threadIdx.x;
-  const int lane = t % kFastTeam, teams = gridDim.x * blockDim.x / kFastTeam;
-  if (a.flags->overflow) return;
-  const int m = a.flags->fast, columns = d.g.columns;
-  for (int q = t / kFastTeam; q < m; q += teams) {
-    const int e = a.rank[q];
-    const int* row = a.start + (a.entry_k[e] - d.first) * d.cells;
-    const Entry me = a.entry[e];
-    const double reach = sweep::search_of(me.vx, me.vy, d.g).d;
-    int x0, x1, y0, y1;
-    sweep::columns_within(me.x, reach, d.g, x0, x1);
-    sweep::rows_within(me.y, reach, d.g, y0, y1);
-    for (int y = y0; y <= y1; ++y)
-      test_entries(p, box, a, d, e, row[y * columns + x0], row[y * columns + x1 + 1], lane,
-                   kFastTeam);
+/// The neighbour search, one thread per sorted entry (particle i in slab k): the entries of
+/// slab k in the cells within reach_of() of i's midpoint, one run of entries per row of cells.
+/// A pair is filed when i files it (files_pair()), it meets in slab k (so once) and before both
+/// walls (a later pair loses to the wall).
+__global__ void find_pairs(ParticlesView p, Box box, StepArrays a, Grid g, int entries) {
+  const int e = blockIdx.x * blockDim.x + threadIdx.x;
+  if (e >= entries) return;
+  const int i = a.id_out[e], k = a.key_out[e] / g.cells();
+  const double tm = slab_mid(k, g);
+  const double mx = p.x[i] + tm * p.vx[i], my = p.y[i] + tm * p.vy[i];
+  const double d = reach_of(p.vx[i], p.vy[i], g);
+  const int x0 = cell_index(mx - d, g), x1 = cell_index(mx + d, g);
+  for (int y = cell_index(my - d, g); y <= cell_index(my + d, g); ++y) {
+    const int* row = a.start + k * g.cells() + y * g.side;
+    for (int f = row[x0]; f < row[x1 + 1]; ++f) {
+      const int j = a.id_out[f];
+      if (j == i || !files_pair(p, i, j)) continue;
+      const int lo = min(i, j), hi = max(i, j);
+      const double t = model::pair_time(p.x[lo], p.y[lo], p.vx[lo], p.vy[lo], p.x[hi], p.y[hi],
+                                        p.vx[hi], p.vy[hi], box.r);
+      if (model::in_step(t) && slab_of(t, g) == k &&
+          model::before_walls(t, wall_of(p, box, lo), wall_of(p, box, hi)))
+        file(a, lo, hi, t);
+    }
   }
 }
 
-/// After the passes: lays the filed pairs into each particle's row (CompactView::place(), once
-/// `end` is the exclusive scan of the counts); when the list had no room for them all, stops
-/// the batch instead (`overflow` = the pairs the step needs; the host grows the list).
-__global__ void place_pairs(StepArrays a) {
-  const int q = blockIdx.x * blockDim.x + threadIdx.x;
-  const int filed = a.flags->pairs;
-  if (filed > a.slots.capacity) {
-    if (q == 0) atomicMax(&a.flags->overflow, filed);
-    return;
+/// The sparse selection in one block: rounds until no filed pair has both particles free. In a
+/// round each free particle's earliest pair (by time, then (lo, hi): model.md's key) is found by
+/// two atomicMin passes, and a pair that is the earliest of both its particles is accepted: the
+/// greedy pass's plan. Every pair filed comes before both walls; walls come after (apply).
+__global__ void __launch_bounds__(kSelectThreads) select_pairs(StepArrays a) {
+  if (a.flags->overflow) return;  // the host redoes this step with a longer list
+  const int m = a.flags->pairs;
+  for (;;) {
+    for (int phase = 0; phase < 3; ++phase) {
+      for (int q = threadIdx.x; q < m; q += blockDim.x) {
+        const Pair e = a.list[q];
+        const auto t = static_cast<unsigned long long>(__double_as_longlong(e.t));  // t >= 0
+        const unsigned long long key = static_cast<unsigned long long>(e.lo) << 32 | e.hi;
+        const bool free =
+            phase < 2 && a.partner[e.lo] == Plan::kFree && a.partner[e.hi] == Plan::kFree;
+        if (phase == 0 && free) {  // the earliest time of each free particle
+          atomicMin(&a.best_t[e.lo], t);
+          atomicMin(&a.best_t[e.hi], t);
+        } else if (phase == 1 && free) {  // the smallest (lo, hi) at that time
+          if (a.best_t[e.lo] == t) atomicMin(&a.best_pair[e.lo], key);
+          if (a.best_t[e.hi] == t) atomicMin(&a.best_pair[e.hi], key);
+        } else if (phase == 2 && a.best_pair[e.lo] == key && a.best_pair[e.hi] == key) {
+          a.partner[e.lo] = e.hi;  // the earliest of both: accepted
+          a.partner[e.hi] = e.lo;
+          a.ptime[e.lo] = a.ptime[e.hi] = e.t;
+        }
+      }
+      __syncthreads();
+    }
+    int open = 0;
+    for (int q = threadIdx.x; q < m; q += blockDim.x) {  // clear the bests; any pair left?
+      const Pair e = a.list[q];
+      a.best_t[e.lo] = a.best_t[e.hi] = a.best_pair[e.lo] = a.best_pair[e.hi] = kNone;
+      open |= a.partner[e.lo] == Plan::kFree && a.partner[e.hi] == Plan::kFree;
+    }
+    if (!__syncthreads_or(open)) break;
   }
-  if (q < filed && !a.flags->overflow) a.slots.place(q);
 }
 
-/// Before the rounds, on the whole GPU: each particle's start (cuda::start_one(): decided at once
-/// when it has no pair event) and the list of those with pair events, `a.contested` (as many as
-/// `flags->contested`).
-__global__ void start_rounds(int n, StepArrays a) {
-  const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n || a.flags->overflow) return;
-  if (start_one(i, a) > 0) a.contested[atomicAdd(&a.flags->contested, 1)] = i;
-}
-
-/// Every round of the step in one block over the particles start_rounds listed (stage 05's
-/// rounds, from the kit: cuda::rounds_block()); nothing when the step was stopped.
-__global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) {
-  if (a.flags->overflow) return;
-  cuda::rounds_block(n, a.flags->contested, a);
-}
-
-/// resolve() for large N: the same rounds over the whole grid (a cooperative launch, every block
-/// resident), with grid-wide barriers between the phases instead of block barriers.
-__global__ void resolve_grid(int n, StepArrays a) {
-  namespace cg = cooperative_groups;
-  cg::grid_group grid = cg::this_grid();
-  Flags* f = a.flags;
-  const int stride = gridDim.x * blockDim.x;
-  const int me = blockIdx.x * blockDim.x + threadIdx.x;
-  if (f->overflow) return;  // written before this kernel: every block returns alike
-  const int m = f->contested;
-  const Event none = model::pair_event_key(model::never(), n, n);
-  for (int round = 0;; ++round) {
-    // Three flags: round r writes r % 3 and everyone reads it after the last barrier of round r;
-    // clearing (r + 1) % 3 now cannot meet a slow reader of round r - 1's flag.
-    if (me == 0) f->open[(round + 1) % 3] = 0;
-    for (int q = me; q < m; q += stride)  // choose
-      if (!a.resolved[a.contested[q]]) choose_one(a.contested[q], a, none);
-    grid.sync();
-    for (int q = me; q < m; q += stride)  // accept
-      if (!a.resolved[a.contested[q]] && !accept_one(a.contested[q], a)) f->open[round % 3] = 1;
-    grid.sync();
-    if (!f->open[round % 3]) break;
-  }
-  if (me == 0) f->steps_done += 1;
-}
-
-/// Applies the plan (plab::apply_one()'s own code, on the device, with branchless walls);
-/// nothing when the step was skipped.
+/// Applies the plan (plab::apply_one()'s code): a particle no pair took hits its wall when its
+/// wall time is in the step. Nothing when the step was stopped.
 __global__ void apply(ParticlesView p, Box box, StepArrays a) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= p.n || a.flags->overflow) return;
-  apply_planned<true>(p, a.partner, a.ptime, i, box.L, box.r);
+  if (i == 0) a.flags->steps_done += 1;
+  if (a.partner[i] == Plan::kFree && model::in_step(wall_of(p, box, i))) a.partner[i] = Plan::kWall;
+  apply_planned(p, a.partner, a.ptime, i, box.L, box.r);
 }
 
 }  // namespace plab::kernels

@@ -1,85 +1,67 @@
 /// \file solutions/06-broadphase/launchers.cuh
-/// \brief Stage 06's launchers: grid size, launch on a stream, check. One per kernel (the
-/// counting sort's scan is the kit's, plab::cuda::exclusive_scan()).
+/// \brief Stage 06's launchers: grid size, launch on a stream, check; the sort of the entries
+/// by bucket is CUB's DeviceRadixSort.
 #pragma once
 
+#include <cub/device/device_radix_sort.cuh>
+
+#include <cstddef>
 
 #include "kernels.cuh"
 #include "plab/cuda/check.hpp"
-#include "plab/cuda/scan.cuh"
-#include "plab/cuda/stream.hpp"
+#include "plab/stage.hpp"
 
 namespace plab::launch {
 
 constexpr int kThreads = 256;  //!< threads per block of the per-particle and per-entry kernels
 
-static_assert(kernels::kSearchThreads == kThreads);
-
 /// Blocks of kThreads covering `n`.
 inline unsigned blocks(long long n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
 
-inline void start_step(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
-                       const kernels::DeviceGrid& d, cudaStream_t s) {
-  kernels::start_step<<<blocks(p.n), kThreads, 0, s>>>(p, box, a, d);
+/// The bits of a bucket key of grid `g` (the sort looks at no others).
+inline int key_bits(const kernels::Grid& g) {
+  int bits = 1;
+  while (bits < 31 && (1 << bits) < g.slabs * g.cells()) ++bits;
+  return bits;
+}
+
+/// Bytes of temporary storage the sort of `entries` entries of grid `g` needs.
+inline std::size_t sort_bytes(const kernels::Grid& g, int entries) {
+  std::size_t bytes = 0;
+  int* none = nullptr;
+  PLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, bytes, none, none, none, none, entries,
+                                                  0, key_bits(g)));
+  return bytes;
+}
+
+inline void start_step(int n, const kernels::StepArrays& a, cudaStream_t s) {
+  kernels::start_step<<<blocks(n), kThreads, 0, s>>>(n, a);
   PLAB_CUDA_CHECK_LAUNCH("start_step");
 }
 
-inline void bin_count(const cuda::ParticlesView& p, const kernels::StepArrays& a,
-                      const kernels::DeviceGrid& d, cudaStream_t s) {
-  kernels::bin_count<<<dim3(blocks(p.n), d.slabs), kThreads, 0, s>>>(p, a, d);
-  PLAB_CUDA_CHECK_LAUNCH("bin_count");
+/// The binning: kernels::bin on (N / kThreads) x slabs blocks, the sort of the entries by key
+/// (key_in, id_in into key_out, id_out; `temp` of sort_bytes()), then kernels::cell_starts.
+inline void bin(const cuda::ParticlesView& p, const kernels::StepArrays& a, const kernels::Grid& g,
+                int entries, void* temp, std::size_t temp_bytes, cudaStream_t s) {
+  kernels::bin<<<dim3(blocks(p.n), g.slabs), kThreads, 0, s>>>(p, a, g);
+  PLAB_CUDA_CHECK_LAUNCH("bin");
+  PLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(temp, temp_bytes, a.key_in, a.key_out, a.id_in,
+                                                  a.id_out, entries, 0, key_bits(g), s));
+  kernels::cell_starts<<<blocks(entries), kThreads, 0, s>>>(a, g, entries);
+  PLAB_CUDA_CHECK_LAUNCH("cell_starts");
 }
 
-inline void bin_scatter(const cuda::ParticlesView& p, const kernels::StepArrays& a,
-                        const kernels::DeviceGrid& d, cudaStream_t s) {
-  kernels::bin_scatter<<<dim3(blocks(p.n), d.slabs), kThreads, 0, s>>>(p, a, d);
-  PLAB_CUDA_CHECK_LAUNCH("bin_scatter");
-}
-
-/// The pair search of a pass: find_pairs over every entry (the slow ones), then find_fast_pairs
-/// over the fast ones it listed (a team of kernels::kFastTeam threads each, on a grid for a
-/// tenth of the entries: the fastest tenth of the particles are the fast ones, sweep::choose()).
+/// The neighbour search: kernels::find_pairs, one thread per entry.
 inline void find_pairs(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
-                       const kernels::DeviceGrid& d, cudaStream_t s) {
-  const long long most = static_cast<long long>(p.n) * d.slabs;  // entries this pass, at most
-  PLAB_CUDA_CHECK(cudaMemsetAsync(&a.flags->fast, 0, sizeof(int), s));
-  kernels::find_pairs<<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d);
+                       const kernels::Grid& g, int entries, cudaStream_t s) {
+  kernels::find_pairs<<<blocks(entries), kThreads, 0, s>>>(p, box, a, g, entries);
   PLAB_CUDA_CHECK_LAUNCH("find_pairs");
-  kernels::find_fast_pairs<<<blocks((most / 10 + 1) * kernels::kFastTeam),
-                             kernels::kSearchThreads, 0, s>>>(p, box, a, d);
-  PLAB_CUDA_CHECK_LAUNCH("find_fast_pairs");
 }
 
-/// One thread per pair the list can hold.
-inline void place_pairs(const kernels::StepArrays& a, cudaStream_t s) {
-  kernels::place_pairs<<<blocks(a.slots.capacity), kThreads, 0, s>>>(a);
-  PLAB_CUDA_CHECK_LAUNCH("place_pairs");
-}
-
-inline void start_rounds(int n, const kernels::StepArrays& a, cudaStream_t s) {
-  kernels::start_rounds<<<blocks(n), kThreads, 0, s>>>(n, a);
-  PLAB_CUDA_CHECK_LAUNCH("start_rounds");
-}
-
-inline void resolve(int n, const kernels::StepArrays& a, cudaStream_t s) {
-  kernels::resolve<<<1, kernels::kResolveThreads, 0, s>>>(n, a);
-  PLAB_CUDA_CHECK_LAUNCH("resolve");
-}
-
-/// Blocks of resolve_grid that can all be resident at once (a cooperative launch needs that).
-inline int resolve_grid_blocks() {
-  int device = 0, sms = 0, per_sm = 0;
-  PLAB_CUDA_CHECK(cudaGetDevice(&device));
-  PLAB_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
-  PLAB_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, kernels::resolve_grid,
-                                                                kThreads, 0));
-  return sms * per_sm;
-}
-
-inline void resolve_grid(int n, const kernels::StepArrays& a, int grid_blocks, cudaStream_t s) {
-  void* args[] = {&n, const_cast<kernels::StepArrays*>(&a)};
-  PLAB_CUDA_CHECK(cudaLaunchCooperativeKernel(reinterpret_cast<void*>(kernels::resolve_grid),
-                                              grid_blocks, kThreads, args, 0, s));
+/// The selection: kernels::select_pairs in one block of kernels::kSelectThreads.
+inline void select_pairs(const kernels::StepArrays& a, cudaStream_t s) {
+  kernels::select_pairs<<<1, kernels::kSelectThreads, 0, s>>>(a);
+  PLAB_CUDA_CHECK_LAUNCH("select_pairs");
 }
 
 inline void apply(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,

@@ -1,24 +1,24 @@
 /// \file solutions/06-broadphase/step.cu
-/// \brief Stage 06 on the GPU: the broad phase of step.cpp as a counting sort on the device, the
-/// pair search over neighbouring buckets into compact candidates, stage 05's rounds and apply;
-/// one CUDA graph per step.
-/// plab::make_gpu_stepper(), which step.cpp's make_stepper() takes when there is a GPU
-/// (--device cpu forces step.cpp).
+/// \brief Stage 06 on the GPU: step.cpp's broad phase as a sort of (slab, particle) entries by
+/// cell, a neighbour search into one list of pairs, mutual-earliest rounds over that list, and
+/// apply, recorded once as a CUDA graph. plab::make_gpu_stepper(), which step.cpp's
+/// make_stepper() takes when there is a GPU (--device cpu forces step.cpp).
 //
 // =================================================================================================
-//  GOAL   step.cpp's idea with every phase on the device and no host round trip in a step:
-//         start_step (wall times, last slabs, counters) -> per pass of a few slabs: bin_count ->
-//         CUB scan -> bin_scatter -> find_pairs; then CUB scan of the counts -> place_pairs ->
-//         start_rounds -> resolve -> apply, recorded once as a graph. The grid is chosen on the
-//         host from the first state; particles that get faster than v_cut search wider, so it
-//         stays exact for any speed. A step with more pairs than the list holds stops the batch
-//         on the device, and the host redoes it with a longer list.
+//  GOAL   Every phase on the device, as the CUDA sample `particles` does its grid:
+//         4. binning: each (slab, particle) entry gets the cell of its position at the slab's
+//            midpoint as key; sort the entries by key (CUB); find where each cell starts;
+//         5. neighbour search: each entry tests the entries of the cells within its reach and
+//            files the pairs that meet in its slab into one list (a fast particle searches more
+//            cells: exact for any speed);
+//         6. the sparse selection: stage 04's mutual-earliest rounds over the list of pairs.
+//         A step whose pairs overflow the list stops the batch; the host redoes it, longer.
 //  READ   handouts/06-broadphase.md     TEST   ./plab test --stage 06 (on a GPU machine)
 // =================================================================================================
 #include <algorithm>
+#include <cmath>
 #include <memory>
 #include <string>
-#include <vector>
 
 #include "launchers.cuh"
 #include "plab/cuda/stepper.hpp"
@@ -27,134 +27,95 @@
 namespace plab {
 namespace {
 
-constexpr double kAlpha = 0.5;  //!< slabs per sqrt(N) v_cut / L (measured best on an H100)
-/// Entries (particle, slab) one pass of the counting sort holds at most: a step takes as many
-/// passes as this needs (one up to N = 10^5 at the report's density, every slab alone from
-/// N = 10^6), so that memory grows with N, not with N times the slabs. One pass or nine made no
-/// measurable difference at N = 10^6 on an H100 (a few kernel launches more a step).
-constexpr long long kEntriesPerPass = 1 << 20;
+constexpr double kAlpha = 1.0;  //!< slabs per sqrt(N) mean speed / L (--sweep-alpha sets another)
+constexpr long long kMostEntries = 1 << 27;  //!< (slab, particle) entries at most (and 64 slabs)
+constexpr long long kCheckEvery = 32;        //!< steps between two looks at the flags
 
-/// A run of stage 06 on the GPU (the kit's cuda::DeviceStepper holds the particles, the flags
-/// and the timer, and reads the state back).
+/// A run of stage 06 on the GPU (cuda::DeviceStepper holds the particles, flags and timer).
 class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
  public:
   CudaStepper(const Box& box, const Particles& p, std::string device, double alpha)
-      : DeviceStepper(std::move(device), box, p, cuda::Queue::kOwnStream), alpha_(alpha),
-        wall_(n_), last_(n_), slots_(n_, n_ / 4 + 1024), best_(n_), resolved_(n_),  // grown as needed
-        contested_(n_), partner_(n_), ptime_(n_) {
-    set_grid(p);
-    if (n_ >= kGridResolveFrom) grid_blocks_ = launch::resolve_grid_blocks();
+      : DeviceStepper(std::move(device), box, p, cuda::Queue::kOwnStream), list_(n_ + 1024),
+        partner_(n_), ptime_(n_), best_t_(n_), best_pair_(n_) {
+    choose_grid(p, alpha);
+    entries_ = static_cast<int>(static_cast<long long>(n_) * grid_.slabs);
+    for (auto* v : {&key_in_, &id_in_, &key_out_, &id_out_}) v->resize(entries_);
+    start_.resize(static_cast<std::size_t>(grid_.slabs) * grid_.cells() + 1);
+    temp_.resize(launch::sort_bytes(grid_, entries_));
     sync();
   }
 
   void step() override {
-    DeviceStepper::step();
-    // A stop on the device (a longer list) idles every later step until the host looks: look
-    // after the first step (the list's first length is a guess) and then every kCheckEvery
-    // steps, so that at most that many are redone.
+    DeviceStepper::step();  // look at the flags after the first step, then every kCheckEvery
     if (n_ > 0 && (asked_ == 1 || asked_ % kCheckEvery == 0)) catch_up();
   }
 
  private:
-  /// One step: the recorded graph (recorded again after the arrays changed).
   void queue_step() override {
-    if (stale_) {
-      graph_.record(main_, [this] { queue_kernels(); });
-      stale_ = false;
-    }
+    if (stale_) graph_.record(main_, [this] { queue_kernels(); });
+    stale_ = false;
     graph_.launch(main_);
   }
 
   /// The kernels of one step.
   void queue_kernels() {
-    const auto a = arrays();
-    launch::start_step(p_.view(), box_, a, grid_, main_);
-    for (int first = 0; first < grid_.g.slabs; first += per_pass_) {
-      kernels::DeviceGrid pass = grid_;
-      pass.first = first;
-      pass.slabs = std::min(per_pass_, grid_.g.slabs - first);
-      const int buckets = pass.slabs * grid_.cells + 1;
-      PLAB_CUDA_CHECK(cudaMemsetAsync(filled_.get(), 0, buckets * sizeof(int), main_));
-      launch::bin_count(p_.view(), a, pass, main_);
-      cuda::exclusive_scan(filled_.get(), start_.get(), buckets, temp_.get(), temp_.size(), main_);
-      launch::bin_scatter(p_.view(), a, pass, main_);
-      launch::find_pairs(p_.view(), box_, a, pass, main_);
-    }
-    cuda::exclusive_scan(a.slots.count, a.slots.end, n_, temp_.get(), temp_.size(), main_);
-    launch::place_pairs(a, main_);
-    launch::start_rounds(n_, a, main_);
-    if (n_ >= kGridResolveFrom)
-      launch::resolve_grid(n_, a, grid_blocks_, main_);
-    else
-      launch::resolve(n_, a, main_);
+    const kernels::StepArrays a{key_in_.get(),  id_in_.get(),   key_out_.get(),
+                                id_out_.get(),  start_.get(),   list_.get(),
+                                static_cast<int>(list_.size()), partner_.get(),
+                                ptime_.get(),   best_t_.get(),  best_pair_.get(), flags_.get()};
+    launch::start_step(n_, a, main_);
+    launch::bin(p_.view(), a, grid_, entries_, temp_.get(), temp_.size(), main_);
+    launch::find_pairs(p_.view(), box_, a, grid_, entries_, main_);
+    launch::select_pairs(a, main_);
     launch::apply(p_.view(), box_, a, main_);
   }
 
-  /// Waits for the queued steps; redoes those a stop on the device skipped (a longer list).
+  /// Waits for the queued steps; redoes those a stop on the device skipped, with a longer list.
   void catch_up() override {
-    for (;;) {
-      const kernels::Flags f = flags_.read(main_);
-      if (f.steps_done == asked_ || f.overflow == 0) return;
-      slots_.grow(2 * f.overflow, main_);
-      stale_ = true;  // the recorded graph holds the old list's addresses
-      flags_.clear(&kernels::Flags::overflow, main_);  // the stop
+    for (kernels::Flags f = flags_.read(main_); f.overflow > 0; f = flags_.read(main_)) {
+      list_.resize(2 * static_cast<std::size_t>(f.overflow));
+      stale_ = true;  // the recorded graph holds the old list's address
+      flags_.clear(&kernels::Flags::overflow, main_);
       for (long long s = f.steps_done; s < asked_; ++s) queue_step();
       timer_.stop(main_);
     }
   }
 
-  /// The grid for the state `p` (sweep::choose(), the fastest 10% search wider), the slabs a
-  /// pass takes (kEntriesPerPass), and the arrays a pass needs.
-  void set_grid(const Particles& p) {
-    sync();
-    std::vector<double> end(p.size()), scratch;
-    for (std::size_t i = 0; i < p.size(); ++i)
-      end[i] = sweep::path_end(model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box_.L, box_.r));
-    grid_.g = sweep::choose(box_, p, end, scratch, 0.9, alpha_);
-    grid_.cells = grid_.g.cells();
-    // As few passes as kEntriesPerPass allows, with the slabs spread evenly over them.
-    const long long most = std::max<long long>(1, kEntriesPerPass / std::max(n_, 1));
-    const int passes = static_cast<int>((grid_.g.slabs + most - 1) / most);
-    per_pass_ = (grid_.g.slabs + passes - 1) / passes;
-    const std::size_t entries = static_cast<std::size_t>(n_) * per_pass_;
-    const int size = per_pass_ * grid_.cells + 1;
-    filled_.resize(size);
-    start_.resize(size);
-    for (auto* v : {&rank_, &entry_id_, &entry_k_}) v->resize(entries);
-    entry_.resize(entries);
-    temp_.resize(std::max(cuda::exclusive_scan_bytes(size), cuda::exclusive_scan_bytes(n_)));
-    stale_ = true;
+  /// alpha sqrt(N) v / L slabs for the mean speed v, and cells as wide as the reach of a
+  /// particle of that speed (kernels::reach_of()), at most about 4N a slab. Without a finite
+  /// mean speed, one slab and one cell (every pair is tested).
+  void choose_grid(const Particles& p, double alpha) {
+    double sum = 0;
+    for (int i = 0; i < n_; ++i) sum += std::sqrt(p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i]);
+    const double v = n_ > 0 ? sum / n_ : 0, L = box_.L, n = std::max(n_, 1);
+    const bool known = std::isfinite(v) && std::isfinite(L) && L > 0;
+    const double most = static_cast<double>(std::clamp(kMostEntries / std::max(n_, 1), 1LL, 64LL));
+    grid_.slabs = known ? static_cast<int>(std::clamp(std::ceil(alpha * std::sqrt(n) * v / L), 1.0,
+                                                      most))
+                        : 1;
+    grid_.reach = 2 * box_.r + 1e-6 * (L + box_.r);
+    grid_.per_speed = 1.0 / grid_.slabs + 1e-6;
+    const double cell = (grid_.reach + v * grid_.per_speed) * (1 + 1e-9);
+    grid_.side = known ? static_cast<int>(std::max(1.0, std::min(L / cell, 2 * std::sqrt(n) + 1)))
+                       : 1;
+    grid_.inv_cell = known ? grid_.side / L : 0;
   }
 
   [[nodiscard]] std::size_t arrays_bytes() const override {
-    return cuda::bytes_of(wall_, last_, slots_, best_, resolved_, contested_, partner_, ptime_,
-                          filled_, start_, rank_, entry_id_, entry_k_, entry_, temp_);
+    return cuda::bytes_of(key_in_, id_in_, key_out_, id_out_, start_, list_, partner_, ptime_,
+                          best_t_, best_pair_, temp_);
   }
 
-  [[nodiscard]] kernels::StepArrays arrays() const {
-    return {wall_.get(),     last_.get(),     slots_.view(),   best_.get(),     resolved_.get(),
-            contested_.get(), partner_.get(), ptime_.get(),    filled_.get(),   start_.get(),
-            rank_.get(),     entry_id_.get(), entry_k_.get(),  entry_.get(),    flags_.get()};
-  }
-
-  static constexpr long long kCheckEvery = 32;  //!< steps between two looks at the flags
-  static constexpr int kGridResolveFrom = 50000;  //!< from this N the rounds use the whole GPU
-  double alpha_;  //!< slabs per sqrt(N) v_cut / L (StageOptions::sweep_alpha, or kAlpha)
-  kernels::DeviceGrid grid_{};
-  int per_pass_ = 1;  //!< slabs one pass of the counting sort takes
-  cuda::DeviceArray<double> wall_;
-  cuda::DeviceArray<int> last_;
-  cuda::DeviceCandidates slots_;
-  cuda::DeviceArray<model::Event> best_;
-  cuda::DeviceArray<char> resolved_;
-  cuda::DeviceArray<int> contested_, partner_;
+  kernels::Grid grid_{};
+  int entries_ = 0;  //!< slabs x N
+  cuda::DeviceArray<int> key_in_, id_in_, key_out_, id_out_, start_;
+  cuda::DeviceArray<kernels::Pair> list_;
+  cuda::DeviceArray<int> partner_;
   cuda::DeviceArray<double> ptime_;
-  cuda::DeviceArray<int> filled_, start_, rank_, entry_id_, entry_k_;
-  cuda::DeviceArray<kernels::Entry> entry_;
+  cuda::DeviceArray<unsigned long long> best_t_, best_pair_;
   cuda::DeviceArray<unsigned char> temp_;
   cuda::Graph graph_;
-  bool stale_ = true;
-  int grid_blocks_ = 0;
+  bool stale_ = true;  //!< the graph must be recorded (again)
 };
 
 }  // namespace

@@ -59,9 +59,10 @@ class EventQueue {
   [[nodiscard]] bool empty() const { return heap_.empty(); }
   /// The earliest event.
   [[nodiscard]] const Event& top() const { return events_[heap_[0].i]; }
-  /// Replaces the prediction of particle `e.i`.
+  /// Replaces the prediction of particle `e.i` and moves the particle to its place in the heap.
   void set(const Event& e) {
     events_[e.i] = e;
+    // EXERCISE 1: the event queue: store the new time at the particle's place, sift up or down.
     const int k = at_[e.i];
     heap_[k].t = e.t;
     if (k > 0 && e.t < heap_[(k - 1) / 2].t) up(k);
@@ -73,15 +74,18 @@ class EventQueue {
     double t;  //!< the event's time, kept beside the particle so that sifting reads one array
     int i;     //!< the particle
   };
+  /// Puts entry `e` at place `k` of the heap and records where its particle is.
   void put(int k, const Entry& e) {
     heap_[k] = e;
     at_[e.i] = k;
   }
+  /// Moves the entry at `k` up while it is earlier than its parent.
   void up(int k) {
     const Entry e = heap_[k];
     for (; k > 0 && e.t < heap_[(k - 1) / 2].t; k = (k - 1) / 2) put(k, heap_[(k - 1) / 2]);
     put(k, e);
   }
+  /// Moves the entry at `k` down while a child (the earlier one) is earlier.
   void down(int k) {
     const Entry e = heap_[k];
     const int n = static_cast<int>(heap_.size());
@@ -240,6 +244,7 @@ class EventDriven final : public Stepper {
     while (!queue_.empty() && queue_.top().t < end) {
       const Event e = queue_.top();  // each branch below predicts e.i again, replacing it
       now_ = e.t;
+      // EXERCISE 2: a pair event whose partner has collided since it was predicted is stale.
       if (e.kind == kPairHit && e.cj != hits_[e.j]) {  // the partner moved on: look again
         predict(e.i);
         continue;
@@ -265,10 +270,17 @@ class EventDriven final : public Stepper {
   /// Elastic collision of equal disks at the current time: the components of the velocities
   /// along the line of centres are exchanged, \f$ v_i \mathrel{-}= (b/d^2)\,d,\ v_j \mathrel{+}= (b/d^2)\,d \f$.
   void collide(int i, int j) {
+    // EXERCISE 3: bring both to now, then exchange the components along the line of centres.
     advance(i, now_);
     advance(j, now_);
-    model::contact_response(p_.x[i], p_.y[i], p_.vx[i], p_.vy[i],
-                            p_.x[j], p_.y[j], p_.vx[j], p_.vy[j]);
+    const double dx = p_.x[i] - p_.x[j];
+    const double dy = p_.y[i] - p_.y[j];
+    const double b = dx * (p_.vx[i] - p_.vx[j]) + dy * (p_.vy[i] - p_.vy[j]);
+    const double f = b / (dx * dx + dy * dy);
+    p_.vx[i] = p_.vx[i] - f * dx;
+    p_.vy[i] = p_.vy[i] - f * dy;
+    p_.vx[j] = p_.vx[j] + f * dx;
+    p_.vy[j] = p_.vy[j] + f * dy;
     ++p_.pc[i];
     ++p_.pc[j];
     ++hits_[i];

@@ -37,7 +37,8 @@ void step([[maybe_unused]] const Box& box, Particles& p) {
   // particle finds its earliest event: its wall, or a candidate pair with an unresolved partner.
   // (b) In parallel, each unresolved particle accepts its choice when it is a wall, no event, or
   // a pair its partner chose too; each iteration writes only its own particle
-  // (plab::Plan::accept_for()).
+  // (plab::Plan::accept_for()), and a reduction over the particles says whether another round is
+  // needed.
   Plan plan;
   plan.reset(n);
   std::vector<char> resolved(n, 0);

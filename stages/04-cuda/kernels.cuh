@@ -42,14 +42,14 @@ __global__ void start_step(ParticlesView p, Box box, StepArrays a) {
   a.partner[i] = Plan::kFree;
 }
 
-// EXERCISE 1: find_pairs, one thread per particle i: every j != i whose pair event with i falls in
+// EXERCISE 2: find_pairs, one thread per particle i: every j != i whose pair event with i falls in
 // this step goes to i's slots (count them all; store the first cap; report a larger count).
 // Hints: compute every pair as pair_time(lower index, higher index) so that both particles get the
 // same bits; a.slots.put(i, c, j, t) stores the c-th event of particle i when c < cap (slot c of
 // particle i); count them all into a.slots.count[i], and raise a.flags->overflow to the count with
 // atomicMax when it exceeds a.slots.cap (the host then grows the slots and runs it again).
 
-// EXERCISE 2: a round in two kernels: choose (each unresolved particle's earliest event among its
+// EXERCISE 3: a round in two kernels: choose (each unresolved particle's earliest event among its
 // wall and its unresolved partners) and accept (a wall, no event, or a pair both chose).
 // Hints: "none" is model::pair_event_key(model::never(), n, n); slot s of particle i is
 // a.slots.other_at(i, s) and a.slots.time_at(i, s), s < a.slots.count[i]; compare events with
@@ -57,7 +57,7 @@ __global__ void start_step(ParticlesView p, Box box, StepArrays a) {
 // ptime, resolved) and sets a.flags->unresolved to 1 when i is left for the next round. Stage 03's
 // rounds are the same algorithm.
 
-// EXERCISE 3: apply, one thread per particle; a pair is applied by its lower index.
+// EXERCISE 4: apply, one thread per particle; a pair is applied by its lower index.
 // Hints: plab::apply_planned() (plan.hpp) is plab::apply_one() on plain arrays, for host and
 // device: give it the particles' view, the plan's partner and ptime arrays, i, box.L and box.r.
 

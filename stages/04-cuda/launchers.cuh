@@ -21,24 +21,24 @@ inline void start_step(const cuda::ParticlesView& p, const Box& box, const kerne
 
 inline void find_pairs([[maybe_unused]] const cuda::ParticlesView& p, [[maybe_unused]] const Box& box,
                        [[maybe_unused]] const kernels::StepArrays& a) {
-  // EXERCISE 1: launch kernels::find_pairs (one thread per particle) and check the launch.
-  PLAB_EXERCISE(1, "find each particle's pair events of the step: kernel find_pairs");
+  // EXERCISE 2: launch kernels::find_pairs (one thread per particle) and check the launch.
+  PLAB_EXERCISE(2, "find each particle's pair events of the step: kernel find_pairs");
 }
 
 inline void choose([[maybe_unused]] int n, [[maybe_unused]] const kernels::StepArrays& a) {
-  // EXERCISE 2: launch kernels::choose and check the launch.
-  PLAB_EXERCISE(2, "a round of mutual-earliest choices: kernels choose and accept");
+  // EXERCISE 3: launch kernels::choose and check the launch.
+  PLAB_EXERCISE(3, "the rounds on the device: kernels choose and accept, and their host loop");
 }
 
 inline void accept([[maybe_unused]] int n, [[maybe_unused]] const kernels::StepArrays& a) {
-  // EXERCISE 2: launch kernels::accept and check the launch.
-  PLAB_EXERCISE(2, "a round of mutual-earliest choices: kernels choose and accept");
+  // EXERCISE 3: launch kernels::accept and check the launch.
+  PLAB_EXERCISE(3, "the rounds on the device: kernels choose and accept, and their host loop");
 }
 
 inline void apply([[maybe_unused]] const cuda::ParticlesView& p, [[maybe_unused]] const Box& box,
                   [[maybe_unused]] const kernels::StepArrays& a) {
-  // EXERCISE 3: launch kernels::apply and check the launch.
-  PLAB_EXERCISE(3, "apply the plan: kernel apply");
+  // EXERCISE 4: launch kernels::apply and check the launch.
+  PLAB_EXERCISE(4, "apply the plan: kernel apply");
 }
 
 }  // namespace plab::launch

@@ -20,22 +20,22 @@ inline void wall_times(const cuda::ParticlesView& p, const Box& box, const kerne
   PLAB_CUDA_CHECK_LAUNCH("wall_times");
 }
 
-inline void find_pairs([[maybe_unused]] const cuda::ParticlesView& p, [[maybe_unused]] const Box& box,
-                       [[maybe_unused]] const kernels::StepArrays& a,
-                       [[maybe_unused]] cudaStream_t s) {
-  // EXERCISE 1: launch kernels::find_pairs on a grid of (N / kPairThreads) x (N / kTile) blocks
-  // (rounded up) on stream s, and check the launch.
-  PLAB_EXERCISE(1, "the pair search on a 2D grid with shared-memory tiles: kernel find_pairs");
+inline void find_pairs(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
+                       cudaStream_t s) {
+  const dim3 grid(blocks(p.n, kernels::kPairThreads), blocks(p.n, kernels::kTile));
+  kernels::find_pairs<<<grid, kernels::kPairThreads, 0, s>>>(p, box, a);
+  PLAB_CUDA_CHECK_LAUNCH("find_pairs");
 }
 
-inline void resolve([[maybe_unused]] int n, [[maybe_unused]] const kernels::StepArrays& a,
-                    [[maybe_unused]] cudaStream_t s) {
-  // EXERCISE 2: launch kernels::resolve as one block of kResolveThreads on stream s, and check it.
-  PLAB_EXERCISE(2, "every round of the step in one block: kernel resolve");
+inline void resolve(int n, const kernels::StepArrays& a, cudaStream_t s) {
+  kernels::resolve<<<1, kernels::kResolveThreads, 0, s>>>(n, a);
+  PLAB_CUDA_CHECK_LAUNCH("resolve");
 }
 
 inline void apply(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
                   bool branchless, cudaStream_t s) {
+  // EXERCISE 2: write kernels::BranchlessWall (kernels.cuh), then remove this line.
+  if (branchless) PLAB_EXERCISE(2, "the branchless wall event: BranchlessWall in kernels.cuh");
   if (branchless)
     kernels::apply<true><<<blocks(p.n), kThreads, 0, s>>>(p, box, a);
   else

@@ -3,15 +3,18 @@
 /// never waits inside a step. Same bits as stages 01-04.
 //
 // =================================================================================================
-//  GOAL   Stage 04's step with the report's Part 2 optimisations, done so that they pay:
-//         1. wall times on one stream beside the pair search on another (joined by an event);
-//            the pair search split over a 2D grid (i x tiles of j in shared memory, j > i only),
-//            so that N = 10^4 fills an H100; slots laid out [slot][particle] for coalescing;
-//         2. every round in one block (resolve): no host round trip per round;
-//         3. the branchless wall event in apply;
-//         4. one step recorded once as a CUDA graph and replayed: no host synchronisation per
-//            step at all. Slots that run out are caught on the device and redone by the host.
-//         --off graph,streams,branchless turns changes off, to measure what each buys.
+//  GOAL   Two changes to a GPU step, each measured with --off (it turns a change off):
+//         1. streams: the wall times on the stepper's stream beside the pair search on a second
+//            one, forked and joined by CUDA events (EXERCISE 1, this file);
+//         2. the branchless wall event in apply: one path for every thread of a warp, the same
+//            bits as model::wall_event() (EXERCISE 2, kernels.cuh).
+//         Given, from the report's Part 2 (switch `graph` turns the last one off): the pair search
+//         on a 2D grid (tiles of j in shared memory, j > i only) with slots laid out
+//         [slot][particle]; every round of a step in one block (resolve: stage 04's rounds, no
+//         host round trip per round); one step recorded once as a CUDA graph and replayed. Slots
+//         that run out are caught on the device and the step is redone by the host.
+//         --off graph,streams,branchless turns changes off, to measure what each buys; the
+//         starting point runs with --off streams,branchless.
 //  READ   handouts/05-cuda-streams.md   TEST   ./plab test --impl student --stage 05
 // =================================================================================================
 #include <memory>
@@ -48,28 +51,43 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
       : DeviceStepper(cuda::require_device(), box, p, cuda::Queue::kOwnStream),
         options_(Options::from(asked)), wall_(n_), slots_(n_, 8), best_(n_),
         resolved_(n_), contested_(n_), partner_(n_), ptime_(n_) {
+    // EXERCISE 1: when options_.streams, create the second stream side_ (a non-blocking one:
+    // cudaStreamCreateWithFlags) and the two events forked_ and joined_ (cudaEventCreateWithFlags,
+    // without timing), every call checked; destroy them in the destructor.
+    if (options_.streams)
+      PLAB_EXERCISE(1, "streams: the pair search on a second stream, forked and joined by events");
     sync();
   }
+  ~CudaStepper() override {
+    // EXERCISE 1: destroy side_, forked_ and joined_ when they were created (unchecked here: a
+    // destructor must not throw).
+  }
+  CudaStepper(const CudaStepper&) = delete;
+  CudaStepper& operator=(const CudaStepper&) = delete;
 
  private:
   /// Queues one step: the recorded graph, or its kernels one by one.
   void queue_step() override {
     if (!options_.graph) return queue_kernels();
-    // EXERCISE 3: record queue_kernels() once as a CUDA graph (again when the slots were
-    // reallocated), then replay it: one launch per step instead of five. cuda::Graph::record()
-    // takes the stream and a function that queues the work; graph_stale_ says when to record.
-    queue_kernels();
-    PLAB_EXERCISE(3, "replay one recorded step as a CUDA graph");
+    // Recorded once (again when the slots were reallocated), then replayed: one launch per step
+    // instead of five.
+    if (graph_stale_) {
+      graph_.record(main_, [this] { queue_kernels(); });
+      graph_stale_ = false;
+    }
+    graph_.launch(main_);
   }
 
   /// The kernels of one step, on two streams when options_.streams.
   void queue_kernels() {
-    const cudaStream_t side = options_.streams ? static_cast<cudaStream_t>(side_) : main_;
-    if (options_.streams) fork_.order(main_, side_);
+    const cudaStream_t side = options_.streams ? side_ : main_;
+    // EXERCISE 1 (fork): when options_.streams, side_ must wait for what main_ has queued so far
+    // (the last step's apply): record forked_ on main_, and make side_ wait for it.
     launch::wall_times(p_.view(), box_, arrays(), main_);
     slots_.clear_counts(side);
     launch::find_pairs(p_.view(), box_, arrays(), side);
-    if (options_.streams) join_.order(side_, main_);
+    // EXERCISE 1 (join): resolve, on main_, must wait for the pair search on side_: the same
+    // two calls the other way round, with joined_. (A graph records both streams this way.)
     launch::resolve(n_, arrays(), main_);
     launch::apply(p_.view(), box_, arrays(), options_.branchless, main_);
   }
@@ -99,8 +117,8 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   }
 
   Options options_;
-  cuda::Stream side_;
-  cuda::Event fork_, join_;
+  cudaStream_t side_ = nullptr;                        //!< the pair search's stream (streams on)
+  cudaEvent_t forked_ = nullptr, joined_ = nullptr;    //!< fork and join of the two streams
   cuda::DeviceArray<double> wall_;
   cuda::DeviceSlots<cuda::SlotLayout::kBySlot> slots_;
   cuda::DeviceArray<model::Event> best_;

@@ -1,219 +1,143 @@
 /// \file stages/06-broadphase/kernels.cuh
-/// \brief Stage 06's kernels (device code only): the space-time grid built by a counting sort on
-/// the GPU (atomics, a CUB scan), a few slabs at a time, the pair search over neighbouring
-/// buckets filing compact candidates (cuda/candidates.cuh), then stage 05's rounds and branchless
-/// apply over them.
+/// \brief Stage 06's kernels (device code only): each particle hashed to a cell of a uniform grid
+/// in each time slab of the step, the cell starts of the sorted keys, the neighbour search
+/// filing the pairs that meet into one list, the mutual-earliest rounds over it, and apply.
 #pragma once
 
-#include <cooperative_groups.h>
-
 #include "plab/cuda/particles.hpp"
-#include "plab/cuda/rounds.cuh"
-#include "plab/cuda/candidates.cuh"
 #include "plab/model.hpp"
 #include "plab/plan.hpp"
 #include "plab/scene.hpp"
-#include "plab/sweep.hpp"
 
 namespace plab::kernels {
 
-using cuda::accept_one;
-using cuda::choose_one;
-using cuda::start_one;
 using cuda::ParticlesView;
-using model::Event;
-
-constexpr int kResolveThreads = 1024;  //!< the one block of resolve
+constexpr int kSelectThreads = 1024;          //!< the one block of select_pairs
+constexpr unsigned long long kNone = ~0ull;  //!< "no pair yet" in best_t and best_pair
 
 /// What the host reads after a batch of steps.
 struct Flags {
-  int overflow;          //!< pairs a step needed, when they did not fit the list (else 0)
+  int pairs;             //!< pairs filed this step
+  int overflow;          //!< pairs a step needed when the list had no room for them (else 0)
   long long steps_done;  //!< steps applied so far
-  int pairs;             //!< pairs filed this step (CompactView::file())
-  int contested;         //!< particles with pair events this step (listed by start_rounds)
-  int open[3];           //!< resolve_grid: someone left unresolved in round r (at r % 3)
-  int fast;              //!< fast entries the pass's search listed for a team search (the solution's
-                         //!< find_fast_pairs)
 };
 
-/// The grid of the batch and the slabs of one pass of the counting sort, as the kernels see it.
-/// A pass sorts and searches slabs [first, first + slabs) together: slab k's cells are buckets
-/// [(k - first) * cells, (k - first + 1) * cells), and its entries are counted at
-/// [(k - first) * n + i]. Large scenes take a few slabs a pass, so that the entries of one pass
-/// (not of the whole step) are what the memory holds.
-struct DeviceGrid {
-  sweep::Grid g;  //!< slabs, cells, v_cut
-  int cells;      //!< g.cells()
-  int first;      //!< the pass's first slab
-  int slabs;      //!< the pass's number of slabs
+/// The step split into `slabs` time slabs; in each, a particle is binned by its position at the
+/// slab's midpoint into side x side square cells covering the box (an entry: slab, particle).
+struct Grid {
+  int slabs;         //!< time slabs K of the step
+  int side;          //!< cells along each axis
+  double inv_cell;   //!< 1 / cell width
+  double reach;      //!< 2r + a rounding margin (length units)
+  double per_speed;  //!< a slab's width 1/K, plus a millionth for rounding
+  [[nodiscard]] __host__ __device__ int cells() const { return side * side; }  //!< of a slab
 };
 
-/// What the pair search reads of an entry, in one 32-byte sector (the scatter writes it at a
-/// random place: one sector, not four).
-struct alignas(32) Entry {
-  double x, y;    //!< midpoint position
-  double vx, vy;  //!< velocity
+/// One pair event the search files.
+struct Pair {
+  int lo;    //!< the lower particle index
+  int hi;    //!< the higher
+  double t;  //!< the pair time (steps)
 };
-
-/// Each particle's pair events of the step, compact (cuda/candidates.cuh).
-using Slots = cuda::CompactView;
 
 /// One step's working arrays (pointers into memory the host class owns).
 struct StepArrays {
-  double* wall;      //!< wall time of each particle
-  int* last;         //!< the last slab each particle takes part in (sweep::last_slab())
-  Slots slots;       //!< each particle's pair events of the step (count, list, rows)
-  Event* best;       //!< each unresolved particle's earliest event in the current round
-  char* resolved;    //!< 1 once a particle's event (or none) is decided
-  int* contested;    //!< the particles with at least one pair event
-  int* partner;      //!< the plan: Plan::kFree, Plan::kWall, or the other particle of its pair
-  double* ptime;     //!< the plan's pair time
-  int* filled;       //!< a pass's slabs * cells + 1: entries counted into each bucket
-  int* start;        //!< the same: bucket b holds entries [start[b], start[b + 1])
-  int* rank;         //!< per (slab of the pass, particle) at [(k - first) * n + i]: its place in
-                     //!< its bucket
-  int* entry_id;     //!< per entry (at most slabs of a pass * N): the particle
-  int* entry_k;      //!< ... its slab
-  Entry* entry;      //!< ... its midpoint position and velocity
-  Flags* flags;      //!< see Flags
+  int* key_in;   //!< per entry k * N + i: its bucket, slab * cells + cell
+  int* id_in;    //!< ... its particle i
+  int* key_out;  //!< the keys, sorted
+  int* id_out;   //!< the particles, in the sorted keys' order
+  int* start;             //!< slabs * cells + 1: bucket b holds entries [start[b], start[b + 1])
+  Pair* list;             //!< the pairs filed this step
+  int capacity;           //!< room in `list`
+  int* partner;           //!< the plan: Plan::kFree, Plan::kWall, or the other particle
+  double* ptime;          //!< the plan's pair time
+  unsigned long long* best_t;     //!< in a round: each particle's earliest pair time (bits)
+  unsigned long long* best_pair;  //!< ... the smallest lo << 32 | hi at that time
+  Flags* flags;           //!< see Flags
 };
 
-/// Wall times, the last slab of each particle, counters cleared.
-__global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
+/// Midpoint time of slab `k`.
+__device__ inline double slab_mid(int k, const Grid& g) { return (k + 0.5) / g.slabs; }
+
+/// The slab that holds time `t` (0 <= t < 1).
+__device__ inline int slab_of(double t, const Grid& g) {
+  return min(static_cast<int>(t * g.slabs), g.slabs - 1);
+}
+
+/// The cell of coordinate `v` along one axis, clamped to [0, side - 1] (0 for not-a-number):
+/// clamping never separates two neighbours.
+__device__ inline int cell_index(double v, const Grid& g) {
+  const double c = floor(v * g.inv_cell);
+  if (!(c > 0)) return 0;
+  return c >= g.side ? g.side - 1 : static_cast<int>(c);
+}
+
+/// How far along each axis a particle of velocity (vx, vy) searches around its midpoint
+/// position: two particles that meet in a slab are at most 2r + h(|v_a| + |v_b|) apart at its
+/// midpoint (h = 1/(2K)), so within the faster one's 2r + 2h|v|.
+__device__ inline double reach_of(double vx, double vy, const Grid& g) {
+  return (g.reach + sqrt(vx * vx + vy * vy) * g.per_speed) * (1 + 1e-9);
+}
+
+/// Whether particle i files its pair with j: the faster of the two (its reach covers the other),
+/// the lower index when both are as fast; so each pair is filed once.
+__device__ inline bool files_pair(const ParticlesView& p, int i, int j) {
+  const double vi = p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i];
+  const double vj = p.vx[j] * p.vx[j] + p.vy[j] * p.vy[j];
+  return vj < vi || (vj == vi && i < j);
+}
+
+/// Particle i's wall time (model.md).
+__device__ inline double wall_of(const ParticlesView& p, const Box& box, int i) {
+  return model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
+}
+
+/// Files the pair event (lo, hi, t); when the list is full, raises `overflow` to the pairs the
+/// step needs (the host grows the list and redoes the step).
+__device__ inline void file(const StepArrays& a, int lo, int hi, double t) {
+  const int q = atomicAdd(&a.flags->pairs, 1);
+  if (q < a.capacity)
+    a.list[q] = Pair{lo, hi, t};
+  else
+    atomicMax(&a.flags->overflow, q + 1);
+}
+
+/// Every particle free, no earliest pair, the list empty.
+__global__ void start_step(int n, StepArrays a) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= p.n) return;
-  a.wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
-  a.last[i] = sweep::last_slab(sweep::path_end(a.wall[i]), d.g);
-  a.slots.count[i] = 0;
-  if (i == 0) {
-    a.flags->pairs = 0;
-    a.flags->contested = 0;
-    a.flags->open[0] = a.flags->open[1] = a.flags->open[2] = 0;
-  }
+  if (i >= n) return;
+  a.partner[i] = Plan::kFree;
+  a.best_t[i] = a.best_pair[i] = kNone;
+  if (i == 0) a.flags->pairs = 0;
 }
 
-/// Particle i's midpoint position in slab k.
-__device__ inline void midpoint(const ParticlesView& p, int i, int k, const DeviceGrid& d,
-                                double& mx, double& my) {
-  const double tm = sweep::slab_mid(k, d.g);
-  mx = p.x[i] + tm * p.vx[i];
-  my = p.y[i] + tm * p.vy[i];
-}
+// EXERCISE 4: the binning. Kernel `bin`, a thread per particle i and slab k = blockIdx.y: entry
+// k * N + i gets id_in = i and key_in = k * g.cells() + row * g.side + column of its position
+// at the slab's midpoint. Kernel `cell_starts(a, g, entries)`, a thread per sorted entry e:
+// start[b] = e for the buckets b after the previous entry's key up to e's own; the last entry
+// also sets the later ones, up to start[slabs * cells], to `entries`.
 
-/// Particle i's bucket in slab k of the pass (its midpoint position's cell).
-__device__ inline int bucket_of(const ParticlesView& p, int i, int k, const DeviceGrid& d,
-                                double& mx, double& my) {
-  midpoint(p, i, k, d, mx, my);
-  return (k - d.first) * d.cells + sweep::cell_of(mx, my, d.g);
-}
+// EXERCISE 5: the neighbour search. Kernel `find_pairs(p, box, a, g, entries)`, a thread per
+// sorted entry (particle i, slab k): the entries of slab k in the cells within reach_of() of
+// i's midpoint (a row's cells are one run of entries). Each j that i files (files_pair()):
+// model::pair_time(), lower index first; file() it when in the step, in slab k (slab_of()) and
+// before both walls (model::before_walls(), wall_of()).
 
-// EXERCISE 4: the broad phase on the GPU, as step.cpp's EXERCISE 1 with one thread per
-// (particle, slab of the pass): blockIdx.y is the slab's place in the pass, k = d.first +
-// blockIdx.y. bin_count (a particle with a.last[i] >= k finds its bucket with bucket_of() and
-// keeps its place, atomicAdd(&a.filled[bucket], 1), in a.rank[blockIdx.y * n + i]); after the
-// host's exclusive scan of `filled` into `start`, bin_scatter (the same bucket again, and entry
-// start[bucket] + rank gets the particle, its slab k, midpoint position and velocity).
+// EXERCISE 6: the sparse selection. Kernel `select_pairs(a)`, one block (nothing when
+// flags->overflow): rounds over the flags->pairs pairs of `list` until none has both particles
+// free (Plan::kFree). A round, with barriers: (1) each free pair lowers best_t of both particles
+// to its time's bits (atomicMin); (2) each free pair at a particle's best_t lowers its best_pair
+// to lo << 32 | hi; (3) a pair that is best_pair of both is accepted (partner, ptime); (4) the
+// bests back to kNone, and __syncthreads_or() says whether a free pair is left.
 
-/// Whether particles i and j pass the slab test in slab k (then slab k's search finds them).
-__device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, int k,
-                                        const DeviceGrid& d) {
-  double xi, yi, xj, yj;
-  midpoint(p, i, k, d, xi, yi);
-  midpoint(p, j, k, d, xj, yj);
-  return sweep::close_in_slab(xi - xj, yi - yj, p.vx[i] - p.vx[j], p.vy[i] - p.vy[j], d.g);
-}
-
-/// Entry e against entries [from, to) of its slab: the pairs that pass sweep::close_in_slab() get
-/// model.md's pair time, unless slab k - 1 found them already (a pair filed twice is harmless to
-/// the rounds, but it takes room), and are filed when the pair comes before both particles'
-/// walls. A team of `lanes` threads can share the run: this one takes every lanes-th entry from
-/// from + lane.
-__device__ inline void test_entries(const ParticlesView& p, const Box& box, const StepArrays& a,
-                                    const DeviceGrid& d, int e, int from, int to, int lane = 0,
-                                    int lanes = 1) {
-  const int i = a.entry_id[e], k = a.entry_k[e];
-  const Entry me = a.entry[e];
-  for (int f = from + lane; f < to; f += lanes) {
-    const Entry o = a.entry[f];
-    if (f == e || !sweep::close_in_slab(me.x - o.x, me.y - o.y, me.vx - o.vx, me.vy - o.vy, d.g))
-      continue;
-    const int j = a.entry_id[f];
-    if (k > 0 && close_in_slab_at(p, i, j, k - 1, d)) continue;  // found in slab k - 1
-    const int lo = i < j ? i : j, hi = i < j ? j : i;
-    const double t = model::pair_time(p.x[lo], p.y[lo], p.vx[lo], p.vy[lo], p.x[hi], p.y[hi],
-                                      p.vx[hi], p.vy[hi], box.r);
-    if (model::in_step(t) && model::before_walls(t, a.wall[lo], a.wall[hi]))
-      a.slots.file(lo, hi, t, &a.flags->pairs);
-  }
-}
-
-// EXERCISE 4: find_pairs, one thread per entry e < a.start[d.slabs * d.cells] (the entries of
-// this pass): as step.cpp's search (slab k's cells start at a.start + (k - d.first) * d.cells),
-// with sweep::search_of(), sweep::columns_within(), sweep::rows_within() and test_entries(): a
-// slow entry over the later entries of its row up to the last column within reach, then the
-// columns within reach of the next row; a fast entry over every row within reach.
-
-/// After the passes: lays the filed pairs into each particle's row (CompactView::place(), once
-/// `end` is the exclusive scan of the counts); when the list had no room for them all, stops
-/// the batch instead (`overflow` = the pairs the step needs; the host grows the list).
-__global__ void place_pairs(StepArrays a) {
-  const int q = blockIdx.x * blockDim.x + threadIdx.x;
-  const int filed = a.flags->pairs;
-  if (filed > a.slots.capacity) {
-    if (q == 0) atomicMax(&a.flags->overflow, filed);
-    return;
-  }
-  if (q < filed && !a.flags->overflow) a.slots.place(q);
-}
-
-/// Before the rounds, on the whole GPU: each particle's start (cuda::start_one(): decided at once
-/// when it has no pair event) and the list of those with pair events, `a.contested` (as many as
-/// `flags->contested`).
-__global__ void start_rounds(int n, StepArrays a) {
-  const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n || a.flags->overflow) return;
-  if (start_one(i, a) > 0) a.contested[atomicAdd(&a.flags->contested, 1)] = i;
-}
-
-/// Every round of the step in one block over the particles start_rounds listed (stage 05's
-/// rounds, from the kit: cuda::rounds_block()); nothing when the step was stopped.
-__global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) {
-  if (a.flags->overflow) return;
-  cuda::rounds_block(n, a.flags->contested, a);
-}
-
-/// resolve() for large N: the same rounds over the whole grid (a cooperative launch, every block
-/// resident), with grid-wide barriers between the phases instead of block barriers.
-__global__ void resolve_grid(int n, StepArrays a) {
-  namespace cg = cooperative_groups;
-  cg::grid_group grid = cg::this_grid();
-  Flags* f = a.flags;
-  const int stride = gridDim.x * blockDim.x;
-  const int me = blockIdx.x * blockDim.x + threadIdx.x;
-  if (f->overflow) return;  // written before this kernel: every block returns alike
-  const int m = f->contested;
-  const Event none = model::pair_event_key(model::never(), n, n);
-  for (int round = 0;; ++round) {
-    // Three flags: round r writes r % 3 and everyone reads it after the last barrier of round r;
-    // clearing (r + 1) % 3 now cannot meet a slow reader of round r - 1's flag.
-    if (me == 0) f->open[(round + 1) % 3] = 0;
-    for (int q = me; q < m; q += stride)  // choose
-      if (!a.resolved[a.contested[q]]) choose_one(a.contested[q], a, none);
-    grid.sync();
-    for (int q = me; q < m; q += stride)  // accept
-      if (!a.resolved[a.contested[q]] && !accept_one(a.contested[q], a)) f->open[round % 3] = 1;
-    grid.sync();
-    if (!f->open[round % 3]) break;
-  }
-  if (me == 0) f->steps_done += 1;
-}
-
-/// Applies the plan (plab::apply_one()'s own code, on the device, with branchless walls);
-/// nothing when the step was skipped.
+/// Applies the plan (plab::apply_one()'s code): a particle no pair took hits its wall when its
+/// wall time is in the step. Nothing when the step was stopped.
 __global__ void apply(ParticlesView p, Box box, StepArrays a) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= p.n || a.flags->overflow) return;
-  apply_planned<true>(p, a.partner, a.ptime, i, box.L, box.r);
+  if (i == 0) a.flags->steps_done += 1;
+  if (a.partner[i] == Plan::kFree && model::in_step(wall_of(p, box, i))) a.partner[i] = Plan::kWall;
+  apply_planned(p, a.partner, a.ptime, i, box.L, box.r);
 }
 
 }  // namespace plab::kernels

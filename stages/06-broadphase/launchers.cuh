@@ -1,13 +1,14 @@
 /// \file stages/06-broadphase/launchers.cuh
-/// \brief Stage 06's launchers: grid size, launch on a stream, check. One per kernel (the
-/// counting sort's scan is the kit's, plab::cuda::exclusive_scan()).
+/// \brief Stage 06's launchers: grid size, launch on a stream, check; the sort of the entries
+/// by bucket is CUB's DeviceRadixSort.
 #pragma once
 
+#include <cub/device/device_radix_sort.cuh>
+
+#include <cstddef>
 
 #include "kernels.cuh"
 #include "plab/cuda/check.hpp"
-#include "plab/cuda/scan.cuh"
-#include "plab/cuda/stream.hpp"
 #include "plab/stage.hpp"
 
 namespace plab::launch {
@@ -17,66 +18,45 @@ constexpr int kThreads = 256;  //!< threads per block of the per-particle and pe
 /// Blocks of kThreads covering `n`.
 inline unsigned blocks(long long n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
 
-inline void start_step(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
-                       const kernels::DeviceGrid& d, cudaStream_t s) {
-  kernels::start_step<<<blocks(p.n), kThreads, 0, s>>>(p, box, a, d);
+/// The bits of a bucket key of grid `g` (the sort looks at no others).
+inline int key_bits(const kernels::Grid& g) {
+  int bits = 1;
+  while (bits < 31 && (1 << bits) < g.slabs * g.cells()) ++bits;
+  return bits;
+}
+
+/// Bytes of temporary storage the sort of `entries` entries of grid `g` needs.
+inline std::size_t sort_bytes(const kernels::Grid& g, int entries) {
+  std::size_t bytes = 0;
+  int* none = nullptr;
+  PLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, bytes, none, none, none, none, entries,
+                                                  0, key_bits(g)));
+  return bytes;
+}
+
+inline void start_step(int n, const kernels::StepArrays& a, cudaStream_t s) {
+  kernels::start_step<<<blocks(n), kThreads, 0, s>>>(n, a);
   PLAB_CUDA_CHECK_LAUNCH("start_step");
 }
 
-inline void bin_count([[maybe_unused]] const cuda::ParticlesView& p,
-                      [[maybe_unused]] const kernels::StepArrays& a,
-                      [[maybe_unused]] const kernels::DeviceGrid& d, [[maybe_unused]] cudaStream_t s) {
-  // EXERCISE 4: launch kernels::bin_count on a grid of (N / kThreads) x (the pass's d.slabs)
-  // blocks.
-  PLAB_EXERCISE(4, "the broad phase on the GPU: kernels bin_count, bin_scatter, find_pairs");
+/// The binning: kernels::bin on (N / kThreads) x slabs blocks, the sort of the entries by key
+/// (key_in, id_in into key_out, id_out; `temp` of sort_bytes()), then kernels::cell_starts.
+inline void bin(const cuda::ParticlesView& /*p*/, const kernels::StepArrays& /*a*/,
+                const kernels::Grid& /*g*/, int /*entries*/, void* /*temp*/,
+                std::size_t /*temp_bytes*/, cudaStream_t /*s*/) {
+  PLAB_EXERCISE(4, "the binning on the GPU: kernels bin and cell_starts, the sort by key");
 }
 
-inline void bin_scatter([[maybe_unused]] const cuda::ParticlesView& p,
-                        [[maybe_unused]] const kernels::StepArrays& a,
-                        [[maybe_unused]] const kernels::DeviceGrid& d,
-                        [[maybe_unused]] cudaStream_t s) {
-  // EXERCISE 4: launch kernels::bin_scatter like bin_count.
-  PLAB_EXERCISE(4, "the broad phase on the GPU: kernels bin_count, bin_scatter, find_pairs");
+/// The neighbour search: kernels::find_pairs, one thread per entry.
+inline void find_pairs(const cuda::ParticlesView& /*p*/, const Box& /*box*/,
+                       const kernels::StepArrays& /*a*/, const kernels::Grid& /*g*/,
+                       int /*entries*/, cudaStream_t /*s*/) {
+  PLAB_EXERCISE(5, "the neighbour search on the GPU: kernel find_pairs");
 }
 
-inline void find_pairs([[maybe_unused]] const cuda::ParticlesView& p,
-                       [[maybe_unused]] const Box& box, [[maybe_unused]] const kernels::StepArrays& a,
-                       [[maybe_unused]] const kernels::DeviceGrid& d,
-                       [[maybe_unused]] cudaStream_t s) {
-  // EXERCISE 4: launch kernels::find_pairs, one thread per possible entry (N x d.slabs of them).
-  PLAB_EXERCISE(4, "the broad phase on the GPU: kernels bin_count, bin_scatter, find_pairs");
-}
-
-/// One thread per pair the list can hold.
-inline void place_pairs(const kernels::StepArrays& a, cudaStream_t s) {
-  kernels::place_pairs<<<blocks(a.slots.capacity), kThreads, 0, s>>>(a);
-  PLAB_CUDA_CHECK_LAUNCH("place_pairs");
-}
-
-inline void start_rounds(int n, const kernels::StepArrays& a, cudaStream_t s) {
-  kernels::start_rounds<<<blocks(n), kThreads, 0, s>>>(n, a);
-  PLAB_CUDA_CHECK_LAUNCH("start_rounds");
-}
-
-inline void resolve(int n, const kernels::StepArrays& a, cudaStream_t s) {
-  kernels::resolve<<<1, kernels::kResolveThreads, 0, s>>>(n, a);
-  PLAB_CUDA_CHECK_LAUNCH("resolve");
-}
-
-/// Blocks of resolve_grid that can all be resident at once (a cooperative launch needs that).
-inline int resolve_grid_blocks() {
-  int device = 0, sms = 0, per_sm = 0;
-  PLAB_CUDA_CHECK(cudaGetDevice(&device));
-  PLAB_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
-  PLAB_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, kernels::resolve_grid,
-                                                                kThreads, 0));
-  return sms * per_sm;
-}
-
-inline void resolve_grid(int n, const kernels::StepArrays& a, int grid_blocks, cudaStream_t s) {
-  void* args[] = {&n, const_cast<kernels::StepArrays*>(&a)};
-  PLAB_CUDA_CHECK(cudaLaunchCooperativeKernel(reinterpret_cast<void*>(kernels::resolve_grid),
-                                              grid_blocks, kThreads, args, 0, s));
+/// The selection: kernels::select_pairs in one block of kernels::kSelectThreads.
+inline void select_pairs(const kernels::StepArrays& /*a*/, cudaStream_t /*s*/) {
+  PLAB_EXERCISE(6, "the sparse selection on the GPU: kernel select_pairs");
 }
 
 inline void apply(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,

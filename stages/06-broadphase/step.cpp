@@ -1,626 +1,118 @@
 /// \file stages/06-broadphase/step.cpp
-/// \brief Stage 06, broad phase (CPU, OpenMP): a space-time grid finds every pair that can meet
-/// in the step, model.md's pair time is computed for those alone, and the events are chosen by a
-/// greedy pass over the sparse candidates. Same bits as stages 01-05.
+/// \brief Stage 06, broad phase (CPU, OpenMP): a space-time grid finds the pairs that can meet in
+/// the step, model.md's pair time is computed for those alone, and the events are chosen in key
+/// order over that short list. Same bits as stages 01-05.
 //
 // =================================================================================================
 //  GOAL   Stage 03 tests N^2/2 pairs a step; at N = 10^4 in the report's box only about 2000 can
-//         meet. Find them, and few others, with plab::sweep (read sweep.hpp first):
-//         1. broad phase: for each time slab k in turn, all threads together: sort the particles
-//            that take part into the grid's cells by their positions at the slab's midpoint (a
-//            counting sort by row, then by column within each row: sort_rows()), then test each
-//            against the rest of its row and the next row within its reach (a fast particle:
-//            every cell within its search radius) with sweep::close_in_slab() (search_cells());
-//            a small scene with at least two slabs a thread: each thread takes whole slabs
-//            alone instead (slab_alone(), given: one counting sort by cell, then the same search);
-//         2. narrow phase: model.md's pair time for each pair that passed;
-//         3. model.md's greedy selection over the sparse candidates (a pair at or after either
-//            wall time is never accepted), by the team (plan_team.hpp), then apply.
-//         Memory O(N + candidates + cells), shared by the threads: no N x N anything, and no
-//         copy per thread (but in small scenes). Slab k is sorted from slab k - 1's order, which is nearly right
-//         already, so the sort's writes stay close together (handout 06, "Many cores").
+//         meet. For each time slab of the grid (plab/grid.hpp, given):
+//         1. bin the particles that take part into cells by their midpoint positions (a counting
+//            sort: count per cell, prefix sums, scatter);
+//         2. each particle searches the cells its motion can reach and computes the pair time
+//            with each partner no faster than itself, keeping the pairs that meet in this slab;
+//         then 3. select events in model.md's key order over the pairs found, walls last, and
+//         apply them (given). Memory O(N + cells + pairs found): no N x N anything.
 //  READ   handouts/06-broadphase.md     TEST   ./plab test --impl student --stage 06
 // =================================================================================================
 #include <omp.h>
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-/// 1 where the pair test has AVX2 and AVX-512 paths (x86-64, chosen at run time), else 0.
-#define PLAB_AVX2 1
-#else
-/// 0: no vector paths here; the portable pair test only.
-#define PLAB_AVX2 0
-#endif
-
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
-#include <cstring>
-#include <string>
+#include <memory>
 #include <vector>
 
-#include "plab/plan_team.hpp"
+#include "plab/grid.hpp"
 #include "plab/stage.hpp"
-#include "plab/sweep.hpp"
 
 namespace plab {
 namespace {
 
-constexpr int kLanes = 8;          //!< close_in_slab() is evaluated for this many entries at a time
-constexpr double kQuantile = 0.9;  //!< the fastest 10% search wider (sweep::choose())
-constexpr double kAlpha = 0.3;     //!< slabs per sqrt(N) v_cut / L, measured best on the report's scene
-constexpr int kChunk = 256;        //!< entries a thread searches at a time (dynamic schedule)
-constexpr int kSmall = 1 << 15;    //!< up to this many particles, a thread may take whole slabs
+/// Stage 06's step, and the working memory it keeps from one step to the next (cpu_stage() makes
+/// one a run).
+class BroadPhase final : public CpuStep {
+ public:
+  void step(const Box& box, Particles& p) override;
 
-/// A slab's entries, one array per field: the particles that take part, in cell order.
-struct Entries {
-  std::vector<int> id;               //!< the particle
-  std::vector<int> last;             //!< its last slab (sweep::last_slab())
-  std::vector<double> x0, y0;        //!< its start-of-step position
-  std::vector<double> vx, vy;        //!< its velocity (padded by kLanes)
-  std::vector<sweep::Search> reach;  //!< what it searches (sweep::search_of())
-  std::vector<int> row, column;      //!< its row (-1: takes no part) and column in the next slab
-  /// Room for `n` entries (and kLanes of padding).
-  void reserve(int n) {
-    for (auto* v : {&id, &last, &row, &column}) v->resize(n + kLanes);
-    for (auto* v : {&x0, &y0, &vx, &vy}) v->resize(n + kLanes);
-    reach.resize(n);
-  }
+ private:
+  void bin(const Particles& p, int k);
+  void search(const Box& box, const Particles& p, int k);
+  void select(int n);
+
+  grid::Grid g_;                 //!< this step's grid
+  std::vector<double> wall_;     //!< per particle: its wall time
+  std::vector<double> speed2_;   //!< its squared speed
+  std::vector<int> last_;        //!< the last slab it takes part in (-1: none)
+  std::vector<int> cell_;        //!< its cell in the slab being binned (-1: takes no part)
+  std::vector<int> start_;       //!< cell c holds entries [start_[c], start_[c + 1])
+  std::vector<int> next_;        //!< per cell: where its next entry goes, while scattering
+  std::vector<int> id_;          //!< per entry (the slab's particles in cell order): the particle
+  std::vector<double> x_, y_;    //!< per entry: the particle's position at the slab's midpoint
+  std::vector<std::vector<model::Event>> found_;  //!< each thread's pairs found
+  std::vector<model::Event> pairs_;               //!< every pair found in the step
+  Plan plan_;                                     //!< the events chosen
 };
 
-/// The slab that every thread works on, one at a time. Slab k's entries are sorted from slab
-/// k - 1's (two sets that take turns), which are nearly in order already: a slow particle moves at
-/// most a row from one slab to the next, so the sort's writes stay close together, and a thread
-/// sorts, one slab after the other, about the same particles. What the threads share between two
-/// barriers comes in two copies, one for even slabs and one for odd.
-struct Slab {
-  Entries set[2];                   //!< slab k's entries are set[(k + 1) % 2], its input set[k % 2]
-  std::vector<double> x, y;         //!< per entry of the slab: midpoint position (padded by kLanes)
-  std::vector<int> start;           //!< cell c holds entries [start[c], start[c + 1])
-  std::vector<int> row_start[2];    //!< row r of slab k holds entries [row_start[k % 2][r], ... [r + 1])
-  std::vector<int> counts[2];       //!< slab k's entries per thread and row (count_stride() a thread)
-  std::vector<int> from;            //!< per entry, grouped by row: the input entry it comes from
-  std::vector<int> order;           //!< every particle, in the cell order of the last step's slab 0
-  /// Room for `n` particles in grid `g` sorted by `threads` threads.
-  void reserve(int n, const sweep::Grid& g, int threads);
-};
-
-/// What the search of a slab reads: its entries in cell order, one array per field.
-struct View {
-  const double* x;             //!< midpoint position x
-  const double* y;             //!< midpoint position y
-  const double* vx;            //!< velocity x
-  const double* vy;            //!< velocity y
-  const sweep::Search* reach;  //!< what each entry searches
-  const int* start;            //!< cell c holds entries [start[c], start[c + 1])
-  const int* row_start;        //!< row r holds entries [row_start[r], row_start[r + 1])
-};
-
-/// One thread's own working memory and results (on cache lines of its own: the vectors' ends
-/// move with every pair found).
-struct alignas(128) Mine {
-  std::vector<std::pair<int, int>> hits;  //!< entry pairs that passed close_in_slab()
-  std::vector<model::Event> found;        //!< pair candidates
-  std::vector<int> next;                  //!< per row: where this thread's next entry goes
-  int lo = 0, hi = 0;                     //!< the input entries this thread groups by row
-  int active = 0;                         //!< particles of its share that take part
-  double max2 = 0;                        //!< the largest squared speed among them
-  bool unordered = false;                 //!< whether one of them has a speed that is not a number
-  std::vector<double> sample;             //!< its part of the sample of squared speeds
-  Slab own;                               //!< its own slab, when it takes whole slabs alone
-  bool first = false;                     //!< whether it sorted slab 0 alone (own.order is new)
-};
-
-/// Each thread's row of a table of counts per row (`rows + 1` of them), rounded up to whole cache
-/// lines so that no two threads write the same line.
-inline std::size_t count_stride(int rows) {
-  return (static_cast<std::size_t>(rows) + 1 + 31) / 32 * 32;
-}
-
-void Slab::reserve(int n, const sweep::Grid& g, int threads) {
-  for (Entries& e : set) e.reserve(n);
-  for (auto* v : {&x, &y}) v->resize(n + kLanes);
-  from.resize(n);
-  order.resize(n);
-  start.resize(static_cast<std::size_t>(g.cells()) + 1);
-  for (int u = 0; u < 2; ++u) {
-    row_start[u].resize(g.rows + 1);
-    counts[u].resize(static_cast<std::size_t>(threads) * count_stride(g.rows));
+void BroadPhase::step(const Box& box, Particles& p) {
+  const int n = static_cast<int>(p.size());
+  for (auto* v : {&wall_, &speed2_, &x_, &y_}) v->resize(n);
+  for (auto* v : {&last_, &cell_, &id_}) v->resize(n);
+#pragma omp parallel for
+  for (int i = 0; i < n; ++i) {
+    wall_[i] = wall_candidate(box, p, i).t;
+    speed2_[i] = p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i];
   }
-}
-
-/// The first of `count` items that thread `t` of `threads` takes (a static split).
-inline int share(int count, int t, int threads) {
-  return static_cast<int>(static_cast<long long>(count) * t / threads);
-}
-
-/// Files entry `e` of `in` for slab k: its row and column by its midpoint position (row -1 when it
-/// takes no part, last < k), counted in `count` (one per row, then one for those dropped).
-inline void count_entry(Entries& in, int e, int k, const sweep::Grid& g, int* count) {
-  if (in.last[e] < k) {
-    in.row[e] = -1;
-    ++count[g.rows];
-    return;
+  g_ = grid::choose(box, speed2_, wall_);
+  for (int i = 0; i < n; ++i) last_[i] = g_.last_slab(wall_[i]);
+  start_.resize(static_cast<std::size_t>(g_.cells()) + 1);
+  found_.resize(omp_get_max_threads());
+  for (auto& f : found_) f.clear();
+  for (int k = 0; k < g_.slabs; ++k) {
+    bin(p, k);
+    search(box, p, k);
   }
-  const double tm = sweep::slab_mid(k, g);
-  in.row[e] = sweep::row_of(in.y0[e] + tm * in.vy[e], g);
-  in.column[e] = sweep::column_of(in.x0[e] + tm * in.vx[e], g);
-  ++count[in.row[e]];
+  select(n);
+#pragma omp parallel for
+  for (int i = 0; i < n; ++i) apply_one(box, p, plan_, i);
 }
 
-/// Between the counting and the grouping (each thread, from every thread's counts of slab k):
-/// where this thread's entries of each row go, in `next`, rows in order and threads in order within
-/// a row (so the result does not depend on the timing); thread 0 also writes the rows' first
-/// entries. Returns how many entries take part.
-inline int place_rows(Slab& s, std::vector<int>& next, int k, const sweep::Grid& g, int t,
-                      int threads) {
-  const std::vector<int>& counts = s.counts[k % 2];
-  int at = 0, taking = 0;
-  for (int row = 0; row <= g.rows; ++row) {
-    if (row == g.rows) taking = at;
-    if (t == 0) s.row_start[k % 2][row] = at;
-    for (int u = 0; u < threads; ++u) {
-      if (u == t) next[row] = at;
-      at += counts[static_cast<std::size_t>(u) * count_stride(g.rows) + row];
-    }
-  }
-  return taking;
+/// Slab k's entries: the particles that take part in it (last_[i] >= k), sorted by the cell of
+/// their midpoint position by a counting sort, into id_, x_, y_ and start_.
+void BroadPhase::bin([[maybe_unused]] const Particles& p, [[maybe_unused]] int k) {
+  // EXERCISE 1: the binning. In parallel, each particle's cell at the slab's midpoint time (-1 for
+  // one that takes no part); then count the particles of each cell, turn the counts into each
+  // cell's first entry (prefix sums: start_), and scatter each particle to its cell's next free
+  // entry (id_, and its midpoint position in x_, y_).
+  PLAB_EXERCISE(1, "bin the slab's particles into cells with a counting sort");
 }
 
-/// Each of this thread's input entries to its place in its row's group (`from`); in slab 0, those
-/// that take no part go straight to the end of the next step's order.
-inline void group_rows(Slab& s, Mine& my, const Entries& in, int k, const sweep::Grid& g) {
-  for (int j = my.lo; j < my.hi; ++j) {
-    const int row = in.row[j];
-    if (row >= 0)
-      s.from[my.next[row]++] = j;
-    else if (k == 0)
-      s.order[my.next[g.rows]++] = in.id[j];
-  }
+/// Slab k's pairs: each pair that meets in slab k (model.md's pair time, before both walls), once,
+/// into the thread's found_.
+void BroadPhase::search([[maybe_unused]] const Box& box, [[maybe_unused]] const Particles& p,
+                        [[maybe_unused]] int k) {
+  // EXERCISE 2: the neighbour search. In parallel over the entries: particle i searches every cell
+  // within d of its midpoint position along both axes (g_.indices_within()), where d covers any
+  // partner no faster than i: they are at most 2r + h(|v_i| + |v_j|) <= 2r + 2h|v_i| apart, plus
+  // the margin for rounding. Test each partner no faster than i (equal speeds: the higher index)
+  // with model.md's pair time, and keep the event if it is in the step, before both walls and in
+  // this slab (the same pair may be near in other slabs too).
+  PLAB_EXERCISE(2, "search the neighbouring cells for the pairs that meet in the slab");
 }
 
-/// Whether each thread takes whole slabs alone, as a team of one with its own buffers (no barrier
-/// a slab), rather than every thread working on every slab: when there are at least two slabs a
-/// thread and the scene is small (its slabs in cache: at N = 10^4 a slab is about 0.3 ms of work,
-/// and two barriers a slab cost more than the sort they share, on a loaded machine most of all).
-inline bool whole_slabs(int n, const sweep::Grid& g, int threads) {
-  return n <= kSmall && g.slabs >= 2 * threads;
-}
-
-/// Slab 0's input, entries [lo, hi): the particles in `order` (the last step's slab-0 order),
-/// each with its last slab and its search; each filed for slab 0 when `count` is given.
-template <class Real>
-inline void gather(Entries& first, const ParticlesOf<Real>& p, const std::vector<double>& end,
-                   const std::vector<int>& order, int lo, int hi, const sweep::Grid& g,
-                   int* count) {
-  for (int j = lo; j < hi; ++j) {
-    const int i = order[j];
-    first.id[j] = i;
-    first.last[j] = sweep::last_slab(end[i], g);
-    first.x0[j] = p.x[i];
-    first.y0[j] = p.y[i];
-    first.vx[j] = p.vx[i];
-    first.vy[j] = p.vy[i];
-    first.reach[j] = sweep::search_of(p.vx[i], p.vy[i], g);
-    if (count) count_entry(first, j, 0, g, count);
-  }
-}
-
-/// Slab k's counting sort by column, one row at a time (this thread's rows, [r0, r1)): each row's
-/// group into `out` in cell order, with each entry's midpoint position, and `start` of the row's
-/// cells. Each entry is filed for slab k + 1 on the way (count_entry(), into `next_count`); in
-/// slab 0, the particles in their new order also go to `order` (the next step's).
-inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, int r1,
-                      const sweep::Grid& g, int* next_count) {
-  const double tm = sweep::slab_mid(k, g);
-  const std::vector<int>& row_start = s.row_start[k % 2];
-  // EXERCISE 1: for each row r0 .. r1 - 1, a counting sort of its entries by column. Row `row`
-  // holds entries [row_start[row], row_start[row + 1]); entry e of it comes from input entry
-  // j = s.from[e], whose column is in.column[j]. Its cells' starts are
-  // s.start[row * g.columns + c]: count per column there, prefix sums from row_start[row], then
-  // scatter each input entry to its column's next place `to`: every field of `in` to `out`, its
-  // midpoint position s.x[to] = in.x0[j] + tm * in.vx[j] (and y alike), in slab 0 its particle
-  // to s.order[to], and, when next_count is given, count_entry(out, to, k + 1, g, next_count).
-  // Then put each column's start back (the scatter moved it on). Whoever sorts the last row also
-  // writes s.start[g.cells()], where the last cell ends. Why can the rows be sorted in parallel?
-  (void)tm, (void)row_start, (void)in, (void)out, (void)r0, (void)r1, (void)next_count;
-  // (One thread stops the run with this message, the others wait: replace both lines.)
-#pragma omp critical
-  PLAB_EXERCISE(1, "the broad phase: each slab's particles binned, neighbouring cells tested");
-}
-
-/// Bit u of the result: whether entry `a` and entry `b0 + u` pass close_in_slab(), u < kLanes.
-// [[maybe_unused]]: called by the exercise's code (clang warns while the stub does not).
-[[maybe_unused]]
-inline unsigned close_lanes(const View& s, int a, int b0, const sweep::Grid& g) {
-  unsigned lanes = 0;
-#pragma omp simd reduction(| : lanes)
-  for (int u = 0; u < kLanes; ++u)
-    lanes |= unsigned{sweep::close_in_slab(s.x[a] - s.x[b0 + u], s.y[a] - s.y[b0 + u],
-                                           s.vx[a] - s.vx[b0 + u], s.vy[a] - s.vy[b0 + u], g)}
-             << u;
-  return lanes;
-}
-
-#if PLAB_AVX2
-/// close_lanes() with AVX2, four lanes a register: the operations of close_in_slab() in the
-/// same order (no FMA), so every lane gives the bits of the scalar test.
-[[maybe_unused]]
-__attribute__((target("avx2"))) inline unsigned close_lanes_avx2(const View& s, int a, int b0,
-                                                                 const sweep::Grid& g) {
-  const __m256d xa = _mm256_set1_pd(s.x[a]), ya = _mm256_set1_pd(s.y[a]);
-  const __m256d vxa = _mm256_set1_pd(s.vx[a]), vya = _mm256_set1_pd(s.vy[a]);
-  const __m256d h = _mm256_set1_pd(g.half), two_h = _mm256_set1_pd(2 * g.half);
-  const __m256d hh = _mm256_set1_pd(g.half * g.half), rr = _mm256_set1_pd(g.reach * g.reach);
-  const __m256d sign = _mm256_set1_pd(-0.0);
-  unsigned lanes = 0;
-  for (int u = 0; u < kLanes; u += 4) {
-    const __m256d dx = _mm256_sub_pd(xa, _mm256_loadu_pd(&s.x[b0 + u]));
-    const __m256d dy = _mm256_sub_pd(ya, _mm256_loadu_pd(&s.y[b0 + u]));
-    const __m256d wx = _mm256_sub_pd(vxa, _mm256_loadu_pd(&s.vx[b0 + u]));
-    const __m256d wy = _mm256_sub_pd(vya, _mm256_loadu_pd(&s.vy[b0 + u]));
-    const __m256d dd = _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy));
-    const __m256d ww = _mm256_add_pd(_mm256_mul_pd(wx, wx), _mm256_mul_pd(wy, wy));
-    const __m256d q =
-        _mm256_andnot_pd(sign, _mm256_add_pd(_mm256_mul_pd(dx, wx), _mm256_mul_pd(dy, wy)));
-    const __m256d inside = _mm256_cmp_pd(q, _mm256_mul_pd(h, ww), _CMP_LE_OQ);
-    const __m256d far_inside = _mm256_cmp_pd(
-        _mm256_sub_pd(_mm256_mul_pd(dd, ww), _mm256_mul_pd(q, q)), _mm256_mul_pd(rr, ww),
-        _CMP_GT_OQ);
-    const __m256d far_end = _mm256_cmp_pd(
-        _mm256_add_pd(_mm256_sub_pd(dd, _mm256_mul_pd(two_h, q)), _mm256_mul_pd(hh, ww)), rr,
-        _CMP_GT_OQ);
-    // close = (inside & !far_inside) | (!inside & !far_end)
-    const __m256d far = _mm256_or_pd(_mm256_and_pd(inside, far_inside),
-                                     _mm256_andnot_pd(inside, far_end));
-    lanes |= static_cast<unsigned>(~_mm256_movemask_pd(far) & 0xF) << u;
-  }
-  return lanes;
-}
-
-/// close_lanes() with AVX-512, all eight lanes in one register: the same operations again.
-[[maybe_unused]]
-__attribute__((target("avx512f"))) inline unsigned close_lanes_avx512(const View& s, int a, int b0,
-                                                                     const sweep::Grid& g) {
-  const __m512d dx = _mm512_sub_pd(_mm512_set1_pd(s.x[a]), _mm512_loadu_pd(&s.x[b0]));
-  const __m512d dy = _mm512_sub_pd(_mm512_set1_pd(s.y[a]), _mm512_loadu_pd(&s.y[b0]));
-  const __m512d wx = _mm512_sub_pd(_mm512_set1_pd(s.vx[a]), _mm512_loadu_pd(&s.vx[b0]));
-  const __m512d wy = _mm512_sub_pd(_mm512_set1_pd(s.vy[a]), _mm512_loadu_pd(&s.vy[b0]));
-  const __m512d dd = _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy));
-  const __m512d ww = _mm512_add_pd(_mm512_mul_pd(wx, wx), _mm512_mul_pd(wy, wy));
-  const __m512d q = _mm512_abs_pd(_mm512_add_pd(_mm512_mul_pd(dx, wx), _mm512_mul_pd(dy, wy)));
-  const __mmask8 inside =
-      _mm512_cmp_pd_mask(q, _mm512_mul_pd(_mm512_set1_pd(g.half), ww), _CMP_LE_OQ);
-  const __mmask8 far_inside = _mm512_cmp_pd_mask(
-      _mm512_sub_pd(_mm512_mul_pd(dd, ww), _mm512_mul_pd(q, q)),
-      _mm512_mul_pd(_mm512_set1_pd(g.reach * g.reach), ww), _CMP_GT_OQ);
-  const __mmask8 far_end = _mm512_cmp_pd_mask(
-      _mm512_add_pd(_mm512_sub_pd(dd, _mm512_mul_pd(_mm512_set1_pd(2 * g.half), q)),
-                    _mm512_mul_pd(_mm512_set1_pd(g.half * g.half), ww)),
-      _mm512_set1_pd(g.reach * g.reach), _CMP_GT_OQ);
-  // close = (inside & !far_inside) | (!inside & !far_end)
-  return static_cast<unsigned>(~((inside & far_inside) | (~inside & far_end)) & 0xFF);
-}
-#endif
-
-/// The instruction sets the pair test has a path for, chosen once at run time.
-enum class Isa { kPortable, kAvx2, kAvx512 };
-
-/// Files entry `a` with every entry of [from, to) but itself that passes close_in_slab() in
-/// `hits`, kLanes entries at a time (the arrays are padded: lanes past `to` are masked off).
-template <Isa kIsa>
-inline void test_range(const View& s, std::vector<std::pair<int, int>>& hits, int a, int from,
-                       int to, const sweep::Grid& g) {
-  for (int b0 = from; b0 < to; b0 += kLanes) {
-#if PLAB_AVX2
-    unsigned lanes = kIsa == Isa::kAvx512 ? close_lanes_avx512(s, a, b0, g)
-                     : kIsa == Isa::kAvx2 ? close_lanes_avx2(s, a, b0, g)
-                                          : close_lanes(s, a, b0, g);
-#else
-    unsigned lanes = close_lanes(s, a, b0, g);
-#endif
-    if (to - b0 < kLanes) lanes &= (1u << (to - b0)) - 1;
-    for (; lanes != 0; lanes &= lanes - 1) {
-      const int b = b0 + __builtin_ctz(lanes);
-      if (b != a) hits.emplace_back(a, b);
-    }
-  }
-}
-
-/// The search of entries [from, to) of the slab, entry by entry (sweep::search_of()): a slow
-/// entry against the later entries of its row up to the last column within its reach, then the
-/// columns within reach of the row above, two runs of entries in row-major order; a fast entry
-/// against every entry within its reach, one run per row. The entries that pass go to `hits`.
-template <Isa kIsa>
-inline void search_cells(const View& s, std::vector<std::pair<int, int>>& hits, int from, int to,
-                         const sweep::Grid& g) {
-  // EXERCISE 1: for every entry a in [from, to), knowing its row (row r holds entries
-  // [s.row_start[r], s.row_start[r + 1])): its search q = s.reach[a] and the columns x0 .. x1
-  // within q.d of its midpoint x (sweep::columns_within()). If it is not fast,
-  // test_range<kIsa>(s, hits, a, ...) over the later entries of its row up to column x1, then over
-  // columns x0 .. x1 of the next row: two runs of entries in row-major order. Why are the later
-  // entries enough? (handout 06) A fast entry: every row within q.d (sweep::rows_within()),
-  // columns x0 .. x1 of each.
-  (void)s, (void)hits, (void)from, (void)to, (void)g;
-  // (One thread stops the run with this message, the others wait: replace both lines.)
-#pragma omp critical
-  PLAB_EXERCISE(1, "the broad phase: each slab's particles binned, neighbouring cells tested");
-}
-
-#if PLAB_AVX2
-/// search_cells() with AVX-512.
-__attribute__((target("avx512f"), flatten)) void search_avx512(
-    const View& s, std::vector<std::pair<int, int>>& hits, int from, int to, const sweep::Grid& g) {
-  search_cells<Isa::kAvx512>(s, hits, from, to, g);
-}
-
-/// search_cells() with AVX2.
-__attribute__((target("avx2"), flatten)) void search_avx2(
-    const View& s, std::vector<std::pair<int, int>>& hits, int from, int to, const sweep::Grid& g) {
-  search_cells<Isa::kAvx2>(s, hits, from, to, g);
-}
-#endif
-
-/// The vectors the pair test uses in this run: the widest the CPU has, or narrower ones when
-/// the run asks (StageOptions::simd `portable` or `avx2`: the tests run every path the machine has
-/// and compare their bits). Set once by make_stepper(), before any step.
-Isa isa_in_use = Isa::kPortable;
-
-/// The widest vectors the CPU has, or narrower ones if `asked` says so.
-Isa choose_isa(const std::string& asked) {
-  Isa best = Isa::kPortable;
-#if PLAB_AVX2
-  best = __builtin_cpu_supports("avx512f") ? Isa::kAvx512
-         : __builtin_cpu_supports("avx2")  ? Isa::kAvx2
-                                           : Isa::kPortable;
-#endif
-  if (asked == "portable") return Isa::kPortable;
-  if (asked == "avx2" && best == Isa::kAvx512) return Isa::kAvx2;
-  return best;
-}
-
-/// The search of entries [from, to), with the chosen vectors.
-void search(const View& s, std::vector<std::pair<int, int>>& hits, int from, int to,
-            const sweep::Grid& g) {
-#if PLAB_AVX2
-  if (isa_in_use == Isa::kAvx512) return search_avx512(s, hits, from, to, g);
-  if (isa_in_use == Isa::kAvx2) return search_avx2(s, hits, from, to, g);
-#endif
-  search_cells<Isa::kPortable>(s, hits, from, to, g);
-}
-
-/// The narrow phase: model.md's pair time of each entry pair in `hits` (entries of `out`), kept in
-/// `found` if it is in the step (the plan drops pairs after walls).
-template <class Real>
-inline void narrow(const Box& box, const ParticlesOf<Real>& p, const Entries& out,
-                   const std::vector<std::pair<int, int>>& hits, std::vector<model::Event>& found) {
-  // EXERCISE 2: the narrow phase. For each entry pair (a, b) in `hits`: the particles
-  // i < j (out.id[a], out.id[b]), model.md's pair time (pair_candidate(box, p, i, j));
-  // keep it in `found` if it is in the step. (The plan then drops every pair at or after
-  // either wall time: why may it? handout 06)
-  (void)box, (void)p, (void)out, (void)hits, (void)found;
-  // (One thread stops the run with this message, the others wait: replace both lines.)
-#pragma omp critical
-  PLAB_EXERCISE(2, "the narrow phase: pair times of the pairs that passed");
-}
-
-/// Slab k alone, by one thread in its own buffers `o` (whole_slabs()): a counting sort by cell
-/// of slab 0's input `in` (the team's, read only) into `o`, the search, and the pairs' times (into
-/// `my.found`). One level and one move an entry: the slab is small enough to stay in cache.
-template <class Real>
-inline void slab_alone(const Box& box, const ParticlesOf<Real>& p, Slab& o, Mine& my,
-                       const Entries& in, int n, int k, const sweep::Grid& g) {
-  const double tm = sweep::slab_mid(k, g);
-  std::vector<int>& cell = o.from;  // per input entry: its cell, or -1
-  int* start = o.start.data();
-  std::fill(start, start + g.cells() + 1, 0);
-  for (int j = 0; j < n; ++j) {  // count
-    cell[j] = in.last[j] < k ? -1
-                             : sweep::cell_of(in.x0[j] + tm * in.vx[j], in.y0[j] + tm * in.vy[j], g);
-    if (cell[j] >= 0) ++start[cell[j] + 1];
-  }
-  for (int c = 0; c < g.cells(); ++c) start[c + 1] += start[c];
-  const int taking = start[g.cells()];
-  Entries& out = o.set[1];
-  for (int j = 0, rest = taking; j < n; ++j) {  // scatter: start[c] moves on to cell c + 1's
-    if (cell[j] < 0) {
-      if (k == 0) o.order[rest++] = in.id[j];  // no part in the step: the next step's order's end
-      continue;
-    }
-    const int to = start[cell[j]]++;
-    out.id[to] = in.id[j];
-    out.vx[to] = in.vx[j];
-    out.vy[to] = in.vy[j];
-    out.reach[to] = in.reach[j];
-    o.x[to] = in.x0[j] + tm * in.vx[j];
-    o.y[to] = in.y0[j] + tm * in.vy[j];
-    if (k == 0) o.order[to] = in.id[j];
-  }
-  for (int c = g.cells(); c > 0; --c) start[c] = start[c - 1];
-  start[0] = 0;
-  std::vector<int>& row_start = o.row_start[0];
-  for (int r = 0; r <= g.rows; ++r) row_start[r] = start[static_cast<std::size_t>(r) * g.columns];
-  const View v{o.x.data(),       o.y.data(), out.vx.data(), out.vy.data(),
-               out.reach.data(), start,      row_start.data()};
-  my.hits.clear();
-  search(v, my.hits, 0, taking, g);
-  narrow(box, p, out, my.hits, my.found);
+/// model.md's selection over the pairs found and the walls: plan_.
+void BroadPhase::select([[maybe_unused]] int n) {
+  // EXERCISE 3: the sparse selection. Gather every thread's pairs, sort them by model.md's key,
+  // and accept each pair whose particles are both still free. Every pair found comes before both
+  // its particles' walls, so no wall can take a particle first: once the pairs are done, each
+  // particle left free takes its wall when its wall time is in the step.
+  PLAB_EXERCISE(3, "select the events in key order over the pairs found");
 }
 
 }  // namespace
 
-/// One step in reals of type `Real`: `double` is model.md's step, `float` the variant that
-/// `plab accuracy` measures (the broad phase always works in double). One parallel region: every
-/// thread works on every slab in turn (two barriers a slab), or, in a small scene with at least two
-/// slabs a thread (whole_slabs()), each thread on whole slabs alone; then all on the selection.
-template <class Real>
-void step_in(const Box& box, ParticlesOf<Real>& p) {
-  const int n = static_cast<int>(p.size());
-  static std::vector<double> wall, end, scratch;  // working memory, kept between steps
-  static Slab s;  // the slab of the whole team
-  static std::vector<Mine> mine;
-  static Plan plan;
-  static SparseSelection selection;
-  static sweep::Grid g;
-  wall.resize(n);
-  end.resize(n);
-  if (static_cast<int>(s.order.size()) != n) {  // a new scene: any order will do to begin with
-    s.order.resize(n);
-    for (int i = 0; i < n; ++i) s.order[i] = i;
-  }
-  mine.resize(omp_get_max_threads());
-  plan.partner.resize(n);
-  plan.time.resize(n);
-  selection.only.resize(n);
-  selection.contested.resize(omp_get_max_threads());
-
-#pragma omp parallel
-  {
-    const int t = omp_get_thread_num(), threads = omp_get_num_threads();
-    Mine& my = mine[t];
-    my.found.clear();
-    // Wall times, and what the grid needs to know (sweep::choose(), by the team): how many take
-    // part, the fastest, and a sample of the speeds (every stride-th of those that take part).
-    const auto speed2 = [&](int i) {
-      return double(p.vx[i]) * double(p.vx[i]) + double(p.vy[i]) * double(p.vy[i]);
-    };
-    my.lo = share(n, t, threads);
-    my.hi = share(n, t + 1, threads);
-    my.active = 0;
-    my.max2 = 0;
-    my.unordered = false;
-    for (int i = my.lo; i < my.hi; ++i) {
-      wall[i] = wall_candidate(box, p, i).t;
-      end[i] = sweep::path_end(wall[i]);
-      if (!(end[i] > 0)) continue;  // takes no part
-      const double v2 = speed2(i);
-      my.unordered |= (v2 != v2);
-      my.max2 = std::max(my.max2, v2);
-      ++my.active;
-    }
-#pragma omp barrier
-    my.sample.clear();
-    const int stride = static_cast<int>(sweep::sample_stride(n));
-    if (n > kSmall) {  // a small scene's sample is taken by the single below: one barrier less
-      for (int u = 0, at = 0; u <= t; ++u) {
-        if (u < t) {
-          at += mine[u].active;
-          continue;
-        }
-        for (int i = my.lo; i < my.hi; ++i)
-          if (end[i] > 0 && at++ % stride == 0) my.sample.push_back(speed2(i));
-      }
-#pragma omp barrier
-    }
-#pragma omp single
-    {
-      int active = 0;
-      double max2 = 0;
-      bool unordered = false;
-      scratch.clear();
-      for (int i = 0, at = 0; i < n && n <= kSmall; ++i)
-        if (end[i] > 0 && at++ % stride == 0) scratch.push_back(speed2(i));
-      for (const Mine& m : mine) {
-        if (&m - mine.data() >= threads) break;
-        active += m.active;
-        max2 = std::max(max2, m.max2);
-        unordered |= m.unordered;
-        scratch.insert(scratch.end(), m.sample.begin(), m.sample.end());
-      }
-      g = sweep::choose_from_sample(box, active, max2, unordered, scratch, kQuantile, kAlpha);
-      const bool alone = whole_slabs(n, g, threads);
-      s.reserve(n, g, threads);
-      for (Mine& m : mine) {
-        m.next.resize(g.rows + 1);
-        if (alone && &m - mine.data() < threads) m.own.reserve(n, g, 1);
-      }
-    }
-    if (whole_slabs(n, g, threads)) {
-      // 1-2. Broad and narrow phase, each thread whole slabs alone, from slab 0's input (gathered
-      // by the team); whoever sorts slab 0 hands its order on to the next step.
-      Entries& in = s.set[0];
-      gather(in, p, end, s.order, share(n, t, threads), share(n, t + 1, threads), g, nullptr);
-      my.first = false;
-#pragma omp barrier
-#pragma omp for schedule(dynamic, 1)
-      for (int k = 0; k < g.slabs; ++k) {
-        slab_alone(box, p, my.own, my, in, n, k, g);
-        my.first |= (k == 0);
-      }
-      if (my.first) std::swap(s.order, my.own.order);  // no thread reads s.order until next step
-    } else {
-      // 1. Broad phase. Slab 0's input: every particle, in the order of the last step's slab 0
-      // (close to this step's, so the sort's writes stay close together): the one pass that reads
-      // the particles out of index order. Each thread takes a share and files it for slab 0.
-      Entries& first = s.set[0];
-      int* count = &s.counts[0][static_cast<std::size_t>(t) * count_stride(g.rows)];
-      std::fill(count, count + g.rows + 1, 0);
-      my.lo = share(n, t, threads);
-      my.hi = share(n, t + 1, threads);
-      gather(first, p, end, s.order, my.lo, my.hi, g, count);
-#pragma omp barrier
-      int taking = place_rows(s, my.next, 0, g, t, threads);
-      group_rows(s, my, first, 0, g);
-#pragma omp barrier
-      for (int k = 0; k < g.slabs; ++k) {
-        const Entries& in = s.set[k % 2];
-        Entries& out = s.set[(k + 1) % 2];
-        // This thread's rows: those that start in its share of the entries. Sorting them files
-        // their entries for slab k + 1, which this thread then groups by row.
-        const std::vector<int>& row_start = s.row_start[k % 2];
-        const auto row_at = [&](int u) {
-          return u == threads ? g.rows
-                              : static_cast<int>(std::lower_bound(row_start.begin(),
-                                                                  row_start.begin() + g.rows,
-                                                                  share(taking, u, threads)) -
-                                                 row_start.begin());
-        };
-        const int r0 = row_at(t), r1 = row_at(t + 1);
-        int* next_count = nullptr;
-        if (k + 1 < g.slabs) {
-          next_count = &s.counts[(k + 1) % 2][static_cast<std::size_t>(t) * count_stride(g.rows)];
-          std::fill(next_count, next_count + g.rows + 1, 0);
-        }
-        sort_rows(s, in, out, k, r0, r1, g, next_count);
-        my.lo = row_start[r0];
-        my.hi = row_start[r1];
-#pragma omp barrier
-        const int next_taking = k + 1 < g.slabs ? place_rows(s, my.next, k + 1, g, t, threads) : 0;
-        // The search (each pair that passes, then the narrow phase at once), in chunks of entries
-        // taken as threads come free; then this thread groups slab k + 1's entries by row. No
-        // barrier between: the grouping touches nothing the search reads.
-        const View v{s.x.data(),       s.y.data(),     out.vx.data(),   out.vy.data(),
-                     out.reach.data(), s.start.data(), row_start.data()};
-#pragma omp for schedule(dynamic, 1) nowait
-        for (int from = 0; from < taking; from += kChunk) {
-          my.hits.clear();
-          search(v, my.hits, from, std::min(from + kChunk, taking), g);
-          narrow(box, p, out, my.hits, my.found);  // the pairs' times, at once
-        }
-        if (k + 1 < g.slabs) group_rows(s, my, out, k + 1, g);
-        taking = next_taking;
-#pragma omp barrier
-      }
-    }
-
-    // EXERCISE 3: choose the events with every thread (plab::sparse_greedy_plan_in_team(), from
-    // each thread's my.found, into `plan`, working memory `selection`: model.md's greedy rule over
-    // the sparse candidates and the walls) and apply them in parallel (plab::apply_one()).
-    // (One thread stops the run with this message, the others wait: replace both lines.)
-#pragma omp critical
-    PLAB_EXERCISE(3, "select the events and apply them");
-  }
-}
-
-void step(const Box& box, Particles& p) { step_in(box, p); }
-
-void step_float(const Box& box, ParticlesOf<float>& p) { step_in(box, p); }
-
 /// Stage 06's entry point (stage.hpp): the GPU path (step.cu) when the run and the machine allow
-/// it, otherwise step() on the CPU with the vectors `options.simd` asks for (or step_float()).
+/// it, otherwise a BroadPhase steps on the CPU.
 std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions& options) {
-  isa_in_use = choose_isa(options.simd);
-  return cpu_stage(box, p, options, {step, step_float, make_gpu_stepper});
+  return cpu_stage(box, p, options, std::make_unique<BroadPhase>(), make_gpu_stepper);
 }
 
 }  // namespace plab

@@ -59,13 +59,15 @@ class EventQueue {
   [[nodiscard]] bool empty() const { return heap_.empty(); }
   /// The earliest event.
   [[nodiscard]] const Event& top() const { return events_[heap_[0].i]; }
-  /// Replaces the prediction of particle `e.i`.
+  /// Replaces the prediction of particle `e.i` and moves the particle to its place in the heap.
   void set(const Event& e) {
     events_[e.i] = e;
-    const int k = at_[e.i];
-    heap_[k].t = e.t;
-    if (k > 0 && e.t < heap_[(k - 1) / 2].t) up(k);
-    else down(k);
+    // EXERCISE 1: the event queue. Particle e.i sits at heap_[at_[e.i]]: store its new time
+    // there, then restore the heap order (every parent's time <= its children's; the children of
+    // k are 2k + 1 and 2k + 2): sift it up while it is earlier than its parent, else down while a
+    // child is earlier (take the earlier child). Move entries with put(), which keeps at_ in step,
+    // so that each particle is in the heap exactly once. O(log N) per call.
+    PLAB_EXERCISE(1, "the event queue: sift the changed entry up or down");
   }
 
  private:
@@ -73,24 +75,10 @@ class EventQueue {
     double t;  //!< the event's time, kept beside the particle so that sifting reads one array
     int i;     //!< the particle
   };
+  /// Puts entry `e` at place `k` of the heap and records where its particle is.
   void put(int k, const Entry& e) {
     heap_[k] = e;
     at_[e.i] = k;
-  }
-  void up(int k) {
-    const Entry e = heap_[k];
-    for (; k > 0 && e.t < heap_[(k - 1) / 2].t; k = (k - 1) / 2) put(k, heap_[(k - 1) / 2]);
-    put(k, e);
-  }
-  void down(int k) {
-    const Entry e = heap_[k];
-    const int n = static_cast<int>(heap_.size());
-    for (int c = 2 * k + 1; c < n; k = c, c = 2 * k + 1) {
-      if (c + 1 < n && heap_[c + 1].t < heap_[c].t) ++c;
-      if (!(heap_[c].t < e.t)) break;
-      put(k, heap_[c]);
-    }
-    put(k, e);
   }
   std::vector<Event> events_;  //!< each particle's prediction
   std::vector<Entry> heap_;    //!< (time, particle) in heap order
@@ -181,15 +169,19 @@ class EventDriven final : public Stepper {
 
   /// The earliest of `best` and the pair events of `i` with the particles of cells
   /// [gx0, gx1] x [gy0, gy1] (clipped to the grid).
-  Event scan([[maybe_unused]] int i, int gx0, int gx1, int gy0, int gy1, Event best) const {
+  Event scan(int i, int gx0, int gx1, int gy0, int gy1, Event best) const {
     for (int gy = std::max(0, gy0); gy <= std::min(cells_ - 1, gy1); ++gy) {
       for (int gx = std::max(0, gx0); gx <= std::min(cells_ - 1, gx1); ++gx) {
-        // EXERCISE 1: for every particle j != i of this cell (head_, next_), the contact time
-        // of the pair by model::contact_time_from(), from both positions at the later of their
-        // stored times t_[i], t_[j]; keep `best` the earliest (a kPairHit Event with hits_[j]).
-        // Skip the pair that has just collided when the time is 0 (last_), or rounding can make
-        // it collide again and again.
-        PLAB_EXERCISE(1, "predict the pair events of a particle");
+        for (int j = head_[static_cast<std::size_t>(gy) * cells_ + gx]; j >= 0; j = next_[j]) {
+          if (j == i) continue;
+          const double t0 = std::max(t_[i], t_[j]);
+          const double dt = model::contact_time_from(t0, p_.x[i], p_.y[i], p_.vx[i], p_.vy[i],
+                                                     t_[i], p_.x[j], p_.y[j], p_.vx[j], p_.vy[j],
+                                                     t_[j], box_.r);
+          // The pair that has just collided recedes; rounding must not make it meet again at once.
+          if (dt == 0 && last_[i] == j && last_[j] == i) continue;
+          if (t0 + dt < best.t) best = Event{std::max(now_, t0 + dt), kPairHit, i, j, 0, hits_[j]};
+        }
       }
     }
     return best;
@@ -261,8 +253,8 @@ class EventDriven final : public Stepper {
   /// along the line of centres are exchanged, \f$ v_i \mathrel{-}= (b/d^2)\,d,\ v_j \mathrel{+}= (b/d^2)\,d \f$.
   void collide(int i, int j) {
     // EXERCISE 3: bring both to now, then exchange the velocity components along the line of
-    // centres: b = d . (v_i - v_j), f = b / |d|^2, v_i -= f d, v_j += f d
-    // (model::contact_response() applies it; read it before you call it).
+    // centres: d = p_i - p_j, b = d . (v_i - v_j), f = b / |d|^2, v_i -= f d, v_j += f d, in
+    // that order of operations (the golden files hold its bits; positions do not move).
     PLAB_EXERCISE(3, "the elastic collision of two disks");
     ++p_.pc[i];
     ++p_.pc[j];

@@ -1,7 +1,8 @@
 /// \file 05-cuda-streams.cpp
-/// \brief Stage 05's idea as a spec: streams, one-block rounds, branchless walls and a replayed
-/// CUDA graph change the speed, never the bits: the hand-built cases of stages 01-03 give the
-/// same state with each change turned off (StageOptions::off). Skips without a GPU.
+/// \brief Stage 05's idea as a spec: the second stream and the branchless wall event (the
+/// exercises), like the given one-block rounds and replayed CUDA graph, change the speed, never
+/// the bits: the hand-built cases of stages 01-03 give the same state with each change turned off
+/// (StageOptions::off). Skips without a GPU.
 #include <vector>
 
 #include "cases.hpp"

@@ -11,10 +11,20 @@ using namespace plab::spec;
 
 // Two disks head-on collide at the exact contact time and exchange velocities: d = -3, w = 2,
 // b = -6, c = 5, a = 4, disc = 16: t = 5 / (6 + 4) = 0.5, at x = 3.5 and 5.5; then
-// contact_response: f = (-2 * 2) / 4 = -1, v0 = 1 - 2 = -1, v1 = -1 + 2 = 1; at t = 1: 3 and 6.
+// the collision: f = (-2 * 2) / 4 = -1, v0 = 1 - 2 = -1, v1 = -1 + 2 = 1; at t = 1: 3 and 6.
 TEST(Stage07Spec, HeadOnPairCollidesAtTheContactTime) {
   expect_state(state({{3, 5, -1, 0}, {6, 5, 1, 0}}, {1, 1}, {0, 0}),
                run({10, 1}, disks({{3, 5, 1, 0}, {6, 5, -1, 0}})));
+}
+
+// An oblique collision exchanges only the components along the line of centres (the student's
+// collide()): r = 2.5, disks touching at t = 0 with d = p0 - p1 = (-3, -4), |d|^2 = 25 = (2r)^2;
+// v0 = (7, 1), v1 = 0: b = d.(v0 - v1) = -21 - 4 = -25, f = b / |d|^2 = -1, so
+// v0 = v0 - f d = (4, -3) (its tangential part) and v1 = v1 + f d = (3, 4); at t = 1 they are at
+// (14, 7) and (16, 18), receding.
+TEST(Stage07Spec, AnObliqueCollisionExchangesTheNormalComponents) {
+  expect_state(state({{14, 7, 4, -3}, {16, 18, 3, 4}}, {1, 1}, {0, 0}),
+               run({40, 2.5}, disks({{10, 10, 7, 1}, {13, 14, 0, 0}})));
 }
 
 // A disk hits a wall and then the other wall within one unit of time (the stepped model stops at

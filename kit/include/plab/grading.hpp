@@ -14,8 +14,9 @@
 
 namespace plab {
 
-/// For every block `k` of `blocks` but the last, starts a run from that state, advances it one step
-/// with the stage and writes the result as block `k + 1` (without counters).
+/// For every block of `blocks` (step `k`), starts a run from that state, advances it one step with
+/// the stage and writes the result as a block of step `k + 1` (without counters). The grader gives
+/// every other state of a run (steps 0, 2, 4, ...), so a step's answer is never in the input.
 /// (`blocks` is an output read by parse_output(), io.hpp.)
 void step_from_each(const Box& box, const std::vector<OutputBlock>& blocks,
                     const MakeStepper& make, std::FILE* out);

@@ -198,26 +198,6 @@ PLAB_HD inline void reflect(Real& vx, Real& vy, bool flip_x, bool flip_y) {
   vy = flip_y ? -vy : vy;
 }
 
-/// The branchless wall event (used by the CUDA stages): \f$ e = \min(t_x, t_y) \f$, reflect every
-/// axis whose time equals \f$e\f$, then move \f$ \min(1, t_{later}) - e \f$ with \f$ t_{later} = 1 \f$
-/// at a corner. Gives the same bits as wall_event(); the tests check it.
-template <class Real>
-PLAB_HD inline void wall_event_branchless(Real& x, Real& y, Real& vx, Real& vy,
-                                          long long& wc, Real L, Real r) {
-  const WallTimesOf<Real> w = wall_times(x, y, vx, vy, L, r);
-  const Real e = wall_time(w);
-  const bool flip_x = (w.tx == e);
-  const bool flip_y = (w.ty == e);
-  const Real later = (flip_x && flip_y) ? Real(1) : (flip_x ? w.ty : w.tx);
-  const Real m = ((later < 1) ? later : Real(1)) - e;
-  x = x + e * vx;
-  y = y + e * vy;
-  reflect(vx, vy, flip_x, flip_y);
-  x = x + m * vx;
-  y = y + m * vy;
-  wc = wc + 1;
-}
-
 /// Time for a centre at `pos` moving at `v` along one axis to reach `lo` (moving down) or `hi`
 /// (moving up): \f$ t = (pos - lo)/(0 - v) \f$ if \f$v < 0\f$, else \f$ (hi - pos)/v \f$;
 /// \f$+\infty\f$ if \f$v = 0\f$. Negative when the centre is already past the bound it moves to.
@@ -341,25 +321,6 @@ PLAB_HD inline Real contact_time_from(Real t0, Real xi, Real yi, Real vxi, Real 
   const Real dx = position_at(xi, vxi, ti, t0) - position_at(xj, vxj, tj, t0);
   const Real dy = position_at(yi, vyi, ti, t0) - position_at(yj, vyj, tj, t0);
   return contact_time(dx, dy, vxi - vxj, vyi - vyj, r);
-}
-
-/// The elastic collision of two equal disks at contact, continuous-time variant: the velocity
-/// components along the line of centres \f$ d = p_i - p_j \f$ are exchanged, in one projection,
-/// \f[ f = \frac{d \cdot (v_i - v_j)}{|d|^2},\qquad
-///     v_i \leftarrow v_i - f\,d,\qquad v_j \leftarrow v_j + f\,d. \f]
-/// Not pair_event()'s form (unit normal and tangent, zeros stored as +0.0), which rounds
-/// differently: the exact stage's golden files depend on this one. Positions are not moved.
-template <class Real>
-PLAB_HD inline void contact_response(Real xi, Real yi, Real& vxi, Real& vyi,
-                                     Real xj, Real yj, Real& vxj, Real& vyj) {
-  const Real dx = xi - xj;
-  const Real dy = yi - yj;
-  const Real b = dx * (vxi - vxj) + dy * (vyi - vyj);
-  const Real f = b / (dx * dx + dy * dy);
-  vxi = vxi - f * dx;
-  vyi = vyi - f * dy;
-  vxj = vxj + f * dx;
-  vyj = vyj + f * dy;
 }
 
 }  // namespace plab::model

@@ -2,8 +2,6 @@
 /// \brief The events chosen for one step (at most one per particle), and applying them.
 #pragma once
 
-#include <algorithm>
-#include <utility>
 #include <vector>
 
 #include "plab/model.hpp"
@@ -60,24 +58,33 @@ struct FieldPointers {
   long long* wc;   //!< collisions with walls so far
 };
 
+/// apply_planned()'s wall event unless a stage gives its own: model::wall_event() as a function
+/// object. A stage passes another form of the same event (stage 05's branchless one) as a
+/// struct with this call operator; it must give the same bits.
+struct BranchyWall {
+  /// model::wall_event() on particle `(x, y, vx, vy, wc)`.
+  template <class Real>
+  PLAB_HD void operator()(Real& x, Real& y, Real& vx, Real& vy, long long& wc, Real L,
+                          Real r) const {
+    model::wall_event(x, y, vx, vy, wc, L, r);
+  }
+};
+
 /// Applies particle `i`'s planned event, the plan given as plain arrays (`partner[i]`:
 /// Plan::kFree, Plan::kWall or the other particle; `time[i]`: the pair time, read for a pair
 /// only): a free move, a wall event, or a pair event applied by its lower index, which writes
 /// both particles. Host and device: apply_one() calls it on the CPU, the CUDA stages' `apply`
 /// kernels on the GPU, so both run the same operations in the same order. `p`: any struct of
-/// field pointers named as FieldPointers. `Branchless` picks model::wall_event_branchless()
-/// (the same bits, less divergence on a GPU) over model::wall_event().
-template <bool Branchless = false, class Fields, class Real>
+/// field pointers named as FieldPointers. `Wall` is the form of the wall event (BranchyWall, or
+/// a stage's own struct with the same call operator, chosen once at compile time).
+template <class Wall = BranchyWall, class Fields, class Real>
 PLAB_HD inline void apply_planned(const Fields& p, const int* partner, const double* time, int i,
                                   Real L, Real r) {
   const int j = partner[i];
   if (j == Plan::kFree) {
     model::free_move(p.x[i], p.y[i], p.vx[i], p.vy[i]);
   } else if (j == Plan::kWall) {
-    if constexpr (Branchless)
-      model::wall_event_branchless(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], L, r);
-    else
-      model::wall_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], L, r);
+    Wall{}(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], L, r);
   } else if (i < j) {
     model::pair_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.pc[i], p.x[j], p.y[j], p.vx[j], p.vy[j],
                       p.pc[j], static_cast<Real>(time[i]), L, r);
@@ -99,58 +106,6 @@ template <class Real>
 inline void apply(const Box& box, ParticlesOf<Real>& p, const Plan& plan) {
   const int n = static_cast<int>(p.size());
   for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);
-}
-
-/// model.md's selection over a list of candidate events (walls and pairs with t < 1): in key
-/// order, each event is accepted when its particles are still free. Sorts `events`.
-inline Plan greedy_plan(std::vector<model::Event>& events, std::size_t n) {
-  std::sort(events.begin(), events.end(),
-            [](const model::Event& a, const model::Event& b) { return model::key_less(a, b); });
-  Plan plan;
-  plan.reset(n);
-  for (const model::Event& e : events)
-    if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
-  return plan;
-}
-
-/// greedy_plan() for a broad phase's sparse candidates: `pairs` holds pair candidates (t < 1,
-/// in any order, repeats allowed) and `wall[i]` is each particle's wall time. A pair at or after
-/// either particle's wall time is dropped first: the wall comes first in key order and takes the
-/// particle, or the particle is taken already. Every pair left comes before both its walls, so
-/// the greedy pass over the pairs alone, in key order, decides every pair, and each particle it
-/// leaves free takes its wall if `wall[i] < 1`: the same plan as sorting every candidate, with
-/// only the pairs sorted; a pair whose particles meet no other is accepted without sorting.
-/// Reorders `pairs` and keeps only the pairs it did not drop.
-inline Plan sparse_greedy_plan(std::vector<model::Event>& pairs, const std::vector<double>& wall) {
-  const auto dominated = [&](const model::Event& e) {
-    return !model::before_walls(e.t, wall[e.lo], wall[e.hi]);
-  };
-  pairs.erase(std::remove_if(pairs.begin(), pairs.end(), dominated), pairs.end());
-  // A pair whose particles are in no other pair (found once or more) meets nothing earlier: it is
-  // accepted without sorting. `only[i]`: particle i's one partner, or kMany.
-  constexpr int kNone = -1, kMany = -2;
-  std::vector<int> only(wall.size(), kNone);
-  for (const model::Event& e : pairs)
-    for (const auto& [i, o] : {std::pair{e.lo, e.hi}, std::pair{e.hi, e.lo}})
-      only[i] = (only[i] == kNone || only[i] == o) ? o : kMany;
-  const auto alone = [&](const model::Event& e) { return only[e.lo] == e.hi && only[e.hi] == e.lo; };
-  std::vector<model::Event> isolated;
-  for (const model::Event& e : pairs)
-    if (alone(e)) isolated.push_back(e);
-  pairs.erase(std::remove_if(pairs.begin(), pairs.end(), alone), pairs.end());
-  std::sort(pairs.begin(), pairs.end(),
-            [](const model::Event& a, const model::Event& b) { return model::key_less(a, b); });
-  Plan plan;
-  plan.reset(wall.size());
-  for (const model::Event& e : isolated)  // the earliest, should one pair come with two times
-    if (!plan.taken(e.lo) || model::key_less(e, model::pair_event_key(plan.time[e.lo], e.lo, e.hi)))
-      plan.accept(e);
-  for (const model::Event& e : pairs)
-    if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
-  for (std::size_t i = 0; i < wall.size(); ++i)
-    if (!plan.taken(static_cast<int>(i)) && model::in_step(wall[i])) plan.partner[i] = Plan::kWall;
-  pairs.insert(pairs.end(), isolated.begin(), isolated.end());
-  return plan;
 }
 
 /// The wall event of particle `i` as a candidate, from its start-of-step state (the time of a

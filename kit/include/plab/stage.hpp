@@ -10,6 +10,14 @@
 ///       return cpu_stage(box, p, o, {step});
 ///     }
 ///
+/// A CPU stage that keeps working memory between steps (buffers sized once, an order kept from
+/// the last step) holds it in an object of its own, a plab::CpuStep, rather than in function
+/// statics or globals, and hands the kit a new one (stage 06):
+///
+///     std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions& o) {
+///       return cpu_stage(box, p, o, std::make_unique<BroadPhase>());
+///     }
+///
 /// A CUDA stage returns its own Stepper, which keeps the state on the GPU between steps; the exact
 /// event-driven stage 07 returns one that keeps its continuous-time state. The runner
 /// (`plab-run-NN-IMPL`) and the stage tests are compiled once and linked with each stage's
@@ -140,5 +148,23 @@ struct CpuStage {
 /// variant for Real::kFloat, otherwise `stage.step` applied to `p` in place.
 std::unique_ptr<Stepper> cpu_stage(const Box& box, Particles& p, const StageOptions& options,
                                    const CpuStage& stage);
+
+/// A CPU stage's step together with what it keeps between steps: its buffers are members, so one
+/// run's state lives exactly as long as the run (no function statics, no globals). cpu_stage()
+/// takes a new one a run and calls step() once a step.
+class CpuStep {
+ public:
+  virtual ~CpuStep() = default;
+  /// Advances every particle by one step, as model.md says (plab::step()'s contract).
+  /// \param box the box and radius
+  /// \param p   the state at the start of the step; on return, the state at its end
+  virtual void step(const Box& box, Particles& p) = 0;
+};
+
+/// cpu_stage() for a stage whose step is an object (see CpuStep): `gpu` (its GPU path, if any)
+/// when `options` and the machine allow it, otherwise `state` steps `p` in place on the CPU.
+/// 	hrows std::runtime_error for Real::kFloat (such a stage has no float variant)
+std::unique_ptr<Stepper> cpu_stage(const Box& box, Particles& p, const StageOptions& options,
+                                   std::unique_ptr<CpuStep> state, GpuStarter gpu = nullptr);
 
 }  // namespace plab

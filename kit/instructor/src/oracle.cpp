@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "plab/greedy.hpp"
 #include "plab/model.hpp"
 
 namespace plab {

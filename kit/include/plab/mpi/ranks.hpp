@@ -1,9 +1,17 @@
 /// \file mpi/ranks.hpp
 /// \brief The kit's MPI plumbing (library plab::mpi, what stage 08 links): the decomposition of
-/// the box into slabs, this rank's particles (owned, then ghosts), the exchanges between ranks,
-/// and the driver on rank 0 that the other ranks serve. The stage's idea (halo, candidates,
-/// rounds across ranks, migration) is its step, in its own step.cpp, which it hands to
-/// mpi_stage() and serve() as a CPU stage hands its step to plab::cpu_stage().
+/// the box into slabs, this rank's particles (owned, then ghosts), and the driver on rank 0 that
+/// the other ranks serve (MPI's start and end, the scatter of the scene, the gather of the
+/// output). The stage's idea, every MPI call of a step (the halo, the rounds across ranks,
+/// migration), is its step, in its own step.cpp, which it hands to mpi_stage() and serve() as a
+/// CPU stage hands its step to plab::cpu_stage().
+///
+/// The kit counts a step's messages without the stage's help, through MPI's profiling interface:
+/// ranks.cpp defines MPI_Send, MPI_Isend, MPI_Sendrecv, MPI_Alltoall, MPI_Alltoallv,
+/// MPI_Allreduce, MPI_Allgather(v) (the bytes this rank sends to other ranks; an all-reduce counts
+/// its buffer once) and the calls that wait (MPI_Recv, MPI_Wait, MPI_Waitall: time), each calling
+/// the library's PMPI_ version. `plab run --report` prints the sum of the bytes and the most
+/// seconds any rank spent in them.
 #pragma once
 
 #include <mpi.h>
@@ -27,10 +35,10 @@ struct Ranks {
                                    //!< GPU, rank % the GPUs its machine has
 
   /// The rank that owns a particle whose centre is at `x` (centres outside the box, which
-  /// overlaps can make, go to the first or last slab).
+  /// overlaps can make, go to the first or last slab; a not-a-number to the first).
   [[nodiscard]] int owner_of(double x) const {
-    const int k = static_cast<int>(x / (L / ranks));
-    return k < 0 ? 0 : (k >= ranks ? ranks - 1 : k);
+    const double k = x / (L / ranks);
+    return k >= ranks ? ranks - 1 : (k >= 1 ? static_cast<int>(k) : 0);
   }
   /// The lower x of rank k's slab.
   [[nodiscard]] double slab_lo(int k) const { return k * (L / ranks); }
@@ -71,18 +79,6 @@ struct Local {
   /// Keeps the owned particles only (drops every ghost).
   void drop_ghosts();
 };
-
-/// Sends out[q] to rank q, for every q, and returns what every rank sent to this one,
-/// concatenated in rank order; `from` (R + 1 entries) gets where each rank's part starts.
-/// `T` must be trivially copyable.
-template <class T>
-std::vector<T> all_to_all(const Ranks& r, const std::vector<std::vector<T>>& out,
-                        std::vector<int>* from = nullptr);
-
-/// The largest of `v` over every rank.
-double max_over_ranks(const Ranks& r, double v);
-/// Whether `v` is true on any rank.
-bool any_rank(const Ranks& r, bool v);
 
 /// One step of the distributed model on this rank (a stage's step.cpp: its exercises): from the
 /// owned particles of `s` at the start of the step to those it owns at its end (ghosts dropped).

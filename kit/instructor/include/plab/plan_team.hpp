@@ -1,7 +1,8 @@
 /// \file plan_team.hpp
-/// \brief sparse_greedy_plan() by a team of OpenMP threads (stage 06's CPU path): the same plan,
-/// with the passes over the particles and the candidates in parallel. C++20 atomics (std::atomic_ref),
-/// so host code only (plan.hpp is shared with the CUDA stages).
+/// \brief Instructor only: sparse_greedy_plan() by a team of OpenMP threads (stage 06's CPU
+/// path): the same plan, with the passes over the particles and the candidates in parallel. C++20
+/// atomics (std::atomic_ref), so host code only. Stage 06 asks the student for this selection:
+/// kit/instructor/, left out of a student release and of a graded build.
 #pragma once
 
 #include <algorithm>
@@ -14,7 +15,7 @@
 #include <omp.h>
 #endif
 
-#include "plab/plan.hpp"
+#include "plab/greedy.hpp"
 
 namespace plab {
 

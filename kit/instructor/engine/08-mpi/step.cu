@@ -1,4 +1,4 @@
-/// \file stages/08-mpi/step.cu
+/// \file kit/instructor/engine/08-mpi/step.cu
 /// \brief Stage 08 on one GPU per rank: the candidate search and narrow phase of step.cpp's
 /// find_candidates() on the rank's GPU (kernels.cuh), the rest of the step (halo, rounds,
 /// migration) on the host as step.cpp does it. plab::make_gpu_stepper(), which step.cpp's
@@ -12,7 +12,7 @@
 //         step; then a CUB radix sort by key and a unique-by-key give step.cpp's list, sorted,
 //         each pair once, which comes back for the rounds. Same pairs, same times, same order:
 //         the same bits as the CPU path at any rank count.
-//  READ   handouts/08-mpi.md (the GPU path)   TEST   ./plab test --stage 08 (on a GPU machine)
+//  READ   handouts/engine-08.md (the GPU path)   TEST   ctest -L engine -R stage08 (a GPU machine)
 // =================================================================================================
 #include <algorithm>
 #include <cstdint>

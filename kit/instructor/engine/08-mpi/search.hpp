@@ -1,4 +1,4 @@
-/// \file stages/08-mpi/search.hpp
+/// \file kit/instructor/engine/08-mpi/search.hpp
 /// \brief What stage 08's step.cpp and its GPU path (step.cu) share: a rank's space-time grid,
 /// and the candidate search and narrow phase on the device, which step.cpp calls in place of its
 /// own when the run steps on the GPU (Ranks::gpu).

@@ -1,4 +1,4 @@
-/// \file stages/08-mpi/launchers.cuh
+/// \file kit/instructor/engine/08-mpi/launchers.cuh
 /// \brief Stage 08's launchers: grid size, launch on a stream, check; the CUB radix sort and
 /// unique-by-key that order the pairs found (the counting sort's scan is the kit's,
 /// plab::cuda::exclusive_scan()).

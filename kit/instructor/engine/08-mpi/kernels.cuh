@@ -1,4 +1,4 @@
-/// \file solutions/08-mpi/kernels.cuh
+/// \file kit/instructor/engine/08-mpi/kernels.cuh
 /// \brief Stage 08's kernels (device code only): one rank's candidate search on its GPU. Per time
 /// slab, a counting sort of the particles that take part (owned and ghosts) into the cells of
 /// the rank's grid (atomics, then a CUB scan), and a search of each entry's neighbouring cells

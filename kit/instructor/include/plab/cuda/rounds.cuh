@@ -1,10 +1,9 @@
 /// \file cuda/rounds.cuh
-/// \brief The "mutual earliest" rounds on the device, for the GPU stages that run them without
-/// teaching them: one particle's part of a round (handout 03's rounds, stage 04's choose and
-/// accept kernels: choose_one(), accept_one(), and start_one() before the first round), used by
-/// stage 05's resolve and stage 06; and every round of a step in one block over a list of
-/// contested particles (rounds_block(), which stage 06 calls after a grid-wide start), or with
-/// the start in the same block (stage 05's resolve: resolve_block()).
+/// \brief Instructor only (stage 04's exercise 2 and stage 05's one-block rounds, done): the
+/// "mutual earliest" rounds on the device, for the kit's own GPU engine and stage 06's GPU path.
+/// One particle's part of a round (choose_one(), accept_one(), and start_one() before the first
+/// round), every round of a step in one block over a list of contested particles
+/// (rounds_block()), or with the start in the same block (resolve_block()).
 ///
 /// A round, for every unresolved particle \f$i\f$ at once:
 /// - **choose**: \f$b_i = \min_{\prec} \big(\{w_i\} \cup \{(t_{ik}, \min(i,o_k), \max(i,o_k)) :
@@ -32,6 +31,7 @@
 ///   `int overflow` and `long long steps_done`.
 #pragma once
 
+#include "plab/branchless.hpp"  // the engine applies its plans with apply_planned<true>
 #include "plab/cuda/slots.cuh"
 #include "plab/model.hpp"
 #include "plab/plan.hpp"

@@ -1,0 +1,91 @@
+/// \file kit/instructor/engine/06-broadphase/launchers.cuh
+/// \brief Stage 06's launchers: grid size, launch on a stream, check. One per kernel (the
+/// counting sort's scan is the kit's, plab::cuda::exclusive_scan()).
+#pragma once
+
+
+#include "kernels.cuh"
+#include "plab/cuda/check.hpp"
+#include "plab/cuda/scan.cuh"
+#include "plab/cuda/stream.hpp"
+
+namespace plab::launch {
+
+constexpr int kThreads = 256;  //!< threads per block of the per-particle and per-entry kernels
+
+static_assert(kernels::kSearchThreads == kThreads);
+
+/// Blocks of kThreads covering `n`.
+inline unsigned blocks(long long n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
+
+inline void start_step(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
+                       const kernels::DeviceGrid& d, cudaStream_t s) {
+  kernels::start_step<<<blocks(p.n), kThreads, 0, s>>>(p, box, a, d);
+  PLAB_CUDA_CHECK_LAUNCH("start_step");
+}
+
+inline void bin_count(const cuda::ParticlesView& p, const kernels::StepArrays& a,
+                      const kernels::DeviceGrid& d, cudaStream_t s) {
+  kernels::bin_count<<<dim3(blocks(p.n), d.slabs), kThreads, 0, s>>>(p, a, d);
+  PLAB_CUDA_CHECK_LAUNCH("bin_count");
+}
+
+inline void bin_scatter(const cuda::ParticlesView& p, const kernels::StepArrays& a,
+                        const kernels::DeviceGrid& d, cudaStream_t s) {
+  kernels::bin_scatter<<<dim3(blocks(p.n), d.slabs), kThreads, 0, s>>>(p, a, d);
+  PLAB_CUDA_CHECK_LAUNCH("bin_scatter");
+}
+
+/// The pair search of a pass: find_pairs over every entry (the slow ones), then find_fast_pairs
+/// over the fast ones it listed (a team of kernels::kFastTeam threads each, on a grid for a
+/// tenth of the entries: the fastest tenth of the particles are the fast ones, sweep::choose()).
+inline void find_pairs(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
+                       const kernels::DeviceGrid& d, cudaStream_t s) {
+  const long long most = static_cast<long long>(p.n) * d.slabs;  // entries this pass, at most
+  PLAB_CUDA_CHECK(cudaMemsetAsync(&a.flags->fast, 0, sizeof(int), s));
+  kernels::find_pairs<<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d);
+  PLAB_CUDA_CHECK_LAUNCH("find_pairs");
+  kernels::find_fast_pairs<<<blocks((most / 10 + 1) * kernels::kFastTeam),
+                             kernels::kSearchThreads, 0, s>>>(p, box, a, d);
+  PLAB_CUDA_CHECK_LAUNCH("find_fast_pairs");
+}
+
+/// One thread per pair the list can hold.
+inline void place_pairs(const kernels::StepArrays& a, cudaStream_t s) {
+  kernels::place_pairs<<<blocks(a.slots.capacity), kThreads, 0, s>>>(a);
+  PLAB_CUDA_CHECK_LAUNCH("place_pairs");
+}
+
+inline void start_rounds(int n, const kernels::StepArrays& a, cudaStream_t s) {
+  kernels::start_rounds<<<blocks(n), kThreads, 0, s>>>(n, a);
+  PLAB_CUDA_CHECK_LAUNCH("start_rounds");
+}
+
+inline void resolve(int n, const kernels::StepArrays& a, cudaStream_t s) {
+  kernels::resolve<<<1, kernels::kResolveThreads, 0, s>>>(n, a);
+  PLAB_CUDA_CHECK_LAUNCH("resolve");
+}
+
+/// Blocks of resolve_grid that can all be resident at once (a cooperative launch needs that).
+inline int resolve_grid_blocks() {
+  int device = 0, sms = 0, per_sm = 0;
+  PLAB_CUDA_CHECK(cudaGetDevice(&device));
+  PLAB_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
+  PLAB_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, kernels::resolve_grid,
+                                                                kThreads, 0));
+  return sms * per_sm;
+}
+
+inline void resolve_grid(int n, const kernels::StepArrays& a, int grid_blocks, cudaStream_t s) {
+  void* args[] = {&n, const_cast<kernels::StepArrays*>(&a)};
+  PLAB_CUDA_CHECK(cudaLaunchCooperativeKernel(reinterpret_cast<void*>(kernels::resolve_grid),
+                                              grid_blocks, kThreads, args, 0, s));
+}
+
+inline void apply(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
+                  cudaStream_t s) {
+  kernels::apply<<<blocks(p.n), kThreads, 0, s>>>(p, box, a);
+  PLAB_CUDA_CHECK_LAUNCH("apply");
+}
+
+}  // namespace plab::launch

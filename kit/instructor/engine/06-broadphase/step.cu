@@ -1,0 +1,171 @@
+/// \file kit/instructor/engine/06-broadphase/step.cu
+/// \brief Stage 06 on the GPU: the broad phase of step.cpp as a counting sort on the device, the
+/// pair search over neighbouring buckets into compact candidates, stage 05's rounds and apply;
+/// one CUDA graph per step.
+/// plab::make_gpu_stepper(), which step.cpp's make_stepper() takes when there is a GPU
+/// (--device cpu forces step.cpp).
+//
+// =================================================================================================
+//  GOAL   step.cpp's idea with every phase on the device and no host round trip in a step:
+//         start_step (wall times, last slabs, counters) -> per pass of a few slabs: bin_count ->
+//         CUB scan -> bin_scatter -> find_pairs; then CUB scan of the counts -> place_pairs ->
+//         start_rounds -> resolve -> apply, recorded once as a graph. The grid is chosen on the
+//         host from the first state; particles that get faster than v_cut search wider, so it
+//         stays exact for any speed. A step with more pairs than the list holds stops the batch
+//         on the device, and the host redoes it with a longer list.
+//  READ   handouts/engine.md    TEST   ./plab test --impl engine --stage 06 (on a GPU machine)
+// =================================================================================================
+#include <algorithm>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "launchers.cuh"
+#include "plab/cuda/stepper.hpp"
+#include "plab/stage.hpp"
+
+namespace plab {
+namespace {
+
+constexpr double kAlpha = 0.5;  //!< slabs per sqrt(N) v_cut / L (measured best on an H100)
+/// Entries (particle, slab) one pass of the counting sort holds at most: a step takes as many
+/// passes as this needs (one up to N = 10^5 at the report's density, every slab alone from
+/// N = 10^6), so that memory grows with N, not with N times the slabs. One pass or nine made no
+/// measurable difference at N = 10^6 on an H100 (a few kernel launches more a step).
+constexpr long long kEntriesPerPass = 1 << 20;
+
+/// A run of stage 06 on the GPU (the kit's cuda::DeviceStepper holds the particles, the flags
+/// and the timer, and reads the state back).
+class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
+ public:
+  CudaStepper(const Box& box, const Particles& p, std::string device, double alpha)
+      : DeviceStepper(std::move(device), box, p, cuda::Queue::kOwnStream), alpha_(alpha),
+        wall_(n_), last_(n_), slots_(n_, n_ / 4 + 1024), best_(n_), resolved_(n_),  // grown as needed
+        contested_(n_), partner_(n_), ptime_(n_) {
+    set_grid(p);
+    if (n_ >= kGridResolveFrom) grid_blocks_ = launch::resolve_grid_blocks();
+    sync();
+  }
+
+  void step() override {
+    DeviceStepper::step();
+    // A stop on the device (a longer list) idles every later step until the host looks: look
+    // after the first step (the list's first length is a guess) and then every kCheckEvery
+    // steps, so that at most that many are redone.
+    if (n_ > 0 && (asked_ == 1 || asked_ % kCheckEvery == 0)) catch_up();
+  }
+
+ private:
+  /// One step: the recorded graph (recorded again after the arrays changed).
+  void queue_step() override {
+    if (stale_) {
+      graph_.record(main_, [this] { queue_kernels(); });
+      stale_ = false;
+    }
+    graph_.launch(main_);
+  }
+
+  /// The kernels of one step.
+  void queue_kernels() {
+    const auto a = arrays();
+    launch::start_step(p_.view(), box_, a, grid_, main_);
+    for (int first = 0; first < grid_.g.slabs; first += per_pass_) {
+      kernels::DeviceGrid pass = grid_;
+      pass.first = first;
+      pass.slabs = std::min(per_pass_, grid_.g.slabs - first);
+      const int buckets = pass.slabs * grid_.cells + 1;
+      PLAB_CUDA_CHECK(cudaMemsetAsync(filled_.get(), 0, buckets * sizeof(int), main_));
+      launch::bin_count(p_.view(), a, pass, main_);
+      cuda::exclusive_scan(filled_.get(), start_.get(), buckets, temp_.get(), temp_.size(), main_);
+      launch::bin_scatter(p_.view(), a, pass, main_);
+      launch::find_pairs(p_.view(), box_, a, pass, main_);
+    }
+    cuda::exclusive_scan(a.slots.count, a.slots.end, n_, temp_.get(), temp_.size(), main_);
+    launch::place_pairs(a, main_);
+    launch::start_rounds(n_, a, main_);
+    if (n_ >= kGridResolveFrom)
+      launch::resolve_grid(n_, a, grid_blocks_, main_);
+    else
+      launch::resolve(n_, a, main_);
+    launch::apply(p_.view(), box_, a, main_);
+  }
+
+  /// Waits for the queued steps; redoes those a stop on the device skipped (a longer list).
+  void catch_up() override {
+    for (;;) {
+      const kernels::Flags f = flags_.read(main_);
+      if (f.steps_done == asked_ || f.overflow == 0) return;
+      slots_.grow(2 * f.overflow, main_);
+      stale_ = true;  // the recorded graph holds the old list's addresses
+      flags_.clear(&kernels::Flags::overflow, main_);  // the stop
+      for (long long s = f.steps_done; s < asked_; ++s) queue_step();
+      timer_.stop(main_);
+    }
+  }
+
+  /// The grid for the state `p` (sweep::choose(), the fastest 10% search wider), the slabs a
+  /// pass takes (kEntriesPerPass), and the arrays a pass needs.
+  void set_grid(const Particles& p) {
+    sync();
+    std::vector<double> end(p.size()), scratch;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      end[i] = sweep::path_end(model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box_.L, box_.r));
+    grid_.g = sweep::choose(box_, p, end, scratch, 0.9, alpha_);
+    grid_.cells = grid_.g.cells();
+    // As few passes as kEntriesPerPass allows, with the slabs spread evenly over them.
+    const long long most = std::max<long long>(1, kEntriesPerPass / std::max(n_, 1));
+    const int passes = static_cast<int>((grid_.g.slabs + most - 1) / most);
+    per_pass_ = (grid_.g.slabs + passes - 1) / passes;
+    const std::size_t entries = static_cast<std::size_t>(n_) * per_pass_;
+    const int size = per_pass_ * grid_.cells + 1;
+    filled_.resize(size);
+    start_.resize(size);
+    for (auto* v : {&rank_, &entry_id_, &entry_k_}) v->resize(entries);
+    entry_.resize(entries);
+    temp_.resize(std::max(cuda::exclusive_scan_bytes(size), cuda::exclusive_scan_bytes(n_)));
+    stale_ = true;
+  }
+
+  [[nodiscard]] std::size_t arrays_bytes() const override {
+    return cuda::bytes_of(wall_, last_, slots_, best_, resolved_, contested_, partner_, ptime_,
+                          filled_, start_, rank_, entry_id_, entry_k_, entry_, temp_);
+  }
+
+  [[nodiscard]] kernels::StepArrays arrays() const {
+    return {wall_.get(),     last_.get(),     slots_.view(),   best_.get(),     resolved_.get(),
+            contested_.get(), partner_.get(), ptime_.get(),    filled_.get(),   start_.get(),
+            rank_.get(),     entry_id_.get(), entry_k_.get(),  entry_.get(),    flags_.get()};
+  }
+
+  static constexpr long long kCheckEvery = 32;  //!< steps between two looks at the flags
+  static constexpr int kGridResolveFrom = 50000;  //!< from this N the rounds use the whole GPU
+  double alpha_;  //!< slabs per sqrt(N) v_cut / L (StageOptions::sweep_alpha, or kAlpha)
+  kernels::DeviceGrid grid_{};
+  int per_pass_ = 1;  //!< slabs one pass of the counting sort takes
+  cuda::DeviceArray<double> wall_;
+  cuda::DeviceArray<int> last_;
+  cuda::DeviceCandidates slots_;
+  cuda::DeviceArray<model::Event> best_;
+  cuda::DeviceArray<char> resolved_;
+  cuda::DeviceArray<int> contested_, partner_;
+  cuda::DeviceArray<double> ptime_;
+  cuda::DeviceArray<int> filled_, start_, rank_, entry_id_, entry_k_;
+  cuda::DeviceArray<kernels::Entry> entry_;
+  cuda::DeviceArray<unsigned char> temp_;
+  cuda::Graph graph_;
+  bool stale_ = true;
+  int grid_blocks_ = 0;
+};
+
+}  // namespace
+
+/// Stage 06's GPU path (stage.hpp): a run on the GPU when one can be used; nullptr otherwise
+/// (step.cpp's make_stepper() then runs the CPU path), NoDevice when the run asked for the GPU.
+std::unique_ptr<Stepper> make_gpu_stepper(const Box& box, Particles& p,
+                                          const StageOptions& options) {
+  if (options.device == Device::kAuto && !cuda::missing_device().empty()) return nullptr;
+  return std::make_unique<CudaStepper>(box, p, cuda::require_device(),
+                                       options.sweep_alpha > 0 ? options.sweep_alpha : kAlpha);
+}
+
+}  // namespace plab

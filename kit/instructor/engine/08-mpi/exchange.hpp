@@ -1,0 +1,62 @@
+/// \file kit/instructor/engine/08-mpi/exchange.hpp
+/// \brief The engine's exchanges between ranks (instructor-only: they are stage 08's exercises):
+/// every rank's lists to every rank (MPI_Alltoall of the counts, then MPI_Alltoallv), and the two
+/// reductions its step needs (MPI_Allreduce). The kit counts their bytes and time (ranks.hpp).
+#pragma once
+
+#include <mpi.h>
+
+#include <type_traits>
+#include <vector>
+
+#include "plab/mpi/ranks.hpp"
+
+namespace plab::dist {
+
+/// Sends out[q] to rank q, for every q, and returns what every rank sent to this one,
+/// concatenated in rank order; `from` (R + 1 entries) gets where each rank's part starts.
+/// `T` must be trivially copyable.
+template <class T>
+std::vector<T> all_to_all(const Ranks& r, const std::vector<std::vector<T>>& out,
+                          std::vector<int>* from = nullptr) {
+  static_assert(std::is_trivially_copyable_v<T>);
+  const int n = r.ranks;
+  std::vector<int> send_bytes(n), recv_bytes(n), send_at(n), recv_at(n);
+  std::vector<char> send;
+  for (int q = 0; q < n; ++q) {
+    send_at[q] = static_cast<int>(send.size());
+    send_bytes[q] = static_cast<int>(out[q].size() * sizeof(T));
+    const char* data = reinterpret_cast<const char*>(out[q].data());
+    send.insert(send.end(), data, data + send_bytes[q]);
+  }
+  MPI_Alltoall(send_bytes.data(), 1, MPI_INT, recv_bytes.data(), 1, MPI_INT, r.comm);
+  int total = 0;
+  for (int q = 0; q < n; ++q) {
+    recv_at[q] = total;
+    total += recv_bytes[q];
+  }
+  std::vector<T> in(total / sizeof(T));
+  MPI_Alltoallv(send.data(), send_bytes.data(), send_at.data(), MPI_BYTE, in.data(),
+                recv_bytes.data(), recv_at.data(), MPI_BYTE, r.comm);
+  if (from) {
+    from->assign(n + 1, 0);
+    for (int q = 0; q < n; ++q) (*from)[q + 1] = (*from)[q] + recv_bytes[q] / sizeof(T);
+  }
+  return in;
+}
+
+/// The largest of `v` over every rank.
+inline double max_over_ranks(const Ranks& r, double v) {
+  double m = v;
+  MPI_Allreduce(&v, &m, 1, MPI_DOUBLE, MPI_MAX, r.comm);
+  return m;
+}
+
+/// Whether `v` is true on any rank.
+inline bool any_rank(const Ranks& r, bool v) {
+  int mine = v ? 1 : 0, any = 0;
+  MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_LOR, r.comm);
+  return any != 0;
+}
+
+}  // namespace plab::dist

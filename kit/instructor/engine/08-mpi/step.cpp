@@ -1,0 +1,490 @@
+/// \file kit/instructor/engine/08-mpi/step.cpp
+/// \brief Stage 08's engine (instructor-only: the kit's fast version of the stage, whose code
+/// holds the answers of stage 08's exercises and of earlier stages'): the box cut into slabs, one
+/// per rank; each rank steps the particles whose centre lies in its slab, with copies of the other
+/// ranks' particles that can meet them before their walls (the halo), finds its candidates with
+/// stage 06's space-time grid (on the CPU, or on one GPU per rank: step.cu), chooses the events by
+/// stage 03's mutual-earliest rounds across ranks, sharing only the values of the ghosts that are
+/// some owned particle's candidate partner, and hands the particles that left its slab to their
+/// new owners. Same bits as stages 01-06 at any rank count. handouts/engine-08.md measures it.
+///
+/// One step, on each rank:
+///  1. the halo: copies of its particles that could meet one of another rank's before their walls
+///     (where a particle is when its path ends, widened by what any partner covers by then);
+///  2. candidates: walls of the owned particles, pairs with an owned one (stage 06's grid);
+///  3. the rounds of stage 03 across ranks (share_with_ghosts(), any_rank());
+///  4. apply (a pair with a ghost: both owners compute it, each keeps its own particle);
+///  5. migration: particles now in another rank's slab move there (any rank, any distance).
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "plab/candidates.hpp"
+#include "plab/mpi/ranks.hpp"
+#include "plab/sweep.hpp"
+#include "exchange.hpp"
+#include "search.hpp"
+
+namespace plab::dist {
+
+PairSearch gpu_search = nullptr;
+
+namespace {
+
+/// What the rounds exchange (shared_of()): only the ghosts that are a candidate partner of an
+/// owned particle are ever read, so only their values travel.
+struct Shared {
+  std::vector<std::vector<int>> send;  //!< per rank q: the owned particles whose values q reads
+  std::vector<int> recv;               //!< the ghosts read here, in the order their values come
+};
+
+/// Sends, for every rank q, value[k] of each owned particle k in sh.send[q], and writes what
+/// comes back into value[] of the ghosts in sh.recv.
+template <class T>
+void share_with_ghosts(const Ranks& r, const Shared& sh, std::vector<T>& value) {
+  std::vector<std::vector<T>> out(r.ranks);
+  for (int q = 0; q < r.ranks; ++q)
+    for (int k : sh.send[q]) out[q].push_back(value[k]);
+  const std::vector<T> in = all_to_all(r, out);
+  for (std::size_t j = 0; j < in.size(); ++j) value[sh.recv[j]] = in[j];
+}
+
+/// What every rank knows of the whole scene at the start of the step (the same on every rank).
+struct Scene {
+  double vx = 0;                   //!< the largest |vx| of any particle (length per step)
+  double margin = 0;               //!< the rounding margin m (sweep.hpp's, for the fastest speed)
+  std::vector<double> lo;          //!< per rank: the least x of its owned particles (+inf: none)
+  std::vector<double> hi;          //!< per rank: the greatest x of its owned particles
+  double n = 0;                    //!< particles in the scene
+};
+
+/// The Scene, from every rank's owned particles (two reductions and one exchange).
+Scene scene_of(const Ranks& r, const Box& box, const Local& s) {
+  Scene sc;
+  double v2 = 0, lo = HUGE_VAL, hi = -HUGE_VAL;
+  for (int k = 0; k < s.owned; ++k) {
+    sc.vx = std::fmax(sc.vx, std::fabs(s.p.vx[k]));
+    v2 = std::fmax(v2, s.p.vx[k] * s.p.vx[k] + s.p.vy[k] * s.p.vy[k]);
+    lo = std::fmin(lo, s.p.x[k]);
+    hi = std::fmax(hi, s.p.x[k]);
+  }
+  sc.vx = max_over_ranks(r, sc.vx);
+  sc.margin = 1e-6 * (box.L + std::sqrt(max_over_ranks(r, v2)) + box.r);
+  const std::vector<std::vector<double>> mine(r.ranks, std::vector<double>{lo, hi, 1.0 * s.owned});
+  const std::vector<double> all = all_to_all(r, mine);
+  for (int q = 0; q < r.ranks; ++q) {
+    sc.lo.push_back(all[3 * q]);
+    sc.hi.push_back(all[3 * q + 1]);
+    sc.n += all[3 * q + 2];
+  }
+  return sc;
+}
+
+/// When particle k's path stops mattering for pairs: its wall time if that is in the step, else
+/// 1 (sweep::path_end(): a pair at or after a particle's wall time is never accepted).
+double end_of(const Box& box, const Local& s, int k) {
+  return sweep::path_end(model::wall_time(s.p.x[k], s.p.y[k], s.p.vx[k], s.p.vy[k], box.L, box.r));
+}
+
+/// 1. The halo: copies of every particle that could meet one of a rank's own before both their
+/// walls in this step. Owned particle k whose path ends at T = end_of(k) (T <= 0: it meets
+/// nobody) is at x_k + t vx_k at time t <= T; a partner of rank q is then within sc.vx t of
+/// [sc.lo[q], sc.hi[q]]. That range grows at least as fast as k moves (sc.vx >= |vx_k|), so if
+/// they can meet at some t <= T, k is also within reach of it at T: k goes to q when
+/// [x_k + T vx_k -+ (T sc.vx + 2r + 2m)] meets [sc.lo[q], sc.hi[q]] (handout 08 proves it; a
+/// not-a-number sends it everywhere).
+void share_halo(const Ranks& r, const Box& box, const Scene& sc, Local& s) {
+  s.sent_to.assign(r.ranks, {});
+  std::vector<std::vector<Record>> out(r.ranks);
+  for (int k = 0; k < s.owned; ++k) {
+    const double T = end_of(box, s, k);
+    if (!(T > 0)) continue;  // its wall comes first: it takes part in no pair
+    const double at = s.p.x[k] + T * s.p.vx[k];
+    const double cover = (T * sc.vx + 2 * box.r + 2 * sc.margin) * (1 + 1e-9);
+    const double lo = at - cover, hi = at + cover;
+    int q0 = 0, q1 = r.ranks - 1;  // owner_of() is monotone: only these ranks' x can be in reach
+    if (lo == lo && hi == hi) {
+      q0 = r.owner_of(std::clamp(lo, 0.0, box.L));
+      q1 = r.owner_of(std::clamp(hi, 0.0, box.L));
+    }
+    for (int q = q0; q <= q1; ++q)
+      if (q != r.rank && !(hi < sc.lo[q]) && !(lo > sc.hi[q])) {
+        s.sent_to[q].push_back(k);
+        out[q].push_back(s.record(k));
+      }
+  }
+  for (const Record& rec : all_to_all(r, out, &s.ghosts_from)) s.push(rec);
+  for (int& start : s.ghosts_from) start += s.owned;
+}
+
+constexpr double kAlpha = 0.3;  //!< time slabs per sqrt(density) v_cut: stage 06's measured best
+
+/// The space-time grid of stage 06 (sweep::choose(): reach, margin, v_cut) fitted to the
+/// rectangle that the paths here cover, [x0, x0 + w) x [y0, y0 + h), instead of the whole box: a
+/// rank's particles lie in a slab and its halo. The time slabs are those stage 06 chooses for the
+/// whole scene, \f$K = \lceil \alpha \sqrt N\, v_{cut} / L \rceil\f$ with its \f$\alpha =
+/// 0.3\f$ (they follow the density, \f$\sqrt{N / L^2}\f$, which a rank shares with the scene,
+/// not its own count of particles), with this rank's \f$v_{cut}\f$. Cells are at least a slow
+/// particle's reach, about 4n of them.
+LocalGrid fit_grid(const Box& box, const Scene& sc, const Particles& p,
+                   const std::vector<double>& end, std::vector<double>& scratch) {
+  LocalGrid lg{sweep::choose(box, p, end, scratch, 0.9, kAlpha)};
+  sweep::Grid& g = lg.g;
+  if (!std::isfinite(g.cell)) return lg;  // no geometry to trust: one cell
+  double x0 = HUGE_VAL, x1 = -HUGE_VAL, y0 = HUGE_VAL, y1 = -HUGE_VAL;
+  int active = 0;
+  for (int i = 0; i < static_cast<int>(p.size()); ++i) {
+    if (!(end[i] > 0)) continue;
+    ++active;
+    const double xe = p.x[i] + end[i] * p.vx[i], ye = p.y[i] + end[i] * p.vy[i];
+    x0 = std::fmin(x0, std::fmin(p.x[i], xe)), x1 = std::fmax(x1, std::fmax(p.x[i], xe));
+    y0 = std::fmin(y0, std::fmin(p.y[i], ye)), y1 = std::fmax(y1, std::fmax(p.y[i], ye));
+  }
+  if (active == 0 || !std::isfinite(x1 - x0) || !std::isfinite(y1 - y0)) return lg;
+  const double w = x1 - x0, h = y1 - y0;
+  g.slabs = static_cast<int>(
+      std::clamp(std::ceil(kAlpha * std::sqrt(std::fmax(sc.n, 1.0)) * g.v_cut / box.L), 1.0, 256.0));
+  g.half = 0.5 / g.slabs;
+  const double wanted = (g.reach + 2 * g.margin + 2 * g.half * g.v_cut) * (1 + 1e-9);
+  double cell = std::fmax(wanted, std::sqrt(sweep::kColumnsPerCell * w * h / (4.0 * active)));
+  const auto count = [&](double extent, double per) { return std::floor(extent * per / cell) + 1; };
+  while (count(h, 1) * count(w, sweep::kColumnsPerCell) > 8.0 * active + 64) cell *= 2;
+  g.cell = cell;
+  g.inv_cell = 1 / cell;
+  g.inv_column = sweep::kColumnsPerCell / cell;
+  g.rows = static_cast<int>(count(h, 1));
+  g.columns = static_cast<int>(count(w, sweep::kColumnsPerCell));
+  lg.x0 = x0;
+  lg.y0 = y0;
+  return lg;
+}
+
+/// One time slab's entries, in cell order: the particles that take part, by the cell of their
+/// midpoint positions (shifted by the grid's origin), the owned ones first in each cell.
+struct Entries {
+  std::vector<int> start;            //!< cell c holds entries [start[c], start[c + 1])
+  std::vector<int> owned_end;        //!< cell c's owned entries are [start[c], owned_end[c])
+  std::vector<int> cell;             //!< per particle: its cell in this slab
+  std::vector<int> id;               //!< per entry: the particle (local index)
+  std::vector<double> x, y, vx, vy;  //!< per entry: shifted midpoint position, velocity
+  std::vector<sweep::Search> reach;  //!< per entry: what it searches (sweep::search_of())
+  int owned_from = 0;                //!< the first column that holds an owned entry
+  int owned_to = -1;                 //!< the last one (owned_to < owned_from: none)
+};
+
+/// Slab k's counting sort of the particles that take part in it (first[i] <= k <= last[i]).
+void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& first,
+         const std::vector<int>& last, const std::vector<sweep::Search>& reach, int k,
+         const LocalGrid& lg) {
+  const sweep::Grid& g = lg.g;
+  const int n = static_cast<int>(p.size());
+  const double tm = sweep::slab_mid(k, g);
+  e.start.assign(g.cells() + 1, 0);
+  e.owned_end.assign(g.cells(), 0);
+  e.cell.resize(n);
+  int m = 0;
+  for (int i = 0; i < n; ++i) {
+    if (last[i] < k || first[i] > k) continue;
+    e.cell[i] = sweep::cell_of((p.x[i] + tm * p.vx[i]) - lg.x0, (p.y[i] + tm * p.vy[i]) - lg.y0, g);
+    ++e.start[e.cell[i] + 1];
+    if (i < owned) ++e.owned_end[e.cell[i]];
+    ++m;
+  }
+  for (int c = 0; c < g.cells(); ++c) e.start[c + 1] += e.start[c];
+  for (auto* v : {&e.x, &e.y, &e.vx, &e.vy}) v->resize(m);
+  e.id.resize(m);
+  e.reach.resize(m);
+  e.owned_from = g.columns;
+  e.owned_to = -1;
+  for (int i = 0; i < n; ++i) {  // start[c] moves on to where cell c + 1 starts (owned first:
+                                 // they are particles 0 .. owned - 1)
+    if (last[i] < k || first[i] > k) continue;
+    const int at = e.start[e.cell[i]]++;
+    e.id[at] = i;
+    e.reach[at] = reach[i];
+    e.x[at] = (p.x[i] + tm * p.vx[i]) - lg.x0;
+    e.y[at] = (p.y[i] + tm * p.vy[i]) - lg.y0;
+    e.vx[at] = p.vx[i];
+    e.vy[at] = p.vy[i];
+    if (i < owned) {
+      const int column = e.cell[i] % g.columns;
+      e.owned_from = std::min(e.owned_from, column);
+      e.owned_to = std::max(e.owned_to, column);
+    }
+  }
+  for (int c = g.cells(); c > 0; --c) e.start[c] = e.start[c - 1];
+  e.start[0] = 0;
+  for (int c = 0; c < g.cells(); ++c) e.owned_end[c] += e.start[c];
+}
+
+/// Files owned entry `a` with every entry of [from, to) but itself that passes
+/// sweep::close_in_slab().
+void test_range(const Entries& e, int a, int from, int to, const sweep::Grid& g,
+                std::vector<std::pair<int, int>>& hits) {
+  const double xa = e.x[a], ya = e.y[a], vxa = e.vx[a], vya = e.vy[a];
+  for (int b = from; b < to; ++b)
+    if (sweep::close_in_slab(xa - e.x[b], ya - e.y[b], vxa - e.vx[b], vya - e.vy[b], g) && b != a)
+      hits.emplace_back(e.id[a], e.id[b]);
+}
+
+/// Files ghost entry `a` with every owned entry of [from, to) that passes
+/// sweep::close_in_slab().
+void test_owned(const Entries& e, int a, int from, int to, const sweep::Grid& g,
+                std::vector<std::pair<int, int>>& hits) {
+  for (int b = from; b < to; ++b)
+    if (sweep::close_in_slab(e.x[a] - e.x[b], e.y[a] - e.y[b], e.vx[a] - e.vx[b],
+                             e.vy[a] - e.vy[b], g))
+      hits.emplace_back(e.id[a], e.id[b]);
+}
+
+/// Slab k's search (stage 06's, sweep::search_of()): a slow entry against the later entries of
+/// its row up to the last column within its reach, then the columns within reach of the next row;
+/// a fast entry against every entry within its reach, one run per row. A ghost tests only the
+/// owned entries of those cells (first in each cell), in the columns that hold any: pairs of two
+/// ghosts no rank needs, and an owned entry before a ghost in its cell finds it itself.
+void search(const Entries& e, int owned, const sweep::Grid& g,
+            std::vector<std::pair<int, int>>& hits) {
+  const int columns = g.columns;
+  for (int row = 0, a = 0; row < g.rows; ++row) {
+    for (const int end = e.start[(row + 1) * columns]; a < end; ++a) {
+      const sweep::Search q = e.reach[a];
+      int x0, x1;
+      sweep::columns_within(e.x[a], q.d, g, x0, x1);
+      if (e.id[a] >= owned) {  // a ghost
+        x0 = std::max(x0, e.owned_from);
+        x1 = std::min(x1, e.owned_to);
+        int y0 = row, y1 = std::min(row + 1, g.rows - 1);
+        if (q.fast) sweep::rows_within(e.y[a], q.d, g, y0, y1);
+        const int own = e.cell[e.id[a]] % columns;
+        for (int y = y0; y <= y1; ++y)
+          for (int c = (!q.fast && y == row) ? std::max(x0, own + 1) : x0; c <= x1; ++c)
+            test_owned(e, a, e.start[y * columns + c], e.owned_end[y * columns + c], g, hits);
+        continue;
+      }
+      if (!q.fast) {
+        test_range(e, a, a + 1, e.start[row * columns + x1 + 1], g, hits);
+        if (row + 1 < g.rows)
+          test_range(e, a, e.start[(row + 1) * columns + x0], e.start[(row + 1) * columns + x1 + 1],
+                     g, hits);
+      } else {  // a pair found twice is harmless
+        int y0, y1;
+        sweep::rows_within(e.y[a], q.d, g, y0, y1);
+        for (int y = y0; y <= y1; ++y)
+          test_range(e, a, e.start[y * columns + x0], e.start[y * columns + x1 + 1], g, hits);
+      }
+    }
+  }
+}
+
+/// The first time slab in which a ghost at `x` moving at `vx` can meet a particle of rank q:
+/// q's particles are within sc.vx t of [sc.lo[q], sc.hi[q]] at time t, and the gap between the
+/// ghost and that range, less 2r + 2m, closes at vx + sc.vx from the left (sc.vx - vx from the
+/// right). Slabs before the time it closes need not hold the ghost. (0 when unsure.)
+int first_slab(const Box& box, const Scene& sc, int q, double x, double vx, const sweep::Grid& g) {
+  const double c = 2 * box.r + 2 * sc.margin;
+  const double left = (sc.lo[q] - c) - x, right = x - (sc.hi[q] + c);
+  double t = 0;
+  if (left > 0) t = left / (vx + sc.vx);
+  else if (right > 0) t = right / (sc.vx - vx);
+  t *= 1 - 1e-9;
+  if (!(t > 0)) return 0;  // also not-a-number
+  return t >= 1 ? g.slabs : static_cast<int>(std::fmin(std::floor(t * g.slabs), g.slabs));
+}
+
+/// 2. The candidates of the owned particles: their walls, and their pairs with any particle
+/// here (each pair time computed with the lower scene index first, as every stage does), found
+/// by stage 06's space-time grid over the owned particles and the ghosts (sweep.hpp): every pair
+/// that can meet in the step before both walls is found, and few others.
+void find_candidates(const Box& box, const Ranks& r, const Scene& sc, const Local& s,
+                     std::vector<double>& wall, CandidateLists& cand) {
+  const Particles& p = s.p;
+  const int n = s.size();
+  std::vector<double> end(n), scratch;
+  wall.assign(n, model::never());
+  for (int i = 0; i < n; ++i) {
+    wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
+    end[i] = sweep::path_end(wall[i]);
+  }
+  const LocalGrid lg = fit_grid(box, sc, p, end, scratch);
+  std::vector<int> first(n, 0), last(n);
+  std::vector<sweep::Search> reach(n);
+  for (int i = 0; i < n; ++i) {
+    last[i] = sweep::last_slab(end[i], lg.g);
+    reach[i] = sweep::search_of(p.vx[i], p.vy[i], lg.g);
+    if (i >= s.owned) first[i] = first_slab(box, sc, r.rank, p.x[i], p.vx[i], lg.g);
+  }
+  std::vector<std::vector<FoundPair>> found(1);
+  if (r.gpu) {  // the same search and narrow phase on this rank's GPU (step.cu)
+    if (gpu_search == nullptr) throw NoDevice("stage 08 was built without its GPU path");
+    gpu_search(box, r, lg, s, first, last, found[0]);
+    cand.build(n, found);
+    return;
+  }
+  Entries e;
+  std::vector<std::pair<int, int>> hits;
+  for (int k = 0; k < lg.g.slabs; ++k) {
+    bin(e, p, s.owned, first, last, reach, k, lg);
+    search(e, s.owned, lg.g, hits);
+  }
+  for (auto& [a, b] : hits)
+    if (a > b) std::swap(a, b);
+  std::sort(hits.begin(), hits.end());
+  hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
+  for (const auto& [i, j] : hits) {  // the narrow phase
+    const bool ij = s.id[i] < s.id[j];
+    const int a = ij ? i : j, b = ij ? j : i;
+    const double t =
+        model::pair_time(p.x[a], p.y[a], p.vx[a], p.vy[a], p.x[b], p.y[b], p.vx[b], p.vy[b], box.r);
+    if (model::in_step(t)) found[0].push_back(FoundPair{t, i, j});
+  }
+  cand.build(n, found);
+}
+
+/// Which ghosts' values the rounds need here (the candidate partners of the owned particles),
+/// and, from what the other ranks say they need, which owned particles' values go where (one
+/// exchange a step).
+Shared shared_of(const Ranks& r, const Local& s, const CandidateLists& cand) {
+  std::vector<char> read(s.size(), 0);
+  for (int i = 0; i < s.owned; ++i)
+    for (int k = cand.start[i]; k < cand.start[i + 1]; ++k) read[cand.other[k]] = 1;
+  Shared sh;
+  std::vector<std::vector<int>> ask(r.ranks);  // positions in the owner's list s.sent_to[q]
+  for (int q = 0; q < r.ranks; ++q)
+    for (int g = s.ghosts_from[q]; g < s.ghosts_from[q + 1]; ++g)
+      if (read[g]) {
+        ask[q].push_back(g - s.ghosts_from[q]);
+        sh.recv.push_back(g);
+      }
+  std::vector<int> from;
+  const std::vector<int> asked = all_to_all(r, ask, &from);
+  sh.send.assign(r.ranks, {});
+  for (int q = 0; q < r.ranks; ++q)
+    for (int j = from[q]; j < from[q + 1]; ++j) sh.send[q].push_back(s.sent_to[q][asked[j]]);
+  return sh;
+}
+
+/// 3. Stage 03's rounds across ranks. Returns each owned particle's event (walls and pairs
+/// keyed by scene indices; `t` = never for none), the same as model.md's greedy over every rank.
+std::vector<model::Event> choose_events(const Ranks& r, const Local& s, const Shared& sh,
+                                        const std::vector<double>& wall,
+                                        const CandidateLists& cand) {
+  const int n = s.size();
+  const model::Event none = model::pair_event_key(model::never(), -1, -1);
+  std::vector<char> resolved(n, 0);
+  std::vector<model::Event> best(n, none), chosen(s.owned, none);
+  for (bool open = true; open;) {
+    share_with_ghosts(r, sh, resolved);  // whom the ghosts' owners resolved last round
+    for (int i = 0; i < s.owned; ++i) {
+      if (resolved[i]) continue;
+      model::Event b = model::in_step(wall[i]) ? model::wall_event_key(wall[i], s.id[i]) : none;
+      for (int k = cand.start[i]; k < cand.start[i + 1]; ++k) {
+        const int o = cand.other[k];
+        if (resolved[o]) continue;
+        const int lo = std::min(s.id[i], s.id[o]), hi = std::max(s.id[i], s.id[o]);
+        const model::Event e = model::pair_event_key(cand.time[k], lo, hi);
+        if (model::key_less(e, b)) b = e;
+      }
+      best[i] = b;
+    }
+    share_with_ghosts(r, sh, best);  // what the ghosts chose
+    bool left = false;
+    for (int i = 0; i < s.owned; ++i) {
+      if (resolved[i]) continue;
+      const model::Event& e = best[i];
+      bool mutual = false;
+      if (model::in_step(e.t) && e.kind == model::kPair)
+        for (int k = cand.start[i]; k < cand.start[i + 1]; ++k) {
+          const model::Event& o = best[cand.other[k]];
+          if (o.kind == model::kPair && o.lo == e.lo && o.hi == e.hi && o.t == e.t) mutual = true;
+        }
+      if (!model::in_step(e.t) || e.kind == model::kWall || mutual) {
+        chosen[i] = e;
+        resolved[i] = 1;
+      } else {
+        left = true;
+      }
+    }
+    open = any_rank(r, left);
+  }
+  return chosen;
+}
+
+/// 4. Applies each owned particle's event. A pair with a ghost is computed here too, on the
+/// ghost's copy, in the same order as its owner computes it: both keep the same bits.
+void apply_events(const Box& box, const std::vector<model::Event>& chosen,
+                  const CandidateLists& cand, Local& s) {
+  Particles& p = s.p;
+  for (int i = 0; i < s.owned; ++i) {
+    const model::Event& e = chosen[i];
+    if (!model::in_step(e.t)) {
+      model::free_move(p.x[i], p.y[i], p.vx[i], p.vy[i]);
+    } else if (e.kind == model::kWall) {
+      model::wall_event(p.x[i], p.y[i], p.vx[i], p.vy[i], p.wc[i], box.L, box.r);
+    } else {
+      const int other_id = e.lo == s.id[i] ? e.hi : e.lo;
+      int o = -1;
+      for (int k = cand.start[i]; k < cand.start[i + 1] && o < 0; ++k)
+        if (s.id[cand.other[k]] == other_id) o = cand.other[k];
+      if (o < s.owned && s.id[o] < s.id[i]) continue;  // an owned pair: applied from its lower
+      const int a = s.id[i] < s.id[o] ? i : o, b = a == i ? o : i;
+      model::pair_event(p.x[a], p.y[a], p.vx[a], p.vy[a], p.pc[a], p.x[b], p.y[b], p.vx[b],
+                        p.vy[b], p.pc[b], e.t, box.L, box.r);
+    }
+  }
+}
+
+/// 5. Migration: every owned particle now in another rank's slab goes there; ghosts are dropped.
+void migrate(const Ranks& r, Local& s) {
+  std::vector<std::vector<Record>> out(r.ranks);
+  Local kept;
+  for (int k = 0; k < s.owned; ++k) {
+    const int q = r.owner_of(s.p.x[k]);
+    if (q == r.rank) kept.push(s.record(k));
+    else out[q].push_back(s.record(k));
+  }
+  for (const Record& rec : all_to_all(r, out)) kept.push(rec);
+  kept.owned = kept.size();
+  s = std::move(kept);
+}
+
+}  // namespace
+
+/// One step on this rank: the five parts above, in order.
+void step(const Box& box, const Ranks& r, Local& s) {
+  const Scene sc = scene_of(r, box, s);
+  share_halo(r, box, sc, s);
+  std::vector<double> wall;
+  CandidateLists cand;
+  find_candidates(box, r, sc, s, wall, cand);
+  const Shared sh = shared_of(r, s, cand);
+  const std::vector<model::Event> chosen = choose_events(r, s, sh, wall, cand);
+  apply_events(box, chosen, cand, s);
+  migrate(r, s);
+}
+
+}  // namespace plab::dist
+
+namespace plab {
+
+/// Stage 08's first call on every rank (stage.hpp): the kit's MPI driver (plab/mpi/ranks.hpp)
+/// serves rank 0's run with this stage's step on every other rank. make_gpu_stepper() with
+/// the CPU asked for only sets dist::gpu_search (where this build has a GPU path), so that these
+/// ranks can step on the GPU when rank 0's run does.
+int stage_worker() {
+  Particles none;
+  StageOptions cpu;
+  cpu.device = Device::kCpu;
+  make_gpu_stepper(Box{}, none, cpu);
+  return dist::serve(dist::step);
+}
+
+/// Stage 08's entry point (stage.hpp), on rank 0: the kit's MPI driver with this stage's step,
+/// on the CPU, or on one GPU per rank with `--device gpu` (make_gpu_stepper(), step.cu; NoDevice
+/// where there is none). `--device auto` is the CPU here: the GPU is asked for, not taken, since
+/// several ranks of one machine would share its GPUs.
+std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions& options) {
+  if (auto gpu = make_gpu_stepper(box, p, options)) return gpu;
+  return dist::mpi_stage(box, p, dist::step);
+}
+
+}  // namespace plab
