@@ -3,32 +3,49 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
+#include <string>
 
 #include "commands.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"plab: the particle-lab kit. Simulate scenes with any stage, make scenes, compare "
                "outputs, check golden files, run the tests, build the docs."};
+  app.name("plab");  // the usage line names the command, not where this machine keeps it
   app.require_subcommand(1);
   plab::cli::add_run(app);
-  plab::cli::add_built(app);
-  plab::cli::add_gen(app);
-  plab::cli::add_diff(app);
-  plab::cli::add_read(app);
-  plab::cli::add_golden(app);
   plab::cli::add_test(app);
-  plab::cli::add_docs(app);
-  plab::cli::add_demo(app);
-  plab::cli::add_bench(app);
-  plab::cli::add_report(app);
-  plab::cli::add_similar(app);
+  plab::cli::add_diff(app);
   plab::cli::add_render(app);
   plab::cli::add_view(app);
+  plab::cli::add_report(app);
+  plab::cli::add_bench(app);
+  plab::cli::add_gen(app);
+  plab::cli::add_read(app);
+  plab::cli::add_docs(app);
   plab::cli::add_grade(app);
+  plab::cli::add_similar(app);
   plab::cli::add_release(app);
   plab::cli::add_gradescope(app);
+  plab::cli::add_golden(app);
+  plab::cli::add_demo(app);
+  plab::cli::add_built(app);
   plab::cli::add_accuracy(app);
   plab::cli::add_stress(app);
+  // The help lists a student's commands first, then the instructor's, then the kit's own tools.
+  const char* student = "For students";
+  const char* instructor = "For instructors";
+  const char* kit = "The kit's tools";
+  for (CLI::App* c : app.get_subcommands({})) {
+    const std::string n = c->get_name();
+    if (n == "run" || n == "test" || n == "diff" || n == "render" || n == "view" ||
+        n == "bench" || n == "report" || n == "gen" || n == "read" || n == "docs")
+      c->group(student);
+    else if (n == "grade" || n == "release" || n == "gradescope" || n == "golden" ||
+             n == "similar" || n == "demo")
+      c->group(instructor);
+    else
+      c->group(kit);
+  }
   try {
     CLI11_PARSE(app, argc, argv);
   } catch (const std::exception& e) {

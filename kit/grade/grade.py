@@ -284,7 +284,7 @@ class Grader:
                 continue
             target = f"plab-run-{sid}-student"
             b = self.sandbox.run(["cmake", "--build", "/plab/build", "--target", target, "-j",
-                                  str(os.cpu_count() or 2)], *mounts, "/plab/build", 900, 2**30,
+                                  os.environ.get("PLAB_BUILD_JOBS") or str(os.cpu_count() or 2)], *mounts, "/plab/build", 900, 2**30,
                                  memory=False)
             program = build / "bin" / target
             if b.rc == 0 and not b.reason and program.is_file() and not program.is_symlink():

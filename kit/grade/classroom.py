@@ -1,0 +1,246 @@
+#!/usr/bin/env python3
+"""plab grade --class: grades every submission of a class folder (one folder or zip per student),
+each by its own grader process in its own sandbox, J at a time, and writes the gradebook.
+
+  classroom.py --class DIR --out OUT --jobs J [--stages 01,02] [--regrade] -- GRADER ARGS...
+
+OUT/students/NAME/ holds each student's results.json (Gradescope's format), JUnit XML and the
+summary a student is shown. A batch that was stopped starts again where it stopped: a student
+whose results.json exists for the same upload (its hash in OUT/students/NAME/upload.sha256) is
+not graded twice unless --regrade. At the end: OUT/gradebook.csv (one row per student: each
+stage's points, the total, flags) and OUT/summary.html (the score histogram of every stage).
+"""
+import argparse
+import base64
+import concurrent.futures
+import csv
+import hashlib
+import html
+import io
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import threading
+import time
+
+HERE = pathlib.Path(__file__).resolve().parent
+
+
+def upload_hash(entry):
+    """The upload's content hash (files' names and bytes; links are not followed)."""
+    h = hashlib.sha256()
+    paths = [entry] if entry.is_file() else sorted(p for p in entry.rglob("*"))
+    for p in paths:
+        if p.is_symlink():
+            h.update(b"link:" + str(p.relative_to(entry.parent)).encode())
+        elif p.is_file():
+            h.update(str(p.relative_to(entry.parent)).encode() + b"\0")
+            h.update(p.read_bytes())
+    return h.hexdigest()
+
+
+def students(folder):
+    """(name, path) of every upload in the class folder: folders and zips, links skipped."""
+    out = []
+    for p in sorted(folder.iterdir()):
+        if p.name.startswith(".") or p.is_symlink():
+            continue
+        if p.is_dir() or p.suffix == ".zip":
+            out.append((p.stem if p.suffix == ".zip" else p.name, p))
+    return out
+
+
+def clock(seconds):
+    seconds = int(seconds)
+    return f"{seconds // 3600}h{seconds % 3600 // 60:02d}m" if seconds >= 3600 else \
+        f"{seconds // 60}m{seconds % 60:02d}s"
+
+
+class Progress:
+    """One line a finished student with the count, the elapsed time and an estimate of the rest."""
+
+    def __init__(self, total, done_before):
+        self.total, self.done, self.fresh = total, done_before, 0
+        self.t0 = time.monotonic()
+        self.lock = threading.Lock()
+
+    def tick(self, name, text):
+        with self.lock:
+            self.done += 1
+            self.fresh += 1
+            spent = time.monotonic() - self.t0
+            left = self.total - self.done
+            eta = spent / self.fresh * left if self.fresh else 0
+            width = 24
+            bar = "#" * (width * self.done // max(1, self.total))
+            print(f"[{bar:<{width}}] {self.done:>4}/{self.total} {100 * self.done // max(1, self.total):>3}%"
+                  f"  elapsed {clock(spent)}  ETA {clock(eta)}  {name}: {text}", flush=True)
+
+
+def grade_one(name, entry, out, grader_args, stages, jobs_cpu):
+    """Runs one grader on one upload; returns (name, results dict or None, seconds)."""
+    mine = out / "students" / name
+    mine.mkdir(parents=True, exist_ok=True)
+    results = mine / "results.json"
+    cmd = [sys.executable, str(HERE / "grade.py"), "--submission", str(entry), "--out",
+           str(results), *grader_args]
+    if stages:
+        cmd += ["--stages", stages]
+    env = dict(os.environ, PLAB_BUILD_JOBS=str(jobs_cpu))
+    t0 = time.monotonic()
+    with open(mine / "grader.log", "w") as log:
+        subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
+    seconds = time.monotonic() - t0
+    try:
+        data = json.loads(results.read_text())
+    except (OSError, ValueError):
+        return name, None, seconds
+    (mine / "upload.sha256").write_text(upload_hash(entry) + "\n")
+    return name, data, seconds
+
+
+def stage_points(data):
+    """{stage key: (score, max)} from a results.json (test names start 'KEY: ')."""
+    per = {}
+    for t in data.get("tests", []):
+        key = t.get("name", "").split(":")[0].strip()
+        if not key or " " in key:
+            continue
+        s, m = per.get(key, (0.0, 0.0))
+        per[key] = (s + float(t.get("score", 0)), m + float(t.get("max_score", 0)))
+    return per
+
+
+def flags(data):
+    """Short words a TA scans for: not built, idea missed, race, limit hit, not graded."""
+    words = set()
+    for t in data.get("tests", []):
+        n, o = t.get("name", ""), t.get("output", "")
+        if t.get("status") != "failed":
+            continue
+        if "does not compile" in o or "did not compile" in o:
+            words.add("build")
+        if "idea" in n.lower():
+            words.add("idea")
+        if "race" in n.lower():
+            words.add("race")
+        if "time limit" in o or "memory limit" in o or "output limit" in o:
+            words.add("limit")
+        if n == "not graded" or n == "grader error":
+            words.add("not-graded")
+    return sorted(words)
+
+
+def histogram_png(values, most, title):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(4.2, 2.6))
+    ax.hist(values, bins=min(20, max(5, len(set(values)))), range=(0, most or 1), color="#4c72b0")
+    ax.set_title(title, fontsize=10)
+    ax.set_xlabel("points")
+    ax.set_ylabel("students")
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    plt.close(fig)
+    return base64.b64encode(buf.getvalue()).decode()
+
+
+def write_outputs(out, rows, keys):
+    with open(out / "gradebook.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["student", *keys, "total", "max", "flags"])
+        for r in rows:
+            w.writerow([r["name"], *[f"{r['per'].get(k, (0, 0))[0]:g}" for k in keys],
+                        f"{r['total']:g}", f"{r['max']:g}", " ".join(r["flags"])])
+    parts = [f"<h1>Class summary: {len(rows)} students</h1>",
+             "<p>Score histograms per stage (points), from each student's results.json. "
+             "The gradebook is gradebook.csv beside this page.</p><div>"]
+    for k in keys:
+        vals = [r["per"][k][0] for r in rows if k in r["per"]]
+        most = max((r["per"][k][1] for r in rows if k in r["per"]), default=0)
+        if not vals:
+            continue
+        img = histogram_png(vals, most, f"stage {k} (max {most:g})")
+        mean = sum(vals) / len(vals)
+        parts.append(f'<figure style="display:inline-block;margin:0.5em">'
+                     f'<img src="data:image/png;base64,{img}" alt="stage {html.escape(k)}">'
+                     f"<figcaption>stage {html.escape(k)}: {len(vals)} graded, mean {mean:.1f} / "
+                     f"{most:g}</figcaption></figure>")
+    parts.append("</div><h2>Flags</h2><table border=1 cellpadding=3><tr><th>student</th>"
+                 "<th>total</th><th>flags</th></tr>")
+    for r in rows:
+        if r["flags"]:
+            parts.append(f"<tr><td>{html.escape(r['name'])}</td><td>{r['total']:g}/{r['max']:g}</td>"
+                         f"<td>{html.escape(' '.join(r['flags']))}</td></tr>")
+    parts.append("</table>")
+    (out / "summary.html").write_text("<!DOCTYPE html><html><head><meta charset='utf-8'>"
+                                      "<title>plab grade --class</title></head><body "
+                                      "style='font-family:sans-serif'>" + "".join(parts) +
+                                      "</body></html>")
+
+
+def main():
+    argv = sys.argv[1:]
+    grader_args = argv[argv.index("--") + 1:] if "--" in argv else []
+    argv = argv[:argv.index("--")] if "--" in argv else argv
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--class", dest="klass", required=True, type=pathlib.Path)
+    ap.add_argument("--out", required=True, type=pathlib.Path)
+    ap.add_argument("--jobs", type=int, default=max(1, (os.cpu_count() or 2) // 2))
+    ap.add_argument("--stages", default="")
+    ap.add_argument("--regrade", action="store_true")
+    a = ap.parse_args(argv)
+    if not a.klass.is_dir():
+        sys.exit(f"plab grade --class: {a.klass} is not a folder")
+    everyone = students(a.klass)
+    if not everyone:
+        sys.exit(f"plab grade --class: {a.klass} holds no submission (a folder or a zip per student)")
+    a.out.mkdir(parents=True, exist_ok=True)
+    todo, done = [], []
+    for name, entry in everyone:
+        mine = a.out / "students" / name
+        same = (mine / "results.json").is_file() and (mine / "upload.sha256").is_file() and \
+            (mine / "upload.sha256").read_text().strip() == upload_hash(entry)
+        (done if same and not a.regrade else todo).append((name, entry))
+    cores = os.cpu_count() or 2
+    per_job = max(1, cores // max(1, a.jobs))
+    print(f"plab grade --class: {len(everyone)} submissions, {len(done)} graded already, "
+          f"{len(todo)} to grade, {a.jobs} at a time ({per_job} cores each)", flush=True)
+    progress = Progress(len(everyone), len(done))
+    failures = []
+    with concurrent.futures.ThreadPoolExecutor(max_workers=a.jobs) as pool:
+        futures = [pool.submit(grade_one, n, e, a.out, grader_args, a.stages, per_job)
+                   for n, e in todo]
+        for fut in concurrent.futures.as_completed(futures):
+            name, data, seconds = fut.result()
+            if data is None:
+                failures.append(name)
+                progress.tick(name, f"NO RESULTS (see students/{name}/grader.log)")
+            else:
+                per = stage_points(data)
+                progress.tick(name, f"{sum(s for s, _ in per.values()):g}/"
+                                    f"{sum(m for _, m in per.values()):g} in {seconds:.0f} s")
+    rows = []
+    for name, _ in everyone:
+        path = a.out / "students" / name / "results.json"
+        try:
+            data = json.loads(path.read_text())
+        except (OSError, ValueError):
+            rows.append({"name": name, "per": {}, "total": 0, "max": 0, "flags": ["not-graded"]})
+            continue
+        per = stage_points(data)
+        rows.append({"name": name, "per": per, "total": sum(s for s, _ in per.values()),
+                     "max": sum(m for _, m in per.values()), "flags": flags(data)})
+    keys = sorted({k for r in rows for k in r["per"]})
+    write_outputs(a.out, rows, keys)
+    print(f"plab grade --class: gradebook {a.out / 'gradebook.csv'}, summary {a.out / 'summary.html'}"
+          + (f"; {len(failures)} without results: {', '.join(failures)}" if failures else ""))
+    sys.exit(1 if failures else 0)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,74 @@
+#!/usr/bin/env python3
+"""Checks `plab grade --class` on a class of 5 stage 01 submissions (the solution as a folder and as
+a zip, the untouched starting point, one that does not compile, one flat upload): the batch is
+killed once the first student is graded, started again, and must grade only those left; then the
+gradebook has one row per student with the right totals, each student has results.json, and the
+summary page shows the histogram. Run by CTest (label grader).
+
+  grader_class.py PLAB_PROGRAM KIT_SOURCE SCRATCH_DIR
+"""
+import csv
+import os
+import pathlib
+import shutil
+import signal
+import subprocess
+import sys
+import zipfile
+
+plab, kit, scratch = sys.argv[1], pathlib.Path(sys.argv[2]), pathlib.Path(sys.argv[3])
+shutil.rmtree(scratch, ignore_errors=True)
+cls, out = scratch / "class", scratch / "grades"
+solution = (kit / "solutions" / "01-naive" / "step.cpp").read_text()
+
+
+def upload(name, text, flat=False):
+    folder = cls / name if flat else cls / name / "stages" / "01-naive"
+    folder.mkdir(parents=True)
+    (folder / "step.cpp").write_text(text)
+
+
+upload("ann", solution)
+upload("ben", (kit / "stages" / "01-naive" / "step.cpp").read_text())
+upload("cat", solution.replace("apply_one(box, p, plan, i);", "apply_one(box, p, plan, i)"))
+upload("dan", solution, flat=True)
+with zipfile.ZipFile(cls / "eve.zip", "w") as z:
+    z.writestr("stages/01-naive/step.cpp", solution)
+expected = {"ann": "full", "ben": "zero", "cat": "zero", "dan": "full", "eve": "full"}
+cmd = [plab, "grade", "--class", str(cls), "--stages", "01", "--out", str(out), "--jobs", "2"]
+
+# First batch: killed (its whole process group) as soon as one student is graded.
+first = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                         start_new_session=True)
+seen = []
+for line in first.stdout:
+    seen.append(line.rstrip())
+    if "1/5" in line:
+        os.killpg(first.pid, signal.SIGTERM)
+        break
+first.wait(timeout=120)
+assert any("1/5" in ln for ln in seen), "the first batch never finished a student:\n" + "\n".join(seen)
+graded = [p.parent.name for p in out.glob("students/*/upload.sha256")]
+assert 1 <= len(graded) < 5, f"after the kill, {len(graded)} students graded: {graded}"
+
+# Second batch: resumes, grades only the others.
+done = subprocess.run(cmd, capture_output=True, text=True, timeout=1200)
+assert done.returncode == 0, f"second batch exited {done.returncode}:\n{done.stdout}\n{done.stderr}"
+assert f"{len(graded)} graded already, {5 - len(graded)} to grade" in done.stdout, done.stdout
+for name in graded:
+    assert f" {name}: " not in done.stdout, f"{name} was graded twice:\n{done.stdout}"
+
+rows = {r["student"]: r for r in csv.DictReader(open(out / "gradebook.csv", newline=""))}
+assert sorted(rows) == sorted(expected), f"gradebook rows: {sorted(rows)}"
+for name, what in expected.items():
+    r = rows[name]
+    total, most = float(r["total"]), float(r["max"])
+    assert most > 0, f"{name}: no points possible: {r}"
+    assert (total == most) if what == "full" else (total == 0), f"{name}: {r} (expected {what})"
+    assert (out / "students" / name / "results.json").is_file(), name
+assert "build" in rows["cat"]["flags"], rows["cat"]
+page = (out / "summary.html").read_text()
+assert "data:image/png;base64," in page and "stage 01" in page, "the summary has no histogram"
+shutil.rmtree(scratch)
+print(f"plab grade --class: killed after {len(graded)} of 5, resumed with the other "
+      f"{5 - len(graded)}; gradebook of 5 rows")
