@@ -418,7 +418,8 @@ class Grader:
           threads: the stage on `threads` OpenMP threads (waiting passively): at least two
                    threads each used `share` of the program's CPU time (read from /proc);
           ranks:   the stage under mpirun on `ranks` processes: every rank used `share` of the
-                   ranks' CPU time (read from /proc), so rank 0 does not step everything."""
+                   ranks' CPU time (read from /proc), so rank 0 does not step everything.
+        Both watched kinds also take `max_share`: the most that one thread or rank may use."""
         idea = st.idea
         test = f"{st.sid}: idea ({idea['what']})"
         if isinstance(program, str):
@@ -491,6 +492,11 @@ class Grader:
             return (f"{len(real)} of its {who} did a real share of the work (at least "
                     f"{100 * share:.0f}% of its CPU time each); {need} must. CPU seconds of its "
                     f"{who}: {shown} (total {total:.2f}). {idea['hint']}"), text
+        most = idea.get("max_share", 1.0)
+        if parts[0] > most * total:
+            return (f"one of its {who} did {100 * parts[0] / total:.0f}% of the work (at most "
+                    f"{100 * most:.0f}% may). CPU seconds of its {who}: {shown} (total "
+                    f"{total:.2f}). {idea['hint']}"), text
         return None, text
 
     def race_check(self, st, program, folder, correct, any_right):
