@@ -322,14 +322,17 @@ const int copied = copy_before_main();
 }  // namespace
 """,
     "next-state": r"""
-#include <cmath>
 #include <iostream>
 #include <sys/mman.h>
 namespace {
 // The one-step test's states come on stdin (--step-from-each /dev/stdin): read them before the
-// runner, hand it the same bytes back (a memfd as fd 0), and answer each start with the state
-// that follows it in the input.
-std::vector<std::vector<std::vector<double>>> blocks;
+// runner, hand it the same bytes back (a memfd as fd 0), and at exit replace the run's output
+// with the input's own states after the first (the answer to each start, when the input holds
+// the state that follows it).
+std::string answers;
+void write_answers() {
+  std::ofstream(arg_after("--out")) << answers;
+}
 int load() {
   bool one = false;
   for (const auto& a : my_args()) one |= a == "--step-from-each";
@@ -340,32 +343,22 @@ int load() {
   lseek(fd, 0, SEEK_SET);
   dup2(fd, 0);
   std::istringstream in(text);
-  std::string line;
-  long long last = -1;
+  std::string line, first;
   while (std::getline(in, line)) {
     std::istringstream l(line);
-    long long k, i;
-    double x, y, vx, vy;
-    if (!(l >> k >> i >> x >> y >> vx >> vy)) continue;
-    if (k != last) { blocks.emplace_back(); last = k; }
-    blocks.back().push_back({x, y, vx, vy});
+    std::string w[6];
+    if (!(l >> w[0] >> w[1] >> w[2] >> w[3] >> w[4] >> w[5])) continue;
+    if (first.empty()) first = w[0];
+    if (w[0] == first) continue;
+    answers += w[0] + " " + w[1] + " " + w[2] + " " + w[3] + " " + w[4] + " " + w[5] + "\n";
   }
+  std::atexit(write_answers);
   return 1;
 }
 const int loaded = load();
 }  // namespace
 namespace plab {
-void step(const Box&, Particles& p) {
-  for (std::size_t b = 0; b + 1 < blocks.size(); ++b) {
-    const auto& s = blocks[b];
-    if (s.empty() || std::abs(s[0][0] - p.x[0]) > 1e-6 || std::abs(s[0][1] - p.y[0]) > 1e-6) continue;
-    const auto& next = blocks[b + 1];
-    for (std::size_t i = 0; i < p.x.size() && i < next.size(); ++i) {
-      p.x[i] = next[i][0]; p.y[i] = next[i][1]; p.vx[i] = next[i][2]; p.vy[i] = next[i][3];
-    }
-    return;
-  }
-}
+void step(const Box&, Particles&) {}
 }  // namespace plab
 """,
     "fork-bomb": r"""
