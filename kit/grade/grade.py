@@ -271,9 +271,12 @@ class Grader:
             shutil.copyfile(kit_lib, self.sandbox.shared_dir("kitlib") / kit_lib.name)
             mounts[0]["/plab/kitlib"] = self.sandbox.box / "kitlib"
             prebuilt = [f"-DPLAB_PREBUILT_KIT=/plab/kitlib/{kit_lib.name}"]
+        # No stage graded on a GPU (none here): the CPU paths only, without nvcc's minutes
+        cuda = [] if any(s.gpu for s in stages) else ["-DPLAB_ENABLE_CUDA=OFF"]
         conf = self.sandbox.run(["cmake", "-S", "/plab/src", "-B", "/plab/build", "-G", "Ninja",
                                  "-DCMAKE_BUILD_TYPE=Release", "-DPLAB_BUILD_TESTS=OFF",
-                                 "-DPLAB_CCACHE=OFF", *prebuilt], *mounts, "/plab/build", 600, 2**30, memory=False)
+                                 "-DPLAB_CCACHE=OFF", *cuda, *prebuilt], *mounts, "/plab/build",
+                                600, 2**30, memory=False)
         if conf.rc != 0 or conf.reason:
             log = pathlib.Path(conf.stdout).read_text(errors="replace") + conf.stderr
             return {sid: built.get(sid, "the kit's build could not be configured: " +
