@@ -22,8 +22,18 @@ The attacks (each a stage's step.cpp; the hidden seed of these gradings is SEED)
   before-main     stage 08 on MPI (every rank under mpirun): the solution's own step.cpp with a
                   static initializer that, before main, copies an expected output found on disk
                   or runs any other plab-run-* program of the kit on the scene, and leaves
+  next-state      stage 01 answers the one-step test with the states its input holds after each
+                  start (read from stdin before the runner, written over its output at exit)
+and, measured by the grader outside the student's code (each must score nothing):
+  ideas           02 with stage 01's O(N^3) selection, 03 serial (no OpenMP pragma), 06 with
+                  stage 03's O(N^2) rounds, 08 whose rank 0 steps every particle (a patch of the
+                  solution's step.cpp; skipped with a message when its shape changed)
+  shortcuts       the one-step answers (next-state), a stage 02 that skips the work on the timed
+                  scene (no performance points), the untouched starting point of 03 (no race points)
+  links           a stage folder and a step.cpp that are links into the kit's solutions/, an
+                  empty zip and a zip of links (the three-line message, no traceback)
 and, as a control, read-golden, include-path, call-oracle and before-main again with
---no-sandbox, where they must win.
+--no-sandbox (and without the idea tests), where they must win.
 """
 import json
 import os
