@@ -32,8 +32,10 @@ and, measured by the grader outside the student's code (each must score nothing)
                   scene (no performance points), the untouched starting point of 03 (no race points)
   links           a stage folder and a step.cpp that are links into the kit's solutions/, an
                   empty zip and a zip of links (the three-line message, no traceback)
-and, as a control, read-golden, include-path, call-oracle and before-main again with
---no-sandbox (and without the idea tests), where they must win.
+and, as a control, read-golden, run-solution, include-path and before-main again with
+--no-sandbox (and without the idea tests), where they must win. (call-oracle no longer wins
+there either: since the oracle moved to kit/instructor/, its header is on no graded build's
+include path, so its source included by path does not compile.)
 """
 import json
 import os
@@ -551,9 +553,9 @@ def case_control():
     no_ideas = scratch / "rubric-without-ideas.json"
     no_ideas.write_text(json.dumps(rubric))
     tests, doc, _ = grade("redteam-control", submission("redteam-control", {
-        "01": "read-golden", "02": "call-oracle", "03": "include-path", "08": "before-main"}),
+        "01": "read-golden", "02": "run-solution", "03": "include-path", "08": "before-main"}),
         "01,02,03,08", "--no-sandbox", "--no-races", "--rubric", str(no_ideas))
-    for stage, attack in (("01", "read-golden"), ("02", "call-oracle"), ("03", "include-path"),
+    for stage, attack in (("01", "read-golden"), ("02", "run-solution"), ("03", "include-path"),
                           ("08", "before-main")):
         got = sum(t["score"] for t in correctness(tests, stage).values())
         most = sum(t["max_score"] for t in correctness(tests, stage).values())
