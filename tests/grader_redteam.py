@@ -22,8 +22,20 @@ The attacks (each a stage's step.cpp; the hidden seed of these gradings is SEED)
   before-main     stage 08 on MPI (every rank under mpirun): the solution's own step.cpp with a
                   static initializer that, before main, copies an expected output found on disk
                   or runs any other plab-run-* program of the kit on the scene, and leaves
-and, as a control, read-golden, include-path, call-oracle and before-main again with
---no-sandbox, where they must win.
+  next-state      stage 01 answers the one-step test with the states its input holds after each
+                  start (read from stdin before the runner, written over its output at exit)
+and, measured by the grader outside the student's code (each must score nothing):
+  ideas           02 with stage 01's O(N^3) selection, 03 serial (no OpenMP pragma), 06 with
+                  stage 03's O(N^2) rounds, 08 whose rank 0 steps every particle (a patch of the
+                  solution's step.cpp; skipped with a message when its shape changed)
+  shortcuts       the one-step answers (next-state), a stage 02 that skips the work on the timed
+                  scene (no performance points), the untouched starting point of 03 (no race points)
+  links           a stage folder and a step.cpp that are links into the kit's solutions/, an
+                  empty zip and a zip of links (the three-line message, no traceback)
+and, as a control, read-golden, run-solution, include-path and before-main again with
+--no-sandbox (and without the idea tests), where they must win. (call-oracle no longer wins
+there either: since the oracle moved to kit/instructor/, its header is on no graded build's
+include path, so its source included by path does not compile.)
 """
 import json
 import os
@@ -322,14 +334,17 @@ const int copied = copy_before_main();
 }  // namespace
 """,
     "next-state": r"""
-#include <cmath>
 #include <iostream>
 #include <sys/mman.h>
 namespace {
 // The one-step test's states come on stdin (--step-from-each /dev/stdin): read them before the
-// runner, hand it the same bytes back (a memfd as fd 0), and answer each start with the state
-// that follows it in the input.
-std::vector<std::vector<std::vector<double>>> blocks;
+// runner, hand it the same bytes back (a memfd as fd 0), and at exit replace the run's output
+// with the input's own states after the first (the answer to each start, when the input holds
+// the state that follows it).
+std::string answers;
+void write_answers() {
+  std::ofstream(arg_after("--out")) << answers;
+}
 int load() {
   bool one = false;
   for (const auto& a : my_args()) one |= a == "--step-from-each";
@@ -340,32 +355,22 @@ int load() {
   lseek(fd, 0, SEEK_SET);
   dup2(fd, 0);
   std::istringstream in(text);
-  std::string line;
-  long long last = -1;
+  std::string line, first;
   while (std::getline(in, line)) {
     std::istringstream l(line);
-    long long k, i;
-    double x, y, vx, vy;
-    if (!(l >> k >> i >> x >> y >> vx >> vy)) continue;
-    if (k != last) { blocks.emplace_back(); last = k; }
-    blocks.back().push_back({x, y, vx, vy});
+    std::string w[6];
+    if (!(l >> w[0] >> w[1] >> w[2] >> w[3] >> w[4] >> w[5])) continue;
+    if (first.empty()) first = w[0];
+    if (w[0] == first) continue;
+    answers += w[0] + " " + w[1] + " " + w[2] + " " + w[3] + " " + w[4] + " " + w[5] + "\n";
   }
+  std::atexit(write_answers);
   return 1;
 }
 const int loaded = load();
 }  // namespace
 namespace plab {
-void step(const Box&, Particles& p) {
-  for (std::size_t b = 0; b + 1 < blocks.size(); ++b) {
-    const auto& s = blocks[b];
-    if (s.empty() || std::abs(s[0][0] - p.x[0]) > 1e-6 || std::abs(s[0][1] - p.y[0]) > 1e-6) continue;
-    const auto& next = blocks[b + 1];
-    for (std::size_t i = 0; i < p.x.size() && i < next.size(); ++i) {
-      p.x[i] = next[i][0]; p.y[i] = next[i][1]; p.vx[i] = next[i][2]; p.vy[i] = next[i][3];
-    }
-    return;
-  }
-}
+void step(const Box&, Particles&) {}
 }  // namespace plab
 """,
     "fork-bomb": r"""
@@ -548,9 +553,9 @@ def case_control():
     no_ideas = scratch / "rubric-without-ideas.json"
     no_ideas.write_text(json.dumps(rubric))
     tests, doc, _ = grade("redteam-control", submission("redteam-control", {
-        "01": "read-golden", "02": "call-oracle", "03": "include-path", "08": "before-main"}),
+        "01": "read-golden", "02": "run-solution", "03": "include-path", "08": "before-main"}),
         "01,02,03,08", "--no-sandbox", "--no-races", "--rubric", str(no_ideas))
-    for stage, attack in (("01", "read-golden"), ("02", "call-oracle"), ("03", "include-path"),
+    for stage, attack in (("01", "read-golden"), ("02", "run-solution"), ("03", "include-path"),
                           ("08", "before-main")):
         got = sum(t["score"] for t in correctness(tests, stage).values())
         most = sum(t["max_score"] for t in correctness(tests, stage).values())

@@ -271,9 +271,12 @@ class Grader:
             shutil.copyfile(kit_lib, self.sandbox.shared_dir("kitlib") / kit_lib.name)
             mounts[0]["/plab/kitlib"] = self.sandbox.box / "kitlib"
             prebuilt = [f"-DPLAB_PREBUILT_KIT=/plab/kitlib/{kit_lib.name}"]
+        # No stage graded on a GPU (none here): the CPU paths only, without nvcc's minutes
+        cuda = [] if any(s.gpu for s in stages) else ["-DPLAB_ENABLE_CUDA=OFF"]
         conf = self.sandbox.run(["cmake", "-S", "/plab/src", "-B", "/plab/build", "-G", "Ninja",
                                  "-DCMAKE_BUILD_TYPE=Release", "-DPLAB_BUILD_TESTS=OFF",
-                                 "-DPLAB_CCACHE=OFF", *prebuilt], *mounts, "/plab/build", 600, 2**30, memory=False)
+                                 "-DPLAB_CCACHE=OFF", *cuda, *prebuilt], *mounts, "/plab/build",
+                                600, 2**30, memory=False)
         if conf.rc != 0 or conf.reason:
             log = pathlib.Path(conf.stdout).read_text(errors="replace") + conf.stderr
             return {sid: built.get(sid, "the kit's build could not be configured: " +
@@ -418,7 +421,8 @@ class Grader:
           threads: the stage on `threads` OpenMP threads (waiting passively): at least two
                    threads each used `share` of the program's CPU time (read from /proc);
           ranks:   the stage under mpirun on `ranks` processes: every rank used `share` of the
-                   ranks' CPU time (read from /proc), so rank 0 does not step everything."""
+                   ranks' CPU time (read from /proc), so rank 0 does not step everything.
+        Both watched kinds also take `max_share`: the most that one thread or rank may use."""
         idea = st.idea
         test = f"{st.sid}: idea ({idea['what']})"
         if isinstance(program, str):
@@ -491,6 +495,11 @@ class Grader:
             return (f"{len(real)} of its {who} did a real share of the work (at least "
                     f"{100 * share:.0f}% of its CPU time each); {need} must. CPU seconds of its "
                     f"{who}: {shown} (total {total:.2f}). {idea['hint']}"), text
+        most = idea.get("max_share", 1.0)
+        if parts[0] > most * total:
+            return (f"one of its {who} did {100 * parts[0] / total:.0f}% of the work (at most "
+                    f"{100 * most:.0f}% may). CPU seconds of its {who}: {shown} (total "
+                    f"{total:.2f}). {idea['hint']}"), text
         return None, text
 
     def race_check(self, st, program, folder, correct, any_right):
