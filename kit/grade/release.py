@@ -40,7 +40,7 @@ import tempfile
 # (independent stage 03 solutions).
 INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "README.md",
                    "handouts/measurements.md", "handouts/engine.md", "handouts/engine-gpu.md",
-                   "handouts/engine-08.md", "tests/similar/")
+                   "handouts/engine-08.md", "tests/similar/", "kit/guide/")
 # Files that belong to nobody's copy even when tracked by mistake: logs, build folders, scratch.
 SCRATCH = ("*.log", "*.partial", "*.orig", "*.rej", "*.swp", "*~", "*.pyc", "__pycache__/*",
            "build/*", "build-*/*", ".configure.log")
