@@ -37,9 +37,20 @@ build-gpu/bin/plab bench --stage "${PLAB_BENCH_STAGES:-03,04,05,06}" --threads "
     --n "${PLAB_BENCH_N:-1000,2000,3000,4000,5000,6000,7000,8000,9000,10000}" \
     --runs "${PLAB_BENCH_RUNS:-3}" --csv "$results/bench-gpu.csv"
 
-log "stage 06 at the report's density (L = 20000 sqrt(N / 10^4), speeds 2500..5000), S = 100"
-build-gpu/bin/plab bench --stage 06 --fixed-density --steps 100 --runs "${PLAB_BENCH_RUNS:-3}" \
-    --n "${PLAB_SCALE_N:-10000,100000,1000000}" --csv "$results/bench-06-scale.csv"
+log "compute-sanitizer memcheck: each GPU program on course-1 (the lab solutions and the engine)"
+for prog in plab-run-04-solution plab-run-05-solution plab-run-06-solution plab-run-06-engine; do
+  if [ -x "build-gpu/bin/$prog" ]; then
+    compute-sanitizer --tool memcheck --error-exitcode 9 "build-gpu/bin/$prog" --device gpu \
+        datasets/scenes/course-1.in --quiet --out /dev/null > "$results/memcheck-$prog.log" 2>&1 \
+      && echo "$prog: memcheck clean" || { echo "$prog: MEMCHECK FAILED"; tail -5 "$results/memcheck-$prog.log"; status=1; }
+  fi
+done
+
+log "stage 06 at the report's density (L = 20000 sqrt(N / 10^4), speeds 2500..5000), S = 100: the lab solution and the kit's engine"
+for impl in solution engine; do
+  build-gpu/bin/plab bench --stage 06 --impl "$impl" --fixed-density --steps 100 --runs "${PLAB_BENCH_RUNS:-3}" \
+      --n "${PLAB_SCALE_N:-10000,100000,1000000}" --csv "$results/bench-06-scale-$impl.csv"
+done
 
 [ -n "${PLAB_SKIP_ABLATION:-}" ] && { [ "$status" = 0 ] || echo "SOME GPU TESTS FAILED"; exit "$status"; }
 log "stage 05, each change turned off in turn (PLAB_CUDA_OFF), N = 1000 and 10000"
