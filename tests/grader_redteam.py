@@ -594,8 +594,9 @@ def case_ideas():
     naive06 = root / "stages" / "06-broadphase"
     shutil.copytree(kit / "solutions/06-broadphase", naive06)
     shutil.copy2(kit / "solutions/03-openmp/step.cpp", naive06 / "step.cpp")
-    # Stage 08: the rounds' step renamed, and a step that sends every particle to rank 0, steps
-    # them there alone (a one-rank world) and sends each back to its owner.
+    # Stage 08: the rounds' step renamed, and a step that sends every particle to rank 0 (the
+    # stage's own migrate()), steps them there alone (a one-rank world) and sends each back to its
+    # owner: right outputs, one rank doing the work.
     serial = patched(name, "08", "solutions/08-mpi", [(
         "void step(const Box& box, const Ranks& r, Local& s) {",
         "void real_step(const Box& box, const Ranks& r, Local& s) {"), (
@@ -604,8 +605,7 @@ void step(const Box& box, const Ranks& r, Local& s) {
   std::vector<std::vector<Record>> out(r.ranks), back(r.ranks);
   for (int k = 0; k < s.owned; ++k) out[0].push_back(s.record(k));
   Local all;
-  for (const Record& rec : all_to_all(r, out)) all.push(rec);
-  all.owned = all.size();
+  migrate(r, out, all);
   if (r.rank == 0) {
     Ranks one = r;
     one.comm = MPI_COMM_SELF;
@@ -614,8 +614,7 @@ void step(const Box& box, const Ranks& r, Local& s) {
   }
   for (int k = 0; k < all.owned; ++k) back[r.owner_of(all.p.x[k])].push_back(all.record(k));
   Local mine;
-  for (const Record& rec : all_to_all(r, back)) mine.push(rec);
-  mine.owned = mine.size();
+  migrate(r, back, mine);
   s = std::move(mine);
 }
 }  // namespace plab::dist
