@@ -137,6 +137,12 @@ function(plab_add_stage)
     target_link_libraries(${lib} PUBLIC plab::instructor)  # the answers' headers it may use
   endif()
   target_compile_definitions(${lib} PRIVATE PLAB_STAGE_ID="${id}")
+  if(impl STREQUAL "solution" AND IS_DIRECTORY ${PROJECT_SOURCE_DIR}/stages/${folder})
+    # A given file that the exercise leaves as it is lives once, in the starting point
+    # (stages/NN-name): a solution folder holds only the files the student changes, and finds the
+    # others there (its own folder is searched first).
+    target_include_directories(${lib} PRIVATE ${PROJECT_SOURCE_DIR}/stages/${folder})
+  endif()
   if(needs_gpu)
     target_link_libraries(${lib} PUBLIC plab::cuda)
   elseif(gpu_path)

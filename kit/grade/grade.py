@@ -260,6 +260,13 @@ class Grader:
                 continue
             for f in sources:
                 shutil.copy2(f, dest / f.name)
+            # A given file the solution does not change lives once, in the starting point (the
+            # kit's solutions/NN-name leaves it out): an upload without it gets the kit's.
+            given = self.kit / "stages" / folders[sid]
+            for f in sorted(given.iterdir()):
+                if (f.is_file() and not (self.kit / "solutions" / folders[sid] / f.name).exists()
+                        and not (dest / f.name).exists()):
+                    shutil.copy2(f, dest / f.name)
         readable_by_all(src)  # the kit may be private (Gradescope's setup.sh makes it so)
         build = self.sandbox.writable_dir(self.sandbox.box, "build-")
         mounts = ({"/plab/src": src}, {"/plab/build": build})
