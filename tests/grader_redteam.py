@@ -632,13 +632,6 @@ void step(const Box& box, const Ranks& r, Local& s) {
         ok = idea is not None and idea["status"] == "failed" and got == 0
         message = (f"stage {sid} without its idea scored {got} on correctness; its idea test: "
                    f"{(idea or {}).get('output', 'none')[:300]!r}")
-        if sid == "08" and not ok:
-            # Known weak: ranks waiting in an MPI collective poll the CPU (Open MPI busy-waits),
-            # so on a saturated machine the idle ranks of a rank-0-only stage 08 can use as much
-            # CPU as working ones (measured: 1.37/0.47/0.14 s, then 1.45/1.24/1.08 s). Reported,
-            # not failed, until the check measures work rather than CPU time.
-            print(f"WEAK ideas: {message}", flush=True)
-            continue
         check("ideas", ok, message)
 
 

@@ -438,9 +438,10 @@ class Grader:
             return
         sc = idea["scene"]
         scene = folder / "idea.in"
+        speed = ("--speed", sc["speed"]) if "speed" in sc else ()
         self.kit_programs.gen(scene, "--n", sc["n"], "--l", sc["L"], "--r", sc["r"], "--steps",
                               sc["steps"], "--mode", "perf", "--seed",
-                              (self.seed * 13 + int(st.sid)) % 2**32)
+                              (self.seed * 13 + int(st.sid)) % 2**32, *speed)
         own = self.solution(st.sid)  # the stage's own solution: the same bits, its speed
         start = time.time()
         r = subprocess.run([own, scene, "--quiet", "--threads", str(idea.get("threads", 1)),
@@ -454,8 +455,10 @@ class Grader:
         limit = max(idea.get("seconds", 0), idea.get("multiple", 0) * own_seconds)
         threads = str(idea.get("threads", st.threads))
         env = dict(st.env, OMP_WAIT_POLICY="passive") if kind == "threads" else st.env
+        # Ranks: the kit's MPI layer (not the student's code) counts the bytes the ranks send.
+        report = ["--report", "/plab/out/report.json"] if kind == "ranks" else []
         run = self.run_program(program, scene, ["--quiet", "--threads", threads, "--out",
-                                                "/plab/out/out.txt"], limit,
+                                                "/plab/out/out.txt", *report], limit,
                                max(self.rubric["limits"]["output_min_mb"] * 2**20,
                                    4 * len(expected)), st, env=env, watch=kind != "scale",
                                ranks=idea.get("ranks", st.ranks))
@@ -470,11 +473,30 @@ class Grader:
         elif run.read_output() != expected:
             problem = f"its output on the {what} differs from the reference's"
         text = f"the {what}: {run.seconds:.2f} s (the kit's solution: {own_seconds:.2f} s)"
+        if problem is None and kind == "ranks" and "max_bytes_per_particle_step" in idea:
+            problem, text = self.bytes_sent(idea, run, text)  # counted, so decided first
         if problem is None and kind != "scale":
             problem, text = self.work_shared(idea, run, text)
         if problem:
             self.idea_failed[st.sid] = f"the idea test of stage {st.sid} failed: {problem}"
         self.results.add(test, 0, 0, problem is None, problem or text, False, run.seconds)
+
+    def bytes_sent(self, idea, run, text):
+        """(problem or None, text): the bytes the ranks sent a particle and step, counted by the
+        kit's MPI layer, against the rubric's most. The halo and the rounds' messages of a
+        slow scene are a few bytes; every particle sent to one rank and back, about 75."""
+        sc, most = idea["scene"], idea["max_bytes_per_particle_step"]
+        try:
+            sent = float(json.loads(run.read_output("report.json") or "")["bytes_sent"])
+        except (ValueError, KeyError, TypeError):
+            return "its run left no report of the bytes its ranks sent", text
+        per = sent / (sc["n"] * sc["steps"])
+        text += f"; its ranks sent {per:.1f} bytes a particle and step"
+        if per > most:
+            return (f"its ranks sent {per:.1f} bytes a particle and step (at most {most:g} may: "
+                    f"the halo and the rounds' messages; every particle sent to one rank and "
+                    f"back is about 75). {idea['hint']}"), text
+        return None, text
 
     def work_shared(self, idea, run, text):
         """(problem or None, text) of a watched run: who did the work, threads or ranks."""
