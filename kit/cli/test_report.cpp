@@ -213,6 +213,23 @@ struct FirstFailure {
   Case c;
 };
 
+/// What explains a step's events (the kit's oracle), as a command prefix and as a program: the
+/// stage's own program in the instructor's copy (its runner links the oracle), the compiled
+/// reference in a student copy (kit/reference/bin, built by `plab release`), or nothing.
+struct Explainer {
+  std::string command;  //!< printed: `... SCENE --explain K:I` follows
+  std::string program;  //!< run for the oracle's line ("" when there is none)
+};
+Explainer explainer(const FirstFailure& f, const std::string& scene) {
+  const fs::path kit = source_dir();
+  if (fs::is_directory(kit / "kit" / "instructor"))
+    return {"./plab run --stage " + f.id + " --impl " + f.impl + " " + scene,
+            stage_program(f.id, f.impl)};
+  const fs::path reference = kit / "kit" / "reference" / "bin" / "plab-reference";
+  if (fs::exists(reference)) return {"kit/reference/bin/plab-reference " + scene, reference};
+  return {"", ""};
+}
+
 /// The reproduce and draw commands (and the event that should have happened) for a golden scene.
 void explain_golden(const FirstFailure& f, const Dataset& d, const Manifest& m, const Found& diff) {
   const std::string scene = shown_path(m.scene_path(d));
@@ -221,16 +238,17 @@ void explain_golden(const FirstFailure& f, const Dataset& d, const Manifest& m, 
   std::printf("  the scene: %s\n", d.tests.c_str());
   const long long step = std::atoll(diff.step.c_str());
   const std::string explain = std::to_string(step > 0 ? step - 1 : 0) + ":" + diff.particle;
-  if (!diff.particle.empty()) {
-    const Captured c = capture_program({stage_program(f.id, f.impl), m.scene_path(d), "--explain",
-                                        explain});
+  const Explainer how = explainer(f, scene);
+  if (!diff.particle.empty() && !how.program.empty()) {
+    const Captured c = capture_program({how.program, m.scene_path(d), "--explain", explain});
     if (c.status == 0)
       std::printf("  what should happen from step %lld to %s (the kit's oracle): %s\n",
                   step > 0 ? step - 1 : 0, diff.step.c_str(), first_line(c.text).c_str());
   }
   std::printf("  reproduce it:\n    %s --out mine.out\n    ./plab diff %s mine.out\n", run.c_str(),
               golden.c_str());
-  if (!diff.particle.empty()) std::printf("    %s --explain %s\n", run.c_str(), explain.c_str());
+  if (!diff.particle.empty() && !how.command.empty())
+    std::printf("    %s --explain %s\n", how.command.c_str(), explain.c_str());
   // Two lines, a label and a command each (the report stays short): a GIF, and a page to play,
   // click and compare in the browser.
   std::printf("  draw it:  ./plab render %s --diff %s mine.out --out %s-diff.gif\n",
@@ -250,11 +268,15 @@ void explain_generated(const FirstFailure& f, const Found& diff) {
   const std::string run = "./plab run --stage " + f.id + " --impl " + f.impl + " scene.in";
   const long long step = std::atoll(diff.step.c_str());
   std::printf("  reproduce it:\n    ./plab gen %s --out scene.in\n", g[1].str().c_str());
-  std::printf("    ./plab run --stage %s --impl solution scene.in --out expected.out\n",
-              o[1].str().c_str());
+  const Explainer how = explainer(f, "scene.in");
+  if (fs::is_directory(fs::path(source_dir()) / "solutions"))
+    std::printf("    ./plab run --stage %s --impl solution scene.in --out expected.out\n",
+                o[1].str().c_str());
+  else  // a student copy: the compiled reference prints the same text as every stage
+    std::printf("    kit/reference/bin/plab-reference scene.in --out expected.out\n");
   std::printf("    %s --out mine.out\n    ./plab diff expected.out mine.out\n", run.c_str());
-  if (!diff.particle.empty())
-    std::printf("    %s --explain %lld:%s\n", run.c_str(), step > 0 ? step - 1 : 0,
+  if (!diff.particle.empty() && !how.command.empty())
+    std::printf("    %s --explain %lld:%s\n", how.command.c_str(), step > 0 ? step - 1 : 0,
                 diff.particle.c_str());
   std::printf("  draw it:  ./plab render scene.in --diff expected.out mine.out --out diff.gif\n");
   std::printf("  play it:  ./plab view scene.in --stage %s --impl %s --compare expected.out --out "
