@@ -11,7 +11,7 @@ void add_grade(CLI::App& app) {
     bool regrade = false;
     std::string sandbox = "auto";
     long long seed = -1;
-    bool keep = false, no_sandbox = false, races = false, no_races = false;
+    bool keep = false, no_sandbox = false, make_private = false, races = false, no_races = false;
   };
   auto a = std::make_shared<Args>();
   auto* c = app.add_subcommand(
@@ -53,6 +53,10 @@ void add_grade(CLI::App& app) {
   c->add_flag("--no-sandbox", a->no_sandbox,
               "run student code with the grader's own rights (printed on every result)");
   c->add_flag("--keep", a->keep, "keep the scratch folder");
+  c->add_flag("--make-private", a->make_private,
+              "with the unprivileged-user sandbox (no namespaces): take group and other "
+              "permissions from the kit's answers (solutions, goldens, build) before grading; "
+              "without it the grader refuses while they are readable");
   c->add_flag("--races", a->races,
               "(the default) build the stages whose rubric marks races (03, 06) again with "
               "ThreadSanitizer in the sandbox and report the first data race with file and line");
@@ -77,6 +81,7 @@ void add_grade(CLI::App& app) {
     if (!a->scratch.empty()) args.insert(args.end(), {"--scratch", a->scratch});
     if (a->keep) args.emplace_back("--keep");
     if (a->no_sandbox) args.emplace_back("--no-sandbox");
+    if (a->make_private) args.emplace_back("--make-private");
     if (a->races) args.emplace_back("--races");
     if (a->no_races) args.emplace_back("--no-races");
     if (!a->klass.empty()) {  // the class driver runs one grader a submission, J at a time

@@ -181,16 +181,19 @@ class Grader:
             private = [self.kit / "solutions", self.kit / "datasets" / "golden",
                        self.kit_build / "bin", self.kit / "kit" / "grade" / "rubric.json",
                        self.kit / "kit" / "instructor", self.private]
-            # No namespaces: the sandbox's uid reads every file others may read. The kit's
-            # answers (its solutions, goldens, builds) lose group and other permissions here,
-            # where the grader may change them, before anything is checked.
-            isolation.make_private(private[:-1] + [self.kit_build])
+            # No namespaces: the sandbox's uid reads every file others may read. The grader
+            # refuses while the kit's answers (its solutions, goldens, builds) are readable by
+            # others, and says how to close them (`--make-private` does it); it never changes
+            # them unasked: other gradings of this kit (a class, the tests) may be using them.
+            if self.a.make_private:
+                isolation.make_private(private[:-1] + [self.kit_build])
             seen = isolation.private_readable(private)
             if seen:
                 raise Refused(
                     f"no namespaces here, so student code would run as uid {isolation.SANDBOX_UID}, "
                     f"which can read {', '.join(seen)}. Make the kit private first "
-                    f"(chmod -R go-rwx {self.kit} {self.kit_build}; the Gradescope setup.sh does).")
+                    f"(chmod -R go-rwx {self.kit} {self.kit_build}, or grade with --make-private; "
+                    "the Gradescope setup.sh does).")
             copies = isolation.readable_copies(skip=[self.kit / "solutions", self.kit_build,
                                                      self.scratch, pathlib.Path(
                                                          self.a.submission).resolve()])
@@ -861,6 +864,9 @@ def main():
                     help="skip the ThreadSanitizer check (its points are then not given)")
     ap.add_argument("--sandbox", choices=("auto", "bwrap", "user"), default="auto",
                     help="how student code is isolated (default: the strongest that works)")
+    ap.add_argument("--make-private", action="store_true",
+                    help="with the unprivileged-user sandbox: take group and other permissions "
+                         "from the kit's answers (solutions, goldens, build) before grading")
     ap.add_argument("--no-sandbox", action="store_true",
                     help="run student code with the grader's own rights (printed on every result)")
     a = ap.parse_args()

@@ -97,6 +97,13 @@ def _banner_stage(path, kit_folders):
     return m.group(1) if m and m.group(1) in kit_folders else None
 
 
+def _describe_plain(root):
+    """_describe() of a folder, its links left out (an upload's links are never followed)."""
+    names = sorted(p.name + ("/" if p.is_dir() and not p.is_symlink() else "")
+                   for p in root.iterdir() if not p.is_symlink())
+    return ", ".join(names[:8]) + (" ..." if len(names) > 8 else "") if names else "nothing"
+
+
 def _describe(root):
     names = sorted(p.name + ("/" if p.is_dir() else "") for p in root.iterdir())
     return ", ".join(names[:8]) + (" ..." if len(names) > 8 else "") if names else "nothing"
@@ -107,6 +114,7 @@ def find_stages(submission, kit_folders, wanted, scratch):
     stage ids asked for (empty: whatever the upload has). Returns ({id: folder with the
     sources}, a note saying what layout was taken)."""
     root = pathlib.Path(submission)
+    uploaded = root  # what the student sent, named in a message (the copy holds sources only)
     dropped = []
     if root.is_dir():  # links dropped before anything reads the upload
         root, dropped = _without_links(root, scratch / "upload-copy")
@@ -156,5 +164,7 @@ def find_stages(submission, kit_folders, wanted, scratch):
             shutil.copy2(p, dest / p.name)
         return {stage: dest}, note + (f"took {len(flat)} files uploaded flat "
                                       f"({', '.join(p.name for p in flat)}) as stage {stage}")
-    raise UploadError(f"found {_describe(root)}: no stage folder and no source file\n{EXPECTED}\n"
+    shown = uploaded if uploaded.is_dir() and root != uploaded and not any(root.iterdir()) else root
+    raise UploadError(f"found {_describe_plain(shown)}: no stage folder and no source file\n"
+                      f"{EXPECTED}\n"
                       "re-upload your stages/ folder (or the whole kit folder)")
