@@ -53,8 +53,11 @@ def student(folder, kind, rng, stages):
         assert text.count(old) == 1, f"slip of stage {sid} does not match once: {old!r}"
         step(sid).write_text(text.replace(old, new))
     elif kind == "no-compile":
-        sid = rng.choice(stages)
-        step(sid).write_text(step(sid).read_text().replace(";", "", 1))
+        sid = rng.choice(stages)  # a statement left without its semicolon, inside step()
+        text = step(sid).read_text()
+        head = "void step(const Box& box, Particles& p) {\n"
+        assert text.count(head) == 1, f"stage {sid}: no step() to break"
+        step(sid).write_text(text.replace(head, head + "  const int unfinished = 1\n"))
     elif kind == "endless":
         sid = rng.choice(stages)
         text = step(sid).read_text()
@@ -103,6 +106,10 @@ def main():
         graded = {}
         for done in out.glob("students/*/upload.sha256"):  # written once a student is graded
             graded[done.parent.name] = json.loads((done.parent / "results.json").read_text())
+        refused = [n for n, r in graded.items() if any(t["name"] == "not graded" for t in r["tests"])]
+        if refused:  # the grader refused (e.g. no sandbox possible): nothing was measured
+            sys.exit(f"class-bench: the grader refused {len(refused)} students, e.g. "
+                     f"{out / 'students' / refused[0] / 'grader.log'}")
         n = len(graded)
         if not n:
             sys.exit("class-bench: no student graded")
