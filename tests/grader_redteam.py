@@ -706,11 +706,29 @@ def case_gpu_ideas():
     if probe.returncode != 0:
         print(f"SKIP gpu-ideas: no GPU here (stage 04's solution: exit {probe.returncode})", flush=True)
         return
-    extra = os.environ.get("PLAB_REDTEAM_GRADE_ARGS", "").split()
+    # The GPU entries graded on the small public scenes and one hidden scene, untimed: the idea
+    # tests are what is measured here (a full grading of the three is several minutes a GPU).
+    rubric = json.loads((kit / "kit/grade/rubric.json").read_text())
+    rubric["correctness"]["hidden_scenes"] = rubric["correctness"]["hidden_scenes"][:1]
+    rubric["correctness"]["hidden_families"] = []
+    for key in ("04", "05", "06-gpu"):
+        rubric["stages"][key].update(sizes=["small"], performance=False)
+    trimmed = scratch / "rubric-gpu-ideas.json"
+    trimmed.write_text(json.dumps(rubric))
+    extra = ["--no-races", "--rubric", str(trimmed),
+             *os.environ.get("PLAB_REDTEAM_GRADE_ARGS", "").split()]
     keys = ["04", "05", "06-gpu"]
+    root = scratch / "redteam-gpu-honest"
+    shutil.rmtree(root, ignore_errors=True)
+    for folder in ("04-cuda", "05-cuda-streams", "06-broadphase"):
+        shutil.copytree(kit / "solutions" / folder, root / "stages" / folder)
+    honest = {}  # graded beside the cheats (its own sandbox uid)
+    beside = threading.Thread(target=lambda: honest.update(
+        tests=grade("redteam-gpu-honest", root, ",".join(keys), *extra)[0]))
+    beside.start()
     cheats = gpu_cheats(scratch / "redteam-gpu-ideas")
     if cheats is not None:
-        tests, _, _ = grade("redteam-gpu-ideas", cheats, ",".join(keys), "--no-races", *extra)
+        tests, _, _ = grade("redteam-gpu-ideas", cheats, ",".join(keys), *extra)
         for key in keys:
             idea = next((t for n, t in tests.items() if n.startswith(f"{key}: idea")), None)
             mine = {n: t for n, t in correctness(tests, key).items() if ": idea" not in n}
@@ -721,11 +739,9 @@ def case_gpu_ideas():
             check("gpu-ideas", idea is not None and idea["status"] == "failed" and got == 0,
                   f"stage {key} without its idea scored {got} on correctness; its idea test: "
                   f"{(idea or {}).get('output', 'none')[:400]!r}")
-    root = scratch / "redteam-gpu-honest"
-    shutil.rmtree(root, ignore_errors=True)
-    for folder in ("04-cuda", "05-cuda-streams", "06-broadphase"):
-        shutil.copytree(kit / "solutions" / folder, root / "stages" / folder)
-    tests, _, _ = grade("redteam-gpu-honest", root, ",".join(keys), "--no-races", *extra)
+    beside.join()
+    tests = honest.get("tests", {})
+    check("gpu-ideas", bool(tests), "the honest stages were graded")
     for key in keys:
         idea = next((t for n, t in tests.items() if n.startswith(f"{key}: idea")), None)
         mine = {n: t for n, t in tests.items() if n.startswith(f"{key}:")}
