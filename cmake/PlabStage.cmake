@@ -136,7 +136,10 @@ function(plab_add_stage)
   if(impl STREQUAL "engine")
     target_link_libraries(${lib} PUBLIC plab::instructor)  # the answers' headers it may use
   endif()
-  target_compile_definitions(${lib} PRIVATE PLAB_STAGE_ID="${id}")
+  math(EXPR number "${id}")  # "04" -> 4 (a preprocessor number, not octal)
+  # PLAB_STAGE_NUMBER: kit headers hide from a stage what its own exercise writes (stage 04: the
+  # device arrays' copies and DeviceParticles, its exercise 1).
+  target_compile_definitions(${lib} PRIVATE PLAB_STAGE_ID="${id}" PLAB_STAGE_NUMBER=${number})
   if(impl STREQUAL "solution" AND IS_DIRECTORY ${PROJECT_SOURCE_DIR}/stages/${folder})
     # A given file that the exercise leaves as it is lives once, in the starting point
     # (stages/NN-name): a solution folder holds only the files the student changes, and finds the

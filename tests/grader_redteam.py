@@ -30,6 +30,10 @@ and, measured by the grader outside the student's code (each must score nothing)
                   solution's step.cpp; skipped with a message when its shape changed)
   shortcuts       the one-step answers (next-state), a stage 02 that skips the work on the timed
                   scene (no performance points), the untouched starting point of 03 (no race points)
+  gpu-ideas       (on a GPU) 04 stepping on the host between whole-state copies, 05 on one
+                  stream, 06 whose GPU path tests every pair (stage 04's kernels): traced by the
+                  kit's CUPTI library, each scores nothing; the honest 04, 05, 06-gpu keep full
+                  marks
   links           a stage folder and a step.cpp that are links into the kit's solutions/, an
                   empty zip and a zip of links (the three-line message, no traceback)
 and, as a control, read-golden, run-solution, include-path and before-main again with
@@ -635,6 +639,119 @@ void step(const Box& box, const Ranks& r, Local& s) {
         check("ideas", ok, message)
 
 
+def gpu_cheats(root):
+    """The GPU stages without their ideas, in `root`/stages (None when a solution changed shape):
+    04 stepping on the host (stage 03's step, serial) between a copy down and a copy up of the
+    whole state every step; 05 on one stream (its switch's off position, always); 06 whose GPU
+    path is stage 04's O(N^2) pair search (its kernels and launchers under other names)."""
+    host = (kit / "solutions/03-openmp/step.cpp").read_text()
+    for old, new in (("#include <omp.h>", ""), ("omp_get_max_threads()", "1"),
+                     ("omp_get_thread_num()", "0"),
+                     ("void step(const Box& box, Particles& p) {",
+                      "void host_step(const Box& box, Particles& p) {"),
+                     ("std::unique_ptr<Stepper> make_stepper(", "std::unique_ptr<Stepper> unused_stepper("),
+                     ("{step}", "{host_step}")):
+        if old not in host:
+            print(f"SKIP gpu-ideas: stage 03's solution changed shape (no {old!r})", flush=True)
+            return None
+        host = host.replace(old, new)
+    s04 = root / "stages/04-cuda"
+    shutil.copytree(kit / "solutions/04-cuda", s04)
+    step = (s04 / "step.cu").read_text()
+    old = "  void queue_step() {\n"
+    if old not in step:
+        print("SKIP gpu-ideas: stage 04's solution has no queue_step()", flush=True)
+        return None
+    (s04 / "step.cu").write_text(host + step.replace(old, old + """    Particles h;  // the whole state down, a step on the host, the whole state up
+    h.resize(n_);
+    download(h);
+    ::plab::host_step(box_, h);
+    upload(h);
+    return;
+"""))
+    s05 = root / "stages/05-cuda-streams"
+    shutil.copytree(kit / "solutions/05-cuda-streams", s05)
+    step = (s05 / "step.cu").read_text()
+    old = 'o.streams = !asked.is_off("streams");'
+    if old not in step:
+        print("SKIP gpu-ideas: stage 05's solution has no streams switch", flush=True)
+        return None
+    (s05 / "step.cu").write_text(step.replace(old, "o.streams = false;"))
+    s06 = root / "stages/06-broadphase"
+    shutil.copytree(kit / "solutions/06-broadphase", s06)
+    shutil.copy2(kit / "solutions/04-cuda/kernels.cuh", s06 / "kernels04.cuh")
+    (s06 / "launchers04.cuh").write_text((kit / "solutions/04-cuda/launchers.cuh").read_text()
+                                         .replace('"kernels.cuh"', '"kernels04.cuh"'))
+    step = (kit / "solutions/04-cuda/step.cu").read_text().replace('"launchers.cuh"',
+                                                                    '"launchers04.cuh"')
+    old = "std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions&) {"
+    if old not in step:
+        print("SKIP gpu-ideas: stage 04's solution has no make_stepper() of that shape", flush=True)
+        return None
+    (s06 / "step.cu").write_text(step.replace(old, """std::unique_ptr<Stepper> make_gpu_stepper(const Box& box, Particles& p,
+                                          const StageOptions& options) {
+  if (options.device == Device::kAuto && !cuda::missing_device().empty()) return nullptr;"""))
+    return root
+
+
+def case_gpu_ideas():
+    """The GPU stages' ideas, traced on the device (kit/grade/gpu_idea.py): 04 stepping on the
+    host between copies, 05 on one stream, 06's GPU path with O(N^2) pair tests each score
+    nothing on correctness; the honest solutions of 04, 05 and 06-gpu keep full marks. Skipped
+    without a GPU. PLAB_REDTEAM_GRADE_ARGS adds options to both gradings (on a machine without
+    bubblewrap, as root: --make-private, or --no-sandbox)."""
+    probe = subprocess.run([plab, "run", "--stage", "04", "--impl", "solution",
+                            str(kit / "datasets/scenes/course-1.in"), "--quiet", "--out", os.devnull],
+                           capture_output=True, text=True)
+    if probe.returncode != 0:
+        print(f"SKIP gpu-ideas: no GPU here (stage 04's solution: exit {probe.returncode})", flush=True)
+        return
+    # The GPU entries graded on the small public scenes and one hidden scene, untimed: the idea
+    # tests are what is measured here (a full grading of the three is several minutes a GPU).
+    rubric = json.loads((kit / "kit/grade/rubric.json").read_text())
+    rubric["correctness"]["hidden_scenes"] = rubric["correctness"]["hidden_scenes"][:1]
+    rubric["correctness"]["hidden_families"] = []
+    for key in ("04", "05", "06-gpu"):
+        rubric["stages"][key].update(sizes=["small"], performance=False)
+    trimmed = scratch / "rubric-gpu-ideas.json"
+    trimmed.write_text(json.dumps(rubric))
+    extra = ["--no-races", "--rubric", str(trimmed),
+             *os.environ.get("PLAB_REDTEAM_GRADE_ARGS", "").split()]
+    keys = ["04", "05", "06-gpu"]
+    root = scratch / "redteam-gpu-honest"
+    shutil.rmtree(root, ignore_errors=True)
+    for folder in ("04-cuda", "05-cuda-streams", "06-broadphase"):
+        shutil.copytree(kit / "solutions" / folder, root / "stages" / folder)
+    honest = {}  # graded beside the cheats (its own sandbox uid)
+    beside = threading.Thread(target=lambda: honest.update(
+        tests=grade("redteam-gpu-honest", root, ",".join(keys), *extra)[0]))
+    beside.start()
+    cheats = gpu_cheats(scratch / "redteam-gpu-ideas")
+    if cheats is not None:
+        tests, _, _ = grade("redteam-gpu-ideas", cheats, ",".join(keys), *extra)
+        for key in keys:
+            idea = next((t for n, t in tests.items() if n.startswith(f"{key}: idea")), None)
+            mine = {n: t for n, t in correctness(tests, key).items() if ": idea" not in n}
+            got = sum(t["score"] for t in mine.values())
+            broken = [t["output"] for t in mine.values() if "does not compile" in t["output"]]
+            check("gpu-ideas", bool(mine) and not broken,
+                  f"stage {key}'s cheat was built and graded: {broken[:1]}")
+            check("gpu-ideas", idea is not None and idea["status"] == "failed" and got == 0,
+                  f"stage {key} without its idea scored {got} on correctness; its idea test: "
+                  f"{(idea or {}).get('output', 'none')[:400]!r}")
+    beside.join()
+    tests = honest.get("tests", {})
+    check("gpu-ideas", bool(tests), "the honest stages were graded")
+    for key in keys:
+        idea = next((t for n, t in tests.items() if n.startswith(f"{key}: idea")), None)
+        mine = {n: t for n, t in tests.items() if n.startswith(f"{key}:")}
+        got = sum(t["score"] for t in mine.values())
+        most = sum(t["max_score"] for t in mine.values())
+        check("gpu-ideas", idea is not None and idea["status"] == "passed" and got == most,
+              f"the honest stage {key} scored {got:g} of {most:g}; its idea test: "
+              f"{(idea or {}).get('output', 'none')[:400]!r}")
+
+
 def case_shortcuts():
     """One grading: stage 01 answers the one-step test from its input (the state after each start,
     when the input had it), stage 02 is the solution but skips the work on the timed scene (N =
@@ -710,7 +827,7 @@ def case_links():
 
 CASES = {"copy": case_copy, "escape": case_escape, "processes": case_processes,
          "oracle": case_oracle, "mpi": case_mpi, "control": case_control, "ideas": case_ideas,
-         "shortcuts": case_shortcuts, "links": case_links}
+         "shortcuts": case_shortcuts, "links": case_links, "gpu-ideas": case_gpu_ideas}
 scratch.mkdir(parents=True, exist_ok=True)
 try:
     for name, case in CASES.items():

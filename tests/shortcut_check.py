@@ -6,7 +6,9 @@ Writes the files of a student release of the kit's HEAD (kit/grade/release.py --
 very selection `plab release` ships, without its build), then compiles, against that release
 alone, "shortcut" stages: a stage whose EXERCISEs are done by calling a function that does them,
 named from the instructor's kit (greedy_plan() and apply() for stages 01-03, the team's selection
-for 06, model::contact_response() for 07, the CUDA rounds for 04-05, the MPI collectives for 08).
+for 06, model::contact_response() for 07, the CUDA rounds for 04-05, the MPI collectives for 08),
+or from a public header that a later stage may use but not this one (the device arrays' copies and
+DeviceParticles in stage 04).
 Each must fail to compile, and the compiler's error must name the missing function or header (not
 some unrelated mistake): an honest control file, built the same way with the same compiler,
 must compile. A CUDA shortcut needs nvcc (compile only, no GPU), an MPI one MPI's headers; without
@@ -77,6 +79,22 @@ __global__ void shortcut(int n, Arrays a, double* x, double* y, double* vx, doub
 CUDA_HONEST = """  model::free_move(x[i], y[i], vx[i], vy[i]);
   (void)a; (void)wc; (void)L; (void)r;"""
 
+# Stage 04's to_device() (its exercise 1: cudaMalloc and cudaMemcpy of one field).
+CUDA_HOST = """#include <vector>
+{includes}
+#include "plab/cuda/check.hpp"
+#include "plab/cuda/particles.hpp"
+#include "plab/scene.hpp"
+
+namespace plab {{
+template <class T>
+T* to_device(const std::vector<T>& host) {{
+{body}
+}}
+template double* to_device(const std::vector<double>&);
+}}  // namespace plab
+"""
+
 MPI = """#include <vector>
 #include "plab/mpi/ranks.hpp"
 
@@ -125,6 +143,17 @@ def shortcuts():
   (void)cuda::accept_one(i, a);
   (void)x; (void)y; (void)vx; (void)vy; (void)wc; (void)L; (void)r;"""),
               r"rounds\.cuh", "04"))
+    # Stage 04's exercise 1 (the state in device memory) from the kit's device arrays: their
+    # copies, or the particles on the device whole (DeviceParticles, stages 05 on).
+    s.append(("04-device-array-copies", "cuda", CUDA_HOST.format(includes="", body="""  auto* device = new cuda::DeviceArray<T>(host.size());
+  device->upload(host);
+  return device->get();"""), r"upload", "04"))
+    s.append(("04-device-particles", "cuda", CUDA_HOST.format(
+        includes='#include "plab/cuda/stepper.hpp"', body="""  (void)host;
+  return nullptr;
+}
+cuda::ParticlesView state(const Particles& p) {
+  return (new cuda::DeviceParticles(p))->view();"""), r"stepper\.hpp", "04"))
     s.append(("05-resolve-block", "cuda", CUDA.format(includes='#include "plab/cuda/rounds.cuh"', body="""  cuda::resolve_block(n, a);
   (void)x; (void)y; (void)vx; (void)vy; (void)wc; (void)L; (void)r;"""),
               r"rounds\.cuh", "05"))
@@ -149,7 +178,8 @@ CONTROLS = {
 
 
 def compile_command(kind, release, source, stage, a, mpi_flags):
-    inc = ["-I", str(release / "kit" / "include"), f'-DPLAB_STAGE_ID="{stage}"']
+    inc = ["-I", str(release / "kit" / "include"), f'-DPLAB_STAGE_ID="{stage}"',
+           f"-DPLAB_STAGE_NUMBER={int(stage)}"]  # as cmake/PlabStage.cmake defines them
     if kind == "cuda":
         return [a.nvcc, "-std=c++17", "--fmad=false", "-x", "cu", "-c", *inc, str(source),
                 "-o", str(source.with_suffix(".o"))]
@@ -216,6 +246,10 @@ def main():
             errors = [l for l in (r.stdout + r.stderr).splitlines()
                       if "error" in l and path.name in l.split("error")[0]]
             missing = [l for l in errors if re.search(must_name, l) and MISSING.search(l)]
+            # A header that refuses the stage (#error naming itself and the exercise) says so on
+            # its own line, the shortcut's #include the line after.
+            missing += [l for l in (r.stdout + r.stderr).splitlines()
+                        if "#error" in l and re.search(must_name, l)]
             if r.returncode == 0:
                 failures.append(sid)
                 print(f"shortcut {sid}: FAIL: it compiles in the student release "

@@ -25,7 +25,8 @@ from xml.sax.saxutils import escape, quoteattr
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "pyplab"))
-import hidden as hidden_module  # noqa: E402  (the kit's own modules, beside this file)
+import gpu_idea  # noqa: E402  (the kit's own modules, beside this file)
+import hidden as hidden_module  # noqa: E402
 import plabio  # noqa: E402  (the kit's formats, read and compared by its C++ programs)
 import races  # noqa: E402
 import sandbox as isolation  # noqa: E402
@@ -314,7 +315,7 @@ class Grader:
 
     # -- running student code --------------------------------------------------------------------
     def run_program(self, program, scene, args, seconds, cap, st, stdin_text=None, env=None,
-                    memory=True, watch=False, ranks=None):
+                    memory=True, watch=False, ranks=None, extra_ro=None):
         """Runs a stage program in the sandbox on one scene, under its neutral names (`ranks`:
         how many processes mpirun starts, default the stage's; `watch`: Run.cpu)."""
         ranks = st.ranks if ranks is None else ranks
@@ -323,7 +324,7 @@ class Grader:
         shutil.copyfile(scene, run_dir / "scene.in")
         os.chmod(run_dir / "scene.in", 0o644)
         out = self.sandbox.writable_dir(run_dir, "out-")
-        ro = {"/plab/stage": program, "/plab/scene.in": run_dir / "scene.in"}
+        ro = {"/plab/stage": program, "/plab/scene.in": run_dir / "scene.in", **(extra_ro or {})}
         argv = ["/plab/stage", "/plab/scene.in", *args]
         if stdin_text is not None:  # read through a pipe, never a file the program could reopen
             argv = ["/plab/stage", "/plab/scene.in", *[a if a != "STDIN" else "/dev/stdin"
@@ -374,7 +375,7 @@ class Grader:
 
     def add_correctness(self, st, test, score, points, passed, text, hidden=False, seconds=0.0):
         """A correctness test's result; none of its points when the stage's idea test failed."""
-        failed = self.idea_failed.get(st.sid)
+        failed = self.idea_failed.get(st.sid) or self.idea_failed.get(st.key)
         if failed and score:
             text = (f"counts 0 (it would earn {score:g}): {failed}\n{text}")
             score, passed = 0, False
@@ -387,9 +388,13 @@ class Grader:
         stopped = None  # why later runs of this stage are not started (a time-out)
         folder = self.private / f"stage{st.key}"
         folder.mkdir()
+        if st.gpu and st.idea and st.idea["kind"] == "gpu" and st.key not in self.idea_done:
+            self.idea_done.add(st.key)  # a GPU entry's own idea, traced (gpu_idea.py)
+            gpu_idea.idea_test(self, st, program, folder)
         if st.sid not in self.idea_done:  # once per stage folder, before its correctness tests
             self.idea_done.add(st.sid)
-            idea = next((e for e in self.entries([st.sid]) if e.idea), None)
+            idea = next((e for e in self.entries([st.sid])
+                         if e.idea and e.idea["kind"] != "gpu"), None)
             if idea is not None:
                 self.idea_test(idea, program, folder)
         tests = self.public_tests(st) + self.hidden_tests(st, folder)
@@ -415,7 +420,8 @@ class Grader:
             all_right &= verdict is None
             any_right |= verdict is None
         all_right &= self.one_step(st, program, stopped, folder)
-        correct = all_right and not stopped and not self.idea_failed.get(st.sid)
+        correct = (all_right and not stopped and not self.idea_failed.get(st.sid)
+                   and not self.idea_failed.get(st.key))
         if st.conf.get("races") and not self.a.no_races:
             self.race_check(st, program, folder, correct, any_right)
         if st.conf.get("performance"):
@@ -833,8 +839,9 @@ class Grader:
         runnable = []
         for st in stages:
             if st.gpu and not self.gpu_here():
-                self.notes.append(f"{st.title}: not graded: no CUDA device on this machine")
-                print(f"{st.title}: skipped: no CUDA device on this machine", flush=True)
+                idea = " and its idea test" if st.idea else ""
+                self.notes.append(f"{st.title}{idea}: not graded: no CUDA device on this machine")
+                print(f"{st.title}{idea}: skipped: no CUDA device on this machine", flush=True)
             else:
                 runnable.append(st)
         built = self.build(runnable, found) if runnable else {}

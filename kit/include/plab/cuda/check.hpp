@@ -39,7 +39,10 @@ std::string require_device();
 /// Why no CUDA device can be used, or an empty string when one can (the tests skip on this).
 std::string missing_device();
 
-/// An array of `T` in device memory (cudaMalloc, no managed memory), freed with its owner.
+/// An array of `T` in device memory (cudaMalloc, no managed memory), freed with its owner. In
+/// stage 04's build (PLAB_STAGE_NUMBER 4) it has no upload() nor download(): copying the state
+/// to the device and back is that stage's exercise 1, so the stage's working arrays are
+/// allocated here but never copied from the host.
 template <class T>
 class DeviceArray {
  public:
@@ -57,6 +60,7 @@ class DeviceArray {
     size_ = n;
     if (n) PLAB_CUDA_CHECK(cudaMalloc(&data_, n * sizeof(T)));
   }
+#if !defined(PLAB_STAGE_NUMBER) || PLAB_STAGE_NUMBER != 4
   /// Copies `host` (of size()) to the device, in order with `stream`.
   void upload(const std::vector<T>& host, cudaStream_t stream = nullptr) {
     PLAB_CUDA_CHECK(cudaMemcpyAsync(data_, host.data(), size_ * sizeof(T),
@@ -68,6 +72,7 @@ class DeviceArray {
     PLAB_CUDA_CHECK(cudaMemcpyAsync(host.data(), data_, size_ * sizeof(T),
                                     cudaMemcpyDeviceToHost, stream));
   }
+#endif
   [[nodiscard]] T* get() const { return data_; }           //!< the device pointer
   [[nodiscard]] std::size_t size() const { return size_; }  //!< elements
   [[nodiscard]] std::size_t bytes() const { return size_ * sizeof(T); }  //!< bytes held

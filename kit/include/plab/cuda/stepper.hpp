@@ -6,6 +6,10 @@
 /// writes all of this itself and does not include this header.
 #pragma once
 
+#if defined(PLAB_STAGE_NUMBER) && PLAB_STAGE_NUMBER == 4
+#error "plab/cuda/stepper.hpp (DeviceParticles, DeviceStepper) is for stages 05 on: stage 04's exercise 1 puts the state in device memory itself (cudaMalloc, cudaMemcpy, cudaFree)"
+#endif
+
 #include <cstddef>
 #include <memory>
 #include <string>
