@@ -250,6 +250,61 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
   cuda::rounds_block(n, a.flags->contested, a);
 }
 
+/// Bytes of shared memory resolve_shared() takes for `n` particles: a `resolved` byte and a
+/// chosen partner (an int) each.
+__host__ __device__ constexpr long long resolve_shared_bytes(long long n) { return 5 * n; }
+
+/// resolve() with what every round reads of the others in shared memory (small scenes, N up to
+/// some 4 * 10^4): whether each particle is resolved, and each one's choice as the partner it
+/// chose (or -1 for its wall or none), which is all that the accept half reads of another
+/// particle. The rounds are rounds_block()'s, choose_one() itself (with `resolved` pointing at
+/// the shared copy), and an accept that is accept_one()'s test on the chosen partner: `i`'s
+/// pair (i, o) is mutual exactly when `o` chose `i` (a pair event's lo and hi are the two
+/// particles, and `o` is unresolved, so it chose in this round). The same plan, bit for bit; one
+/// block, `resolve_shared_bytes(n)` of dynamic shared memory.
+__global__ void __launch_bounds__(kResolveThreads) resolve_shared(int n, StepArrays a) {
+  extern __shared__ int shared_words[];
+  int* chose = shared_words;                                  // n partners
+  char* resolved = reinterpret_cast<char*>(shared_words + n);  // n flags
+  if (a.flags->overflow) return;
+  for (int i = threadIdx.x; i < n; i += blockDim.x) resolved[i] = a.resolved[i];
+  __syncthreads();
+  StepArrays s = a;
+  s.resolved = resolved;  // choose_one() reads the shared copy
+  const int m = a.flags->contested;
+  const Event none = model::pair_event_key(model::never(), n, n);
+  for (;;) {
+    for (int q = threadIdx.x; q < m; q += blockDim.x) {  // choose
+      const int i = a.contested[q];
+      if (resolved[i]) continue;
+      choose_one(i, s, none);
+      const Event b = a.best[i];
+      chose[i] = (b.kind == model::kPair && b.lo < n) ? (b.lo == i ? b.hi : b.lo) : -1;
+    }
+    __syncthreads();
+    int open = 0;
+    for (int q = threadIdx.x; q < m; q += blockDim.x) {  // accept (accept_one(), as above)
+      const int i = a.contested[q];
+      if (resolved[i]) continue;
+      const Event e = a.best[i];
+      if (!model::in_step(e.t)) {
+        resolved[i] = 1;
+      } else if (e.kind == model::kWall) {
+        a.partner[i] = Plan::kWall;
+        resolved[i] = 1;
+      } else if (const int o = chose[i]; chose[o] == i) {
+        a.partner[i] = o;
+        a.ptime[i] = e.t;
+        resolved[i] = 1;
+      } else {
+        open = 1;
+      }
+    }
+    if (!__syncthreads_or(open)) break;
+  }
+  if (threadIdx.x == 0) a.flags->steps_done += 1;
+}
+
 /// resolve() for large N: the same rounds over the whole grid (a cooperative launch, every block
 /// resident), with grid-wide barriers between the phases instead of block barriers.
 __global__ void resolve_grid(int n, StepArrays a) {

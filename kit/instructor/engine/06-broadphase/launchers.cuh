@@ -66,6 +66,26 @@ inline void resolve(int n, const kernels::StepArrays& a, cudaStream_t s) {
   PLAB_CUDA_CHECK_LAUNCH("resolve");
 }
 
+/// Whether resolve_shared() can take `n` particles on this GPU (its shared memory), allowing it
+/// the memory it needs when so.
+inline bool resolve_shared_fits(int n) {
+  int device = 0, most = 0;
+  PLAB_CUDA_CHECK(cudaGetDevice(&device));
+  PLAB_CUDA_CHECK(cudaDeviceGetAttribute(&most, cudaDevAttrMaxSharedMemoryPerBlockOptin, device));
+  const long long bytes = kernels::resolve_shared_bytes(n);
+  if (bytes > most) return false;
+  PLAB_CUDA_CHECK(cudaFuncSetAttribute(kernels::resolve_shared,
+                                       cudaFuncAttributeMaxDynamicSharedMemorySize,
+                                       static_cast<int>(bytes)));
+  return true;
+}
+
+inline void resolve_shared(int n, const kernels::StepArrays& a, cudaStream_t s) {
+  kernels::resolve_shared<<<1, kernels::kResolveThreads, kernels::resolve_shared_bytes(n), s>>>(
+      n, a);
+  PLAB_CUDA_CHECK_LAUNCH("resolve_shared");
+}
+
 /// Blocks of resolve_grid that can all be resident at once (a cooperative launch needs that).
 inline int resolve_grid_blocks() {
   int device = 0, sms = 0, per_sm = 0;

@@ -16,6 +16,7 @@
 //  READ   handouts/engine.md    TEST   ./plab test --impl engine --stage 06 (on a GPU machine)
 // =================================================================================================
 #include <algorithm>
+#include <cstdlib>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,6 +35,46 @@ constexpr double kAlpha = 0.5;  //!< slabs per sqrt(N) v_cut / L (measured best 
 /// measurable difference at N = 10^6 on an H100 (a few kernel launches more a step).
 constexpr long long kEntriesPerPass = 1 << 20;
 
+/// Whether PLAB_ENGINE_RESOLVE=global asks small scenes for the rounds in global memory
+/// (kernels::resolve(), as before resolve_shared()): to measure the difference.
+bool resolve_asked_global() {
+  const char* v = std::getenv("PLAB_ENGINE_RESOLVE");
+  return v && std::string(v) == "global";
+}
+
+/// The device's memory bandwidth in bytes a second: the best of three device-to-device copies
+/// of 256 MiB (each byte read once and written once), timed by CUDA events on `stream`; 0 when
+/// the memory for it cannot be had. What plab bench sets a step's time against.
+double measure_bandwidth(cudaStream_t stream) {
+  constexpr std::size_t kBytes = std::size_t{256} << 20;
+  void* from = nullptr;
+  void* to = nullptr;
+  if (cudaMalloc(&from, kBytes) != cudaSuccess) return 0;
+  if (cudaMalloc(&to, kBytes) != cudaSuccess) {
+    PLAB_CUDA_CHECK(cudaFree(from));
+    return 0;
+  }
+  PLAB_CUDA_CHECK(cudaMemsetAsync(from, 1, kBytes, stream));
+  cudaEvent_t start, stop;
+  PLAB_CUDA_CHECK(cudaEventCreate(&start));
+  PLAB_CUDA_CHECK(cudaEventCreate(&stop));
+  float best = 0;
+  for (int k = 0; k < 3; ++k) {
+    PLAB_CUDA_CHECK(cudaEventRecord(start, stream));
+    PLAB_CUDA_CHECK(cudaMemcpyAsync(to, from, kBytes, cudaMemcpyDeviceToDevice, stream));
+    PLAB_CUDA_CHECK(cudaEventRecord(stop, stream));
+    PLAB_CUDA_CHECK(cudaEventSynchronize(stop));
+    float ms = 0;
+    PLAB_CUDA_CHECK(cudaEventElapsedTime(&ms, start, stop));
+    if (k == 0 || ms < best) best = ms;
+  }
+  PLAB_CUDA_CHECK(cudaEventDestroy(start));
+  PLAB_CUDA_CHECK(cudaEventDestroy(stop));
+  PLAB_CUDA_CHECK(cudaFree(from));
+  PLAB_CUDA_CHECK(cudaFree(to));
+  return best > 0 ? 2.0 * kBytes / (best * 1e-3) : 0;
+}
+
 /// A run of stage 06 on the GPU (the kit's cuda::DeviceStepper holds the particles, the flags
 /// and the timer, and reads the state back).
 class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
@@ -42,8 +83,13 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
       : DeviceStepper(std::move(device), box, p, cuda::Queue::kOwnStream), alpha_(alpha),
         wall_(n_), last_(n_), slots_(n_, n_ / 4 + 1024), best_(n_), resolved_(n_),  // grown as needed
         contested_(n_), partner_(n_), ptime_(n_) {
+    bandwidth_ = measure_bandwidth(main_);
     set_grid(p);
-    if (n_ >= kGridResolveFrom) grid_blocks_ = launch::resolve_grid_blocks();
+    if (n_ >= kGridResolveFrom)
+      grid_blocks_ = launch::resolve_grid_blocks();
+    else
+      shared_resolve_ = !resolve_asked_global() &&
+                        launch::resolve_shared_fits(n_);
     sync();
   }
 
@@ -54,6 +100,8 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     // steps, so that at most that many are redone.
     if (n_ > 0 && (asked_ == 1 || asked_ % kCheckEvery == 0)) catch_up();
   }
+
+  [[nodiscard]] double memory_bandwidth() const override { return bandwidth_; }
 
  private:
   /// One step: the recorded graph (recorded again after the arrays changed).
@@ -85,6 +133,8 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     launch::start_rounds(n_, a, main_);
     if (n_ >= kGridResolveFrom)
       launch::resolve_grid(n_, a, grid_blocks_, main_);
+    else if (shared_resolve_)
+      launch::resolve_shared(n_, a, main_);
     else
       launch::resolve(n_, a, main_);
     launch::apply(p_.view(), box_, a, main_);
@@ -139,6 +189,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
 
   static constexpr long long kCheckEvery = 32;  //!< steps between two looks at the flags
   static constexpr int kGridResolveFrom = 50000;  //!< from this N the rounds use the whole GPU
+  double bandwidth_ = 0;  //!< measure_bandwidth(), once, before the steps
   double alpha_;  //!< slabs per sqrt(N) v_cut / L (StageOptions::sweep_alpha, or kAlpha)
   kernels::DeviceGrid grid_{};
   int per_pass_ = 1;  //!< slabs one pass of the counting sort takes
@@ -155,6 +206,9 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   cuda::Graph graph_;
   bool stale_ = true;
   int grid_blocks_ = 0;
+  /// Small scenes: the rounds with the others' state in shared memory (resolve_shared()), unless
+  /// PLAB_ENGINE_RESOLVE=global asks for resolve() (to compare) or the GPU has too little.
+  bool shared_resolve_ = false;
 };
 
 }  // namespace
