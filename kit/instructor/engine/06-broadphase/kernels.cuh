@@ -78,9 +78,13 @@ struct StepArrays {
   Flags* flags;      //!< see Flags
 };
 
-/// Wall times, the last slab of each particle, counters cleared.
-__global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
+/// Wall times, the last slab of each particle, counters cleared; with `buckets` > 0 (a step of
+/// one pass) also the pass's first `buckets` bucket counts and the fast entries' counter, which
+/// the pass would otherwise clear with two memsets of its own.
+__global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d, int buckets) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  for (int b = i; b < buckets; b += gridDim.x * blockDim.x) a.filled[b] = 0;
+  if (i == 0 && buckets > 0) a.flags->fast = 0;
   if (i >= p.n) return;
   a.wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
   a.last[i] = sweep::last_slab(sweep::path_end(a.wall[i]), d.g);
@@ -254,24 +258,30 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
 /// chosen partner (an int) each.
 __host__ __device__ constexpr long long resolve_shared_bytes(long long n) { return 5 * n; }
 
-/// resolve() with what every round reads of the others in shared memory (small scenes, N up to
-/// some 4 * 10^4): whether each particle is resolved, and each one's choice as the partner it
-/// chose (or -1 for its wall or none), which is all that the accept half reads of another
-/// particle. The rounds are rounds_block()'s, choose_one() itself (with `resolved` pointing at
-/// the shared copy), and an accept that is accept_one()'s test on the chosen partner: `i`'s
-/// pair (i, o) is mutual exactly when `o` chose `i` (a pair event's lo and hi are the two
-/// particles, and `o` is unresolved, so it chose in this round). The same plan, bit for bit; one
-/// block, `resolve_shared_bytes(n)` of dynamic shared memory.
+/// start_rounds() and resolve() in one block, with what every round reads of the others in
+/// shared memory (small scenes, N up to some 4 * 10^4): whether each particle is resolved, and
+/// each one's choice as the partner it chose (or -1 for its wall or none), which is all that the
+/// accept half reads of another particle. Each particle's start is start_one() (into the shared
+/// `resolved`), listing the contested ones; the rounds are rounds_block()'s, choose_one() itself
+/// (reading the shared `resolved`), and an accept that is accept_one()'s test on the chosen
+/// partner: `i`'s pair (i, o) is mutual exactly when `o` chose `i` (a pair event's lo and hi are
+/// the two particles, and `o` is unresolved, so it chose in this round). The same plan, bit for
+/// bit (the rounds do not depend on the order of the list); one block,
+/// `resolve_shared_bytes(n)` of dynamic shared memory; replaces start_rounds() and resolve().
 __global__ void __launch_bounds__(kResolveThreads) resolve_shared(int n, StepArrays a) {
   extern __shared__ int shared_words[];
+  __shared__ int listed;
   int* chose = shared_words;                                  // n partners
   char* resolved = reinterpret_cast<char*>(shared_words + n);  // n flags
   if (a.flags->overflow) return;
-  for (int i = threadIdx.x; i < n; i += blockDim.x) resolved[i] = a.resolved[i];
+  if (threadIdx.x == 0) listed = 0;
   __syncthreads();
   StepArrays s = a;
-  s.resolved = resolved;  // choose_one() reads the shared copy
-  const int m = a.flags->contested;
+  s.resolved = resolved;  // start_one() and choose_one() use the shared copy
+  for (int i = threadIdx.x; i < n; i += blockDim.x)
+    if (start_one(i, s) > 0) a.contested[atomicAdd(&listed, 1)] = i;
+  __syncthreads();
+  const int m = listed;
   const Event none = model::pair_event_key(model::never(), n, n);
   for (;;) {
     for (int q = threadIdx.x; q < m; q += blockDim.x) {  // choose

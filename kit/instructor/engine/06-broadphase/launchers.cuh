@@ -18,9 +18,10 @@ static_assert(kernels::kSearchThreads == kThreads);
 /// Blocks of kThreads covering `n`.
 inline unsigned blocks(long long n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
 
+/// `buckets` > 0: also clears the one pass's bucket counts and fast counter (see the kernel).
 inline void start_step(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
-                       const kernels::DeviceGrid& d, cudaStream_t s) {
-  kernels::start_step<<<blocks(p.n), kThreads, 0, s>>>(p, box, a, d);
+                       const kernels::DeviceGrid& d, int buckets, cudaStream_t s) {
+  kernels::start_step<<<blocks(p.n), kThreads, 0, s>>>(p, box, a, d, buckets);
   PLAB_CUDA_CHECK_LAUNCH("start_step");
 }
 
@@ -39,10 +40,11 @@ inline void bin_scatter(const cuda::ParticlesView& p, const kernels::StepArrays&
 /// The pair search of a pass: find_pairs over every entry (the slow ones), then find_fast_pairs
 /// over the fast ones it listed (a team of kernels::kFastTeam threads each, on a grid for a
 /// tenth of the entries: the fastest tenth of the particles are the fast ones, sweep::choose()).
+/// `cleared`: start_step() cleared the fast entries' counter already (a step of one pass).
 inline void find_pairs(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
-                       const kernels::DeviceGrid& d, cudaStream_t s) {
+                       const kernels::DeviceGrid& d, bool cleared, cudaStream_t s) {
   const long long most = static_cast<long long>(p.n) * d.slabs;  // entries this pass, at most
-  PLAB_CUDA_CHECK(cudaMemsetAsync(&a.flags->fast, 0, sizeof(int), s));
+  if (!cleared) PLAB_CUDA_CHECK(cudaMemsetAsync(&a.flags->fast, 0, sizeof(int), s));
   kernels::find_pairs<<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d);
   PLAB_CUDA_CHECK_LAUNCH("find_pairs");
   kernels::find_fast_pairs<<<blocks((most / 10 + 1) * kernels::kFastTeam),

@@ -9,7 +9,9 @@
 //  GOAL   step.cpp's idea with every phase on the device and no host round trip in a step:
 //         start_step (wall times, last slabs, counters) -> per pass of a few slabs: bin_count ->
 //         CUB scan -> bin_scatter -> find_pairs; then CUB scan of the counts -> place_pairs ->
-//         start_rounds -> resolve -> apply, recorded once as a graph. The grid is chosen on the
+//         start_rounds -> resolve -> apply, recorded once as a graph (below some 4 * 10^4
+//         particles start_rounds and resolve are one block, resolve_shared, with the rounds'
+//         state in shared memory). The grid is chosen on the
 //         host from the first state; particles that get faster than v_cut search wider, so it
 //         stays exact for any speed. A step with more pairs than the list holds stops the batch
 //         on the device, and the host redoes it with a longer list.
@@ -116,27 +118,33 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   /// The kernels of one step.
   void queue_kernels() {
     const auto a = arrays();
-    launch::start_step(p_.view(), box_, a, grid_, main_);
+    // A step of one pass (small scenes): start_step clears what the pass would clear itself.
+    const bool one_pass = per_pass_ >= grid_.g.slabs;
+    launch::start_step(p_.view(), box_, a, grid_, one_pass ? grid_.g.slabs * grid_.cells + 1 : 0,
+                       main_);
     for (int first = 0; first < grid_.g.slabs; first += per_pass_) {
       kernels::DeviceGrid pass = grid_;
       pass.first = first;
       pass.slabs = std::min(per_pass_, grid_.g.slabs - first);
       const int buckets = pass.slabs * grid_.cells + 1;
-      PLAB_CUDA_CHECK(cudaMemsetAsync(filled_.get(), 0, buckets * sizeof(int), main_));
+      if (!one_pass)
+        PLAB_CUDA_CHECK(cudaMemsetAsync(filled_.get(), 0, buckets * sizeof(int), main_));
       launch::bin_count(p_.view(), a, pass, main_);
       cuda::exclusive_scan(filled_.get(), start_.get(), buckets, temp_.get(), temp_.size(), main_);
       launch::bin_scatter(p_.view(), a, pass, main_);
-      launch::find_pairs(p_.view(), box_, a, pass, main_);
+      launch::find_pairs(p_.view(), box_, a, pass, one_pass, main_);
     }
     cuda::exclusive_scan(a.slots.count, a.slots.end, n_, temp_.get(), temp_.size(), main_);
     launch::place_pairs(a, main_);
-    launch::start_rounds(n_, a, main_);
-    if (n_ >= kGridResolveFrom)
-      launch::resolve_grid(n_, a, grid_blocks_, main_);
-    else if (shared_resolve_)
-      launch::resolve_shared(n_, a, main_);
-    else
-      launch::resolve(n_, a, main_);
+    if (shared_resolve_) {
+      launch::resolve_shared(n_, a, main_);  // start_rounds and resolve in one block
+    } else {
+      launch::start_rounds(n_, a, main_);
+      if (n_ >= kGridResolveFrom)
+        launch::resolve_grid(n_, a, grid_blocks_, main_);
+      else
+        launch::resolve(n_, a, main_);
+    }
     launch::apply(p_.view(), box_, a, main_);
   }
 
