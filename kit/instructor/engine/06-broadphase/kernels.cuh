@@ -6,6 +6,8 @@
 #pragma once
 
 #include <cooperative_groups.h>
+#include <cub/block/block_reduce.cuh>
+#include <cub/block/block_scan.cuh>
 
 #include "plab/cuda/particles.hpp"
 #include "plab/cuda/rounds.cuh"
@@ -254,65 +256,66 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
   cuda::rounds_block(n, a.flags->contested, a);
 }
 
-/// Bytes of shared memory resolve_shared() takes for `n` particles: a `resolved` byte and a
-/// chosen partner (an int) each.
-__host__ __device__ constexpr long long resolve_shared_bytes(long long n) { return 5 * n; }
+constexpr int kFinishThreads = 256;  //!< threads per block of finish_small()
 
-/// start_rounds() and resolve() in one block, with what every round reads of the others in
-/// shared memory (small scenes, N up to some 4 * 10^4): whether each particle is resolved, and
-/// each one's choice as the partner it chose (or -1 for its wall or none), which is all that the
-/// accept half reads of another particle. Each particle's start is start_one() (into the shared
-/// `resolved`), listing the contested ones; the rounds are rounds_block()'s, choose_one() itself
-/// (reading the shared `resolved`), and an accept that is accept_one()'s test on the chosen
-/// partner: `i`'s pair (i, o) is mutual exactly when `o` chose `i` (a pair event's lo and hi are
-/// the two particles, and `o` is unresolved, so it chose in this round). The same plan, bit for
-/// bit (the rounds do not depend on the order of the list); one block,
-/// `resolve_shared_bytes(n)` of dynamic shared memory; replaces start_rounds() and resolve().
-__global__ void __launch_bounds__(kResolveThreads) resolve_shared(int n, StepArrays a) {
-  extern __shared__ int shared_words[];
-  __shared__ int listed;
-  int* chose = shared_words;                                  // n partners
-  char* resolved = reinterpret_cast<char*>(shared_words + n);  // n flags
-  if (a.flags->overflow) return;
-  if (threadIdx.x == 0) listed = 0;
-  __syncthreads();
-  StepArrays s = a;
-  s.resolved = resolved;  // start_one() and choose_one() use the shared copy
-  for (int i = threadIdx.x; i < n; i += blockDim.x)
-    if (start_one(i, s) > 0) a.contested[atomicAdd(&listed, 1)] = i;
-  __syncthreads();
-  const int m = listed;
-  const Event none = model::pair_event_key(model::never(), n, n);
-  for (;;) {
-    for (int q = threadIdx.x; q < m; q += blockDim.x) {  // choose
-      const int i = a.contested[q];
-      if (resolved[i]) continue;
-      choose_one(i, s, none);
-      const Event b = a.best[i];
-      chose[i] = (b.kind == model::kPair && b.lo < n) ? (b.lo == i ? b.hi : b.lo) : -1;
-    }
-    __syncthreads();
-    int open = 0;
-    for (int q = threadIdx.x; q < m; q += blockDim.x) {  // accept (accept_one(), as above)
-      const int i = a.contested[q];
-      if (resolved[i]) continue;
-      const Event e = a.best[i];
-      if (!model::in_step(e.t)) {
-        resolved[i] = 1;
-      } else if (e.kind == model::kWall) {
-        a.partner[i] = Plan::kWall;
-        resolved[i] = 1;
-      } else if (const int o = chose[i]; chose[o] == i) {
-        a.partner[i] = o;
-        a.ptime[i] = e.t;
-        resolved[i] = 1;
-      } else {
-        open = 1;
-      }
-    }
-    if (!__syncthreads_or(open)) break;
+/// Everything of a small scene's step after the pair search, in one cooperative kernel of
+/// ceil(n / kFinishThreads) blocks (at most kFinishThreads of them, all resident; one thread a
+/// particle), with grid-wide barriers where the multi-kernel path has kernel boundaries: the
+/// exclusive scan of the counts into `slots.end` (each block scans its own, `a.filled` holds the
+/// blocks' totals: free once the passes are done), place_pairs(), start_rounds(), the rounds of
+/// resolve_grid(), and apply(). The same arithmetic in the same order per particle as those
+/// kernels, so the same bits; 8 kernels a step instead of 12. Nothing when the step was stopped;
+/// stops it (as place_pairs()) when the list had no room.
+__global__ void __launch_bounds__(kFinishThreads)
+    finish_small(ParticlesView p, Box box, StepArrays a) {
+  namespace cg = cooperative_groups;
+  using Scan = cub::BlockScan<int, kFinishThreads>;
+  using Sum = cub::BlockReduce<int, kFinishThreads>;
+  __shared__ union {
+    typename Scan::TempStorage scan;
+    typename Sum::TempStorage sum;
+  } temp;
+  cg::grid_group grid = cg::this_grid();
+  Flags* f = a.flags;
+  const int n = p.n;
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;  // this thread's particle, if i < n
+  // Every block decides alike: `overflow` only ever rises, and the list's length is final.
+  const int filed = f->pairs;
+  if (f->overflow || filed > a.slots.capacity) {
+    if (i == 0 && filed > a.slots.capacity) atomicMax(&f->overflow, filed);
+    return;
   }
-  if (threadIdx.x == 0) a.flags->steps_done += 1;
+  // The scan of the counts: within the block, then the earlier blocks' totals.
+  int mine = 0, total = 0;
+  Scan(temp.scan).ExclusiveSum(i < n ? a.slots.count[i] : 0, mine, total);
+  if (threadIdx.x == 0) a.filled[blockIdx.x] = total;
+  grid.sync();
+  __syncthreads();  // temp is reused
+  const int earlier = Sum(temp.sum).Sum(threadIdx.x < blockIdx.x ? a.filled[threadIdx.x] : 0);
+  __shared__ int offset;
+  if (threadIdx.x == 0) offset = earlier;
+  __syncthreads();
+  if (i < n) a.slots.end[i] = offset + mine;
+  grid.sync();
+  const int stride = gridDim.x * blockDim.x;
+  for (int q = i; q < filed; q += stride) a.slots.place(q);  // place_pairs()
+  grid.sync();
+  if (i < n && start_one(i, a) > 0) a.contested[atomicAdd(&f->contested, 1)] = i;  // start_rounds()
+  grid.sync();
+  const int m = f->contested;
+  const Event none = model::pair_event_key(model::never(), n, n);
+  for (int round = 0;; ++round) {  // resolve_grid()'s rounds
+    if (i == 0) f->open[(round + 1) % 3] = 0;
+    for (int q = i; q < m; q += stride)  // choose
+      if (!a.resolved[a.contested[q]]) choose_one(a.contested[q], a, none);
+    grid.sync();
+    for (int q = i; q < m; q += stride)  // accept
+      if (!a.resolved[a.contested[q]] && !accept_one(a.contested[q], a)) f->open[round % 3] = 1;
+    grid.sync();
+    if (!f->open[round % 3]) break;
+  }
+  if (i == 0) f->steps_done += 1;
+  if (i < n) apply_planned<true>(p, a.partner, a.ptime, i, box.L, box.r);  // apply()
 }
 
 /// resolve() for large N: the same rounds over the whole grid (a cooperative launch, every block

@@ -68,24 +68,32 @@ inline void resolve(int n, const kernels::StepArrays& a, cudaStream_t s) {
   PLAB_CUDA_CHECK_LAUNCH("resolve");
 }
 
-/// Whether resolve_shared() can take `n` particles on this GPU (its shared memory), allowing it
-/// the memory it needs when so.
-inline bool resolve_shared_fits(int n) {
-  int device = 0, most = 0;
-  PLAB_CUDA_CHECK(cudaGetDevice(&device));
-  PLAB_CUDA_CHECK(cudaDeviceGetAttribute(&most, cudaDevAttrMaxSharedMemoryPerBlockOptin, device));
-  const long long bytes = kernels::resolve_shared_bytes(n);
-  if (bytes > most) return false;
-  PLAB_CUDA_CHECK(cudaFuncSetAttribute(kernels::resolve_shared,
-                                       cudaFuncAttributeMaxDynamicSharedMemorySize,
-                                       static_cast<int>(bytes)));
-  return true;
+/// Blocks of finish_small() for `n` particles: one thread a particle.
+inline int finish_small_blocks(int n) {
+  return (n + kernels::kFinishThreads - 1) / kernels::kFinishThreads;
 }
 
-inline void resolve_shared(int n, const kernels::StepArrays& a, cudaStream_t s) {
-  kernels::resolve_shared<<<1, kernels::kResolveThreads, kernels::resolve_shared_bytes(n), s>>>(
-      n, a);
-  PLAB_CUDA_CHECK_LAUNCH("resolve_shared");
+/// Whether finish_small() can take `n` particles on this GPU: at most kFinishThreads blocks
+/// (its scan of the blocks' totals is one block's), all resident at once (a cooperative launch).
+inline bool finish_small_fits(int n) {
+  int device = 0, sms = 0, per_sm = 0;
+  PLAB_CUDA_CHECK(cudaGetDevice(&device));
+  PLAB_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
+  PLAB_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, kernels::finish_small,
+                                                                kernels::kFinishThreads, 0));
+  const int blocks = finish_small_blocks(n);
+  return n > 0 && blocks <= kernels::kFinishThreads && blocks <= sms * per_sm;
+}
+
+inline void finish_small(const cuda::ParticlesView& p, const Box& box,
+                         const kernels::StepArrays& a, cudaStream_t s) {
+  cuda::ParticlesView pv = p;
+  Box b = box;
+  kernels::StepArrays av = a;
+  void* args[] = {&pv, &b, &av};
+  PLAB_CUDA_CHECK(cudaLaunchCooperativeKernel(reinterpret_cast<void*>(kernels::finish_small),
+                                              finish_small_blocks(p.n), kernels::kFinishThreads,
+                                              args, 0, s));
 }
 
 /// Blocks of resolve_grid that can all be resident at once (a cooperative launch needs that).

@@ -9,9 +9,9 @@
 //  GOAL   step.cpp's idea with every phase on the device and no host round trip in a step:
 //         start_step (wall times, last slabs, counters) -> per pass of a few slabs: bin_count ->
 //         CUB scan -> bin_scatter -> find_pairs; then CUB scan of the counts -> place_pairs ->
-//         start_rounds -> resolve -> apply, recorded once as a graph (below some 4 * 10^4
-//         particles start_rounds and resolve are one block, resolve_shared, with the rounds'
-//         state in shared memory). The grid is chosen on the
+//         start_rounds -> resolve -> apply, recorded once as a graph (below kGridResolveFrom
+//         particles, everything after the passes is one cooperative kernel, finish_small,
+//         with grid barriers between its phases). The grid is chosen on the
 //         host from the first state; particles that get faster than v_cut search wider, so it
 //         stays exact for any speed. A step with more pairs than the list holds stops the batch
 //         on the device, and the host redoes it with a longer list.
@@ -37,11 +37,12 @@ constexpr double kAlpha = 0.5;  //!< slabs per sqrt(N) v_cut / L (measured best 
 /// measurable difference at N = 10^6 on an H100 (a few kernel launches more a step).
 constexpr long long kEntriesPerPass = 1 << 20;
 
-/// Whether PLAB_ENGINE_RESOLVE=global asks small scenes for the rounds in global memory
-/// (kernels::resolve(), as before resolve_shared()): to measure the difference.
-bool resolve_asked_global() {
-  const char* v = std::getenv("PLAB_ENGINE_RESOLVE");
-  return v && std::string(v) == "global";
+/// Whether PLAB_ENGINE_KERNELS=separate asks small scenes for the separate kernels after the
+/// passes (scan, place_pairs, start_rounds, the one-block resolve, apply) instead of
+/// finish_small: to measure the difference.
+bool separate_asked() {
+  const char* v = std::getenv("PLAB_ENGINE_KERNELS");
+  return v && std::string(v) == "separate";
 }
 
 /// The device's memory bandwidth in bytes a second: the best of three device-to-device copies
@@ -90,8 +91,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     if (n_ >= kGridResolveFrom)
       grid_blocks_ = launch::resolve_grid_blocks();
     else
-      shared_resolve_ = !resolve_asked_global() &&
-                        launch::resolve_shared_fits(n_);
+      finish_small_ = !separate_asked() && launch::finish_small_fits(n_);
     sync();
   }
 
@@ -134,17 +134,17 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
       launch::bin_scatter(p_.view(), a, pass, main_);
       launch::find_pairs(p_.view(), box_, a, pass, one_pass, main_);
     }
+    if (finish_small_) {  // the scan, place_pairs, start_rounds, the rounds and apply in one
+      launch::finish_small(p_.view(), box_, a, main_);
+      return;
+    }
     cuda::exclusive_scan(a.slots.count, a.slots.end, n_, temp_.get(), temp_.size(), main_);
     launch::place_pairs(a, main_);
-    if (shared_resolve_) {
-      launch::resolve_shared(n_, a, main_);  // start_rounds and resolve in one block
-    } else {
-      launch::start_rounds(n_, a, main_);
-      if (n_ >= kGridResolveFrom)
-        launch::resolve_grid(n_, a, grid_blocks_, main_);
-      else
-        launch::resolve(n_, a, main_);
-    }
+    launch::start_rounds(n_, a, main_);
+    if (n_ >= kGridResolveFrom)
+      launch::resolve_grid(n_, a, grid_blocks_, main_);
+    else
+      launch::resolve(n_, a, main_);
     launch::apply(p_.view(), box_, a, main_);
   }
 
@@ -176,7 +176,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     per_pass_ = (grid_.g.slabs + passes - 1) / passes;
     const std::size_t entries = static_cast<std::size_t>(n_) * per_pass_;
     const int size = per_pass_ * grid_.cells + 1;
-    filled_.resize(size);
+    filled_.resize(std::max(size, launch::finish_small_blocks(n_)));  // finish_small's totals
     start_.resize(size);
     for (auto* v : {&rank_, &entry_id_, &entry_k_}) v->resize(entries);
     entry_.resize(entries);
@@ -214,9 +214,9 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   cuda::Graph graph_;
   bool stale_ = true;
   int grid_blocks_ = 0;
-  /// Small scenes: the rounds with the others' state in shared memory (resolve_shared()), unless
-  /// PLAB_ENGINE_RESOLVE=global asks for resolve() (to compare) or the GPU has too little.
-  bool shared_resolve_ = false;
+  /// Small scenes: finish_small() after the passes, unless PLAB_ENGINE_KERNELS=separate asks
+  /// for the separate kernels (to compare) or the GPU cannot hold its blocks at once.
+  bool finish_small_ = false;
 };
 
 }  // namespace
