@@ -6,7 +6,6 @@
 #pragma once
 
 #include <cooperative_groups.h>
-#include <cub/block/block_reduce.cuh>
 #include <cub/block/block_scan.cuh>
 
 #include "plab/cuda/particles.hpp"
@@ -36,6 +35,7 @@ struct Flags {
   int open[3];           //!< resolve_grid: someone left unresolved in round r (at r % 3)
   int fast;              //!< fast entries the pass's search listed for a team search (the solution's
                          //!< find_fast_pairs)
+  int rows;              //!< finish_small: events given a row so far this step
 };
 
 /// The grid of the batch and the slabs of one pass of the counting sort, as the kernels see it.
@@ -95,6 +95,7 @@ __global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d,
     a.flags->pairs = 0;
     a.flags->contested = 0;
     a.flags->open[0] = a.flags->open[1] = a.flags->open[2] = 0;
+    a.flags->rows = 0;
   }
 }
 
@@ -259,22 +260,20 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
 constexpr int kFinishThreads = 256;  //!< threads per block of finish_small()
 
 /// Everything of a small scene's step after the pair search, in one cooperative kernel of
-/// ceil(n / kFinishThreads) blocks (at most kFinishThreads of them, all resident; one thread a
-/// particle), with grid-wide barriers where the multi-kernel path has kernel boundaries: the
-/// exclusive scan of the counts into `slots.end` (each block scans its own, `a.filled` holds the
-/// blocks' totals: free once the passes are done), place_pairs(), start_rounds(), the rounds of
-/// resolve_grid(), and apply(). The same arithmetic in the same order per particle as those
-/// kernels, so the same bits; 8 kernels a step instead of 12. Nothing when the step was stopped;
-/// stops it (as place_pairs()) when the list had no room.
+/// ceil(n / kFinishThreads) blocks (all resident; one thread a particle), with grid-wide
+/// barriers where the multi-kernel path has kernel boundaries: each particle's row of events
+/// (a block's rows side by side, at a place one atomic a block takes: rows need not be in the
+/// particles' order, only apart, so no scan over the grid) and start_rounds() together, then
+/// place_pairs(), the rounds of resolve_grid(), and apply(). The rounds take a particle's events
+/// in any order (the event key orders them completely) and every particle's arithmetic is that
+/// of those kernels, so the same bits; 8 kernels a step instead of 12, and 2 + 2 x rounds grid
+/// barriers. Nothing when the step was stopped; stops it (as place_pairs()) when the list had no
+/// room.
 __global__ void __launch_bounds__(kFinishThreads)
     finish_small(ParticlesView p, Box box, StepArrays a) {
   namespace cg = cooperative_groups;
   using Scan = cub::BlockScan<int, kFinishThreads>;
-  using Sum = cub::BlockReduce<int, kFinishThreads>;
-  __shared__ union {
-    typename Scan::TempStorage scan;
-    typename Sum::TempStorage sum;
-  } temp;
+  __shared__ typename Scan::TempStorage temp;
   cg::grid_group grid = cg::this_grid();
   Flags* f = a.flags;
   const int n = p.n;
@@ -285,22 +284,18 @@ __global__ void __launch_bounds__(kFinishThreads)
     if (i == 0 && filed > a.slots.capacity) atomicMax(&f->overflow, filed);
     return;
   }
-  // The scan of the counts: within the block, then the earlier blocks' totals.
+  // Each particle's row: the block's rows side by side (a scan in the block), the block's at
+  // the place one atomic takes; and start_rounds(), which reads only the counts.
   int mine = 0, total = 0;
-  Scan(temp.scan).ExclusiveSum(i < n ? a.slots.count[i] : 0, mine, total);
-  if (threadIdx.x == 0) a.filled[blockIdx.x] = total;
-  grid.sync();
-  __syncthreads();  // temp is reused
-  const int earlier = Sum(temp.sum).Sum(threadIdx.x < blockIdx.x ? a.filled[threadIdx.x] : 0);
-  __shared__ int offset;
-  if (threadIdx.x == 0) offset = earlier;
+  Scan(temp).ExclusiveSum(i < n ? a.slots.count[i] : 0, mine, total);
+  __shared__ int base;
+  if (threadIdx.x == 0) base = atomicAdd(&f->rows, total);
   __syncthreads();
-  if (i < n) a.slots.end[i] = offset + mine;
+  if (i < n) a.slots.end[i] = base + mine;
+  if (i < n && start_one(i, a) > 0) a.contested[atomicAdd(&f->contested, 1)] = i;
   grid.sync();
   const int stride = gridDim.x * blockDim.x;
   for (int q = i; q < filed; q += stride) a.slots.place(q);  // place_pairs()
-  grid.sync();
-  if (i < n && start_one(i, a) > 0) a.contested[atomicAdd(&f->contested, 1)] = i;  // start_rounds()
   grid.sync();
   const int m = f->contested;
   const Event none = model::pair_event_key(model::never(), n, n);

@@ -73,8 +73,8 @@ inline int finish_small_blocks(int n) {
   return (n + kernels::kFinishThreads - 1) / kernels::kFinishThreads;
 }
 
-/// Whether finish_small() can take `n` particles on this GPU: at most kFinishThreads blocks
-/// (its scan of the blocks' totals is one block's), all resident at once (a cooperative launch).
+/// Whether finish_small() can take `n` particles on this GPU: its blocks all resident at once (a
+/// cooperative launch).
 inline bool finish_small_fits(int n) {
   int device = 0, sms = 0, per_sm = 0;
   PLAB_CUDA_CHECK(cudaGetDevice(&device));
@@ -82,7 +82,7 @@ inline bool finish_small_fits(int n) {
   PLAB_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, kernels::finish_small,
                                                                 kernels::kFinishThreads, 0));
   const int blocks = finish_small_blocks(n);
-  return n > 0 && blocks <= kernels::kFinishThreads && blocks <= sms * per_sm;
+  return n > 0 && blocks <= sms * per_sm;
 }
 
 inline void finish_small(const cuda::ParticlesView& p, const Box& box,

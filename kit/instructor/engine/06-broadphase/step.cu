@@ -176,7 +176,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     per_pass_ = (grid_.g.slabs + passes - 1) / passes;
     const std::size_t entries = static_cast<std::size_t>(n_) * per_pass_;
     const int size = per_pass_ * grid_.cells + 1;
-    filled_.resize(std::max(size, launch::finish_small_blocks(n_)));  // finish_small's totals
+    filled_.resize(size);
     start_.resize(size);
     for (auto* v : {&rank_, &entry_id_, &entry_k_}) v->resize(entries);
     entry_.resize(entries);
