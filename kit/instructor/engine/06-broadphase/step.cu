@@ -9,9 +9,9 @@
 //  GOAL   step.cpp's idea with every phase on the device and no host round trip in a step:
 //         start_step (wall times, last slabs, counters) -> per pass of a few slabs: bin_count ->
 //         CUB scan -> bin_scatter -> find_pairs; then CUB scan of the counts -> place_pairs ->
-//         start_rounds -> resolve -> apply, recorded once as a graph (below kGridResolveFrom
-//         particles, everything after the passes is one cooperative kernel, finish_small,
-//         with grid barriers between its phases). The grid is chosen on the
+//         start_rounds -> resolve -> apply, recorded once as a graph (from kFinishSmallFrom to
+//         kGridResolveFrom particles, everything after the passes is one cooperative kernel,
+//         finish_small, with grid barriers between its phases). The grid is chosen on the
 //         host from the first state; particles that get faster than v_cut search wider, so it
 //         stays exact for any speed. A step with more pairs than the list holds stops the batch
 //         on the device, and the host redoes it with a longer list.
@@ -91,7 +91,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     if (n_ >= kGridResolveFrom)
       grid_blocks_ = launch::resolve_grid_blocks();
     else
-      finish_small_ = !separate_asked() && launch::finish_small_fits(n_);
+      finish_small_ = n_ >= kFinishSmallFrom && !separate_asked() && launch::finish_small_fits(n_);
     sync();
   }
 
@@ -197,6 +197,11 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
 
   static constexpr long long kCheckEvery = 32;  //!< steps between two looks at the flags
   static constexpr int kGridResolveFrom = 50000;  //!< from this N the rounds use the whole GPU
+  /// From this N to kGridResolveFrom, finish_small() after the passes. Measured on an H100
+  /// (2026-11-25, S = 500, the report's box): 3-4% slower than the separate kernels at
+  /// N = 1000, 2000 and 4000, 10% faster at 10^4 and 45% at 4 x 10^4; the crossing, about 5000,
+  /// is interpolated.
+  static constexpr int kFinishSmallFrom = 5000;
   double bandwidth_ = 0;  //!< measure_bandwidth(), once, before the steps
   double alpha_;  //!< slabs per sqrt(N) v_cut / L (StageOptions::sweep_alpha, or kAlpha)
   kernels::DeviceGrid grid_{};
