@@ -180,8 +180,8 @@ void add_bench(CLI::App& app) {
             std::fflush(stdout);
             char row[512];
             std::snprintf(row, sizeof row,
-                          "%s,%s,%lld,%lld,%d,\"%s\",%d,%.6f,%.6f,%.6f,%s,%.6f,%.6f,%.6f,%s,\"%s\",%zu,"
-                          "%.4g,%.4g\n",
+                          "%s,%s,%lld,%lld,%d,\"%s\",%d,%.6f,%.6f,%.6f,%s,%.6f,%.6f,%.6f,%s,"
+                          "\"%s\",%zu,%.4g,%.4g\n",
                           id.c_str(), impl.c_str(), n, a->steps, threads, schedule.c_str(), a->runs,
                           median, t.front(), t.back(), speedup, step_median, steps_t.front(),
                           steps_t.back(), timer.c_str(), device.c_str(),
@@ -201,8 +201,8 @@ void add_bench(CLI::App& app) {
     std::printf("median s: whole-process wall seconds (start-up, scene reading and, on a GPU, "
                 "context creation included; output to /dev/null); spread = (max - min) / median "
                 "over %d runs; speedup: over the first thread (or rank) count; in steps: the median of the "
-                "stage's own time in steps (host clock on the CPU, CUDA events on a GPU); memory (the "
-                "engine): the step against the time to read and write the state once at the "
+                "stage's own time in steps (host clock on the CPU, CUDA events on a GPU); memory "
+                "(the engine): the step against the time to read and write the state once at the "
                 "measured bandwidth (CSV: bandwidth in B/s, floor_s a step)\n",
                 a->runs);
   });
