@@ -1,8 +1,46 @@
 /// \file cli/bench.cpp
 /// \brief `plab bench`: timings, medians, speedups, CSV.
+#include <cstring>
+#include <memory>
+#include <thread>
+
 #include "common.hpp"
 
 namespace plab::cli {
+namespace {
+
+/// Bytes a particle's state takes (x, y, vx, vy, pc, wc); a step reads and writes it at least
+/// once, so twice this is the memory floor of a particle-step.
+constexpr double kStateBytes = 4 * sizeof(double) + 2 * sizeof(long long);
+
+/// The host's memory bandwidth on `threads` threads, in bytes a second: the best of three
+/// copies of 256 MiB split among them (each byte read once and written once, each thread's part
+/// first touched by that thread). About half a second.
+double host_bandwidth(int threads) {
+  constexpr std::size_t kBytes = std::size_t{256} << 20;
+  threads = std::max(threads, 1);
+  const std::size_t part = kBytes / threads;
+  std::unique_ptr<char[]> from(new char[kBytes]), to(new char[kBytes]);
+  const auto on_all = [&](auto&& work) {
+    std::vector<std::thread> team;
+    for (int t = 0; t < threads; ++t) team.emplace_back(work, t);
+    for (auto& th : team) th.join();
+  };
+  on_all([&](int t) {
+    std::memset(from.get() + t * part, 1, part);
+    std::memset(to.get() + t * part, 0, part);
+  });
+  double best = 0;
+  for (int k = 0; k < 3; ++k) {
+    const auto t0 = std::chrono::steady_clock::now();
+    on_all([&](int t) { std::memcpy(to.get() + t * part, from.get() + t * part, part); });
+    const double s = wall_seconds(t0);
+    if (k == 0 || s < best) best = s;
+  }
+  return best > 0 ? 2.0 * part * threads / best : 0;
+}
+
+}  // namespace
 
 void add_bench(CLI::App& app) {
   struct Args {
@@ -47,7 +85,7 @@ void add_bench(CLI::App& app) {
     check_impl(impl);
     std::string csv =
         "stage,impl,n,steps,threads,schedule,runs,median_s,min_s,max_s,speedup,step_median_s,"
-        "step_min_s,step_max_s,timer,device,device_bytes\n";
+        "step_min_s,step_max_s,timer,device,device_bytes,bandwidth,floor_s\n";
     const bool by_ranks = !a->ranks.empty();
     if (by_ranks) {
       a->threads = a->ranks;  // the loop below runs over rank counts, one thread each
@@ -117,6 +155,21 @@ void add_bench(CLI::App& app) {
                         gpu ? "-" : schedule.c_str(), median, 100 * spread, speedup, step_median,
                         a->steps ? 1e3 * step_median / a->steps : 0.0, device.c_str(),
                         timer.c_str());
+            // The memory floor: the state read and written once a step, at the bandwidth the
+            // stage measured (a GPU engine) or, for the engine on the CPU, the host's.
+            double bandwidth = last.value("bandwidth", 0.0);
+            if (bandwidth == 0 && !gpu && !by_ranks && impl == "engine")
+              bandwidth = host_bandwidth(threads);
+            double floor_s = 0;
+            if (bandwidth > 0 && a->steps > 0) {
+              floor_s = 2 * kStateBytes * static_cast<double>(n) / bandwidth;
+              const double per_step = step_median / static_cast<double>(a->steps);
+              std::printf("      memory: %.0f B a particle-step at least (the state read and "
+                          "written once) = %.4f ms/step at the measured %.0f GB/s; this step "
+                          "takes %.0fx that, the time of %.0f B a particle-step\n",
+                          2 * kStateBytes, 1e3 * floor_s, bandwidth / 1e9, per_step / floor_s,
+                          per_step * bandwidth / static_cast<double>(n));
+            }
             const double bytes = last.value("bytes_sent", 0.0);
             const double comm = last.value("comm_seconds", 0.0);
             const double steps = a->steps ? static_cast<double>(a->steps) : 1.0;
@@ -127,11 +180,12 @@ void add_bench(CLI::App& app) {
             std::fflush(stdout);
             char row[512];
             std::snprintf(row, sizeof row,
-                          "%s,%s,%lld,%lld,%d,\"%s\",%d,%.6f,%.6f,%.6f,%s,%.6f,%.6f,%.6f,%s,\"%s\",%zu\n",
+                          "%s,%s,%lld,%lld,%d,\"%s\",%d,%.6f,%.6f,%.6f,%s,%.6f,%.6f,%.6f,%s,"
+                          "\"%s\",%zu,%.4g,%.4g\n",
                           id.c_str(), impl.c_str(), n, a->steps, threads, schedule.c_str(), a->runs,
                           median, t.front(), t.back(), speedup, step_median, steps_t.front(),
                           steps_t.back(), timer.c_str(), device.c_str(),
-                          last.value("device_bytes", std::size_t{0}));
+                          last.value("device_bytes", std::size_t{0}), bandwidth, floor_s);
             csv += row;
             if (by_ranks) {
               csv.pop_back();
@@ -147,7 +201,9 @@ void add_bench(CLI::App& app) {
     std::printf("median s: whole-process wall seconds (start-up, scene reading and, on a GPU, "
                 "context creation included; output to /dev/null); spread = (max - min) / median "
                 "over %d runs; speedup: over the first thread (or rank) count; in steps: the median of the "
-                "stage's own time in steps (host clock on the CPU, CUDA events on a GPU)\n",
+                "stage's own time in steps (host clock on the CPU, CUDA events on a GPU); memory "
+                "(the engine): the step against the time to read and write the state once at the "
+                "measured bandwidth (CSV: bandwidth in B/s, floor_s a step)\n",
                 a->runs);
   });
 }

@@ -18,7 +18,7 @@ void report(const Options& o, const Scene& scene, const RunStats& stats) {
         {"n", scene.particles.size()},    {"steps", scene.steps},
         {"threads", get_threads()},       {"device", stats.device},
         {"timer", stats.timer},           {"step_seconds", stats.step_seconds},
-        {"device_bytes", stats.device_bytes},
+        {"device_bytes", stats.device_bytes}, {"bandwidth", stats.bandwidth},
         {"total_seconds", stats.total_seconds},
         {"pair_events", stats.pair_events}, {"wall_events", stats.wall_events},
         {"substeps", o.substeps},         {"real", o.real},

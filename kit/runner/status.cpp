@@ -29,6 +29,7 @@ class StatusStepper final : public Stepper {
   [[nodiscard]] double own_seconds() const override { return inner_->own_seconds(); }
   [[nodiscard]] std::string device() const override { return inner_->device(); }
   [[nodiscard]] std::size_t device_bytes() const override { return inner_->device_bytes(); }
+  [[nodiscard]] double memory_bandwidth() const override { return inner_->memory_bandwidth(); }
 
  private:
   void write_status() {

@@ -126,6 +126,7 @@ RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOpt
   stats.timer = stage->own_seconds() >= 0 ? "cuda events" : "steady_clock";
   stats.device = stage->device();
   stats.device_bytes = stage->device_bytes();
+  stats.bandwidth = stage->memory_bandwidth();
   stats.traffic = stage->traffic();
   stats.pair_events = (sum(p.pc) - pc0) / 2;
   stats.wall_events = sum(p.wc) - wc0;

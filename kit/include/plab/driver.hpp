@@ -24,6 +24,7 @@ struct RunStats {
   std::string timer;           //!< how step_seconds was measured: "steady_clock" or "cuda events"
   std::string device;          //!< what the stage ran on: "cpu" or the GPU's name
   std::size_t device_bytes = 0;  //!< device memory the stage held at the end (GPU stages)
+  double bandwidth = 0;        //!< Stepper::memory_bandwidth(): bytes a second, 0 when unmeasured
   double total_seconds = 0;    //!< the whole simulation, printing included
   long long pair_events = 0;   //!< pair collisions counted over the run
   long long wall_events = 0;   //!< wall collisions counted over the run

@@ -29,6 +29,10 @@ class Stepper {
   [[nodiscard]] virtual std::string device() const { return "cpu"; }
   /// Bytes of device memory the stage holds now (0 for CPU stages).
   [[nodiscard]] virtual std::size_t device_bytes() const { return 0; }
+  /// The memory bandwidth of the device the stage ran on, in bytes a second, as the stage
+  /// measured it (the kit's engine: a device-to-device copy), or 0 when it did not (plab bench
+  /// then prints no floor for it).
+  [[nodiscard]] virtual double memory_bandwidth() const { return 0; }
   /// What a stage on several processes measured about its messages so far (the others: none).
   struct Traffic {
     double bytes_sent = 0;    //!< bytes every rank sent to the others, summed over the ranks

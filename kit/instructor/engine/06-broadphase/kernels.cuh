@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cooperative_groups.h>
+#include <cub/block/block_scan.cuh>
 
 #include "plab/cuda/particles.hpp"
 #include "plab/cuda/rounds.cuh"
@@ -34,6 +35,7 @@ struct Flags {
   int open[3];           //!< resolve_grid: someone left unresolved in round r (at r % 3)
   int fast;              //!< fast entries the pass's search listed for a team search (the solution's
                          //!< find_fast_pairs)
+  int rows;              //!< finish_small: events given a row so far this step
 };
 
 /// The grid of the batch and the slabs of one pass of the counting sort, as the kernels see it.
@@ -78,9 +80,13 @@ struct StepArrays {
   Flags* flags;      //!< see Flags
 };
 
-/// Wall times, the last slab of each particle, counters cleared.
-__global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
+/// Wall times, the last slab of each particle, counters cleared; with `buckets` > 0 (a step of
+/// one pass) also the pass's first `buckets` bucket counts and the fast entries' counter, which
+/// the pass would otherwise clear with two memsets of its own.
+__global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d, int buckets) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  for (int b = i; b < buckets; b += gridDim.x * blockDim.x) a.filled[b] = 0;
+  if (i == 0 && buckets > 0) a.flags->fast = 0;
   if (i >= p.n) return;
   a.wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
   a.last[i] = sweep::last_slab(sweep::path_end(a.wall[i]), d.g);
@@ -89,6 +95,7 @@ __global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d)
     a.flags->pairs = 0;
     a.flags->contested = 0;
     a.flags->open[0] = a.flags->open[1] = a.flags->open[2] = 0;
+    a.flags->rows = 0;
   }
 }
 
@@ -248,6 +255,62 @@ __global__ void start_rounds(int n, StepArrays a) {
 __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) {
   if (a.flags->overflow) return;
   cuda::rounds_block(n, a.flags->contested, a);
+}
+
+constexpr int kFinishThreads = 256;  //!< threads per block of finish_small()
+
+/// Everything of a small scene's step after the pair search, in one cooperative kernel of
+/// ceil(n / kFinishThreads) blocks (all resident; one thread a particle), with grid-wide
+/// barriers where the multi-kernel path has kernel boundaries: each particle's row of events
+/// (a block's rows side by side, at a place one atomic a block takes: rows need not be in the
+/// particles' order, only apart, so no scan over the grid) and start_rounds() together, then
+/// place_pairs(), the rounds of resolve_grid(), and apply(). The rounds take a particle's events
+/// in any order (the event key orders them completely) and every particle's arithmetic is that
+/// of those kernels, so the same bits; 8 kernels a step instead of 12, and 2 + 2 x rounds grid
+/// barriers. Nothing when the step was stopped; stops it (as place_pairs()) when the list had no
+/// room.
+__global__ void __launch_bounds__(kFinishThreads)
+    finish_small(ParticlesView p, Box box, StepArrays a) {
+  namespace cg = cooperative_groups;
+  using Scan = cub::BlockScan<int, kFinishThreads>;
+  __shared__ typename Scan::TempStorage temp;
+  cg::grid_group grid = cg::this_grid();
+  Flags* f = a.flags;
+  const int n = p.n;
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;  // this thread's particle, if i < n
+  // Every block decides alike: `overflow` only ever rises, and the list's length is final.
+  const int filed = f->pairs;
+  if (f->overflow || filed > a.slots.capacity) {
+    if (i == 0 && filed > a.slots.capacity) atomicMax(&f->overflow, filed);
+    return;
+  }
+  // Each particle's row: the block's rows side by side (a scan in the block), the block's at
+  // the place one atomic takes; and start_rounds(), which reads only the counts.
+  int mine = 0, total = 0;
+  Scan(temp).ExclusiveSum(i < n ? a.slots.count[i] : 0, mine, total);
+  __shared__ int base;
+  if (threadIdx.x == 0) base = atomicAdd(&f->rows, total);
+  __syncthreads();
+  if (i < n) a.slots.end[i] = base + mine;
+  if (i < n && start_one(i, a) > 0) a.contested[atomicAdd(&f->contested, 1)] = i;
+  grid.sync();
+  const int stride = gridDim.x * blockDim.x;
+  for (int q = i; q < filed; q += stride) a.slots.place(q);  // place_pairs()
+  grid.sync();
+  const int m = f->contested;
+  const Event none = model::pair_event_key(model::never(), n, n);
+  for (int round = 0;; ++round) {  // resolve_grid()'s rounds
+    if (i == 0) f->open[(round + 1) % 3] = 0;
+    for (int q = i; q < m; q += stride)  // choose
+      if (!a.resolved[a.contested[q]]) choose_one(a.contested[q], a, none);
+    grid.sync();
+    for (int q = i; q < m; q += stride)  // accept
+      if (!a.resolved[a.contested[q]] && !accept_one(a.contested[q], a)) f->open[round % 3] = 1;
+    grid.sync();
+    if (!f->open[round % 3]) break;
+  }
+  if (i == 0) f->steps_done += 1;
+  if (i < n) apply_planned<true>(p, a.partner, a.ptime, i, box.L, box.r);  // apply()
 }
 
 /// resolve() for large N: the same rounds over the whole grid (a cooperative launch, every block

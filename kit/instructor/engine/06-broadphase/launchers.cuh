@@ -18,9 +18,10 @@ static_assert(kernels::kSearchThreads == kThreads);
 /// Blocks of kThreads covering `n`.
 inline unsigned blocks(long long n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
 
+/// `buckets` > 0: also clears the one pass's bucket counts and fast counter (see the kernel).
 inline void start_step(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
-                       const kernels::DeviceGrid& d, cudaStream_t s) {
-  kernels::start_step<<<blocks(p.n), kThreads, 0, s>>>(p, box, a, d);
+                       const kernels::DeviceGrid& d, int buckets, cudaStream_t s) {
+  kernels::start_step<<<blocks(p.n), kThreads, 0, s>>>(p, box, a, d, buckets);
   PLAB_CUDA_CHECK_LAUNCH("start_step");
 }
 
@@ -39,10 +40,11 @@ inline void bin_scatter(const cuda::ParticlesView& p, const kernels::StepArrays&
 /// The pair search of a pass: find_pairs over every entry (the slow ones), then find_fast_pairs
 /// over the fast ones it listed (a team of kernels::kFastTeam threads each, on a grid for a
 /// tenth of the entries: the fastest tenth of the particles are the fast ones, sweep::choose()).
+/// `cleared`: start_step() cleared the fast entries' counter already (a step of one pass).
 inline void find_pairs(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
-                       const kernels::DeviceGrid& d, cudaStream_t s) {
+                       const kernels::DeviceGrid& d, bool cleared, cudaStream_t s) {
   const long long most = static_cast<long long>(p.n) * d.slabs;  // entries this pass, at most
-  PLAB_CUDA_CHECK(cudaMemsetAsync(&a.flags->fast, 0, sizeof(int), s));
+  if (!cleared) PLAB_CUDA_CHECK(cudaMemsetAsync(&a.flags->fast, 0, sizeof(int), s));
   kernels::find_pairs<<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d);
   PLAB_CUDA_CHECK_LAUNCH("find_pairs");
   kernels::find_fast_pairs<<<blocks((most / 10 + 1) * kernels::kFastTeam),
@@ -64,6 +66,34 @@ inline void start_rounds(int n, const kernels::StepArrays& a, cudaStream_t s) {
 inline void resolve(int n, const kernels::StepArrays& a, cudaStream_t s) {
   kernels::resolve<<<1, kernels::kResolveThreads, 0, s>>>(n, a);
   PLAB_CUDA_CHECK_LAUNCH("resolve");
+}
+
+/// Blocks of finish_small() for `n` particles: one thread a particle.
+inline int finish_small_blocks(int n) {
+  return (n + kernels::kFinishThreads - 1) / kernels::kFinishThreads;
+}
+
+/// Whether finish_small() can take `n` particles on this GPU: its blocks all resident at once (a
+/// cooperative launch).
+inline bool finish_small_fits(int n) {
+  int device = 0, sms = 0, per_sm = 0;
+  PLAB_CUDA_CHECK(cudaGetDevice(&device));
+  PLAB_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
+  PLAB_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, kernels::finish_small,
+                                                                kernels::kFinishThreads, 0));
+  const int blocks = finish_small_blocks(n);
+  return n > 0 && blocks <= sms * per_sm;
+}
+
+inline void finish_small(const cuda::ParticlesView& p, const Box& box,
+                         const kernels::StepArrays& a, cudaStream_t s) {
+  cuda::ParticlesView pv = p;
+  Box b = box;
+  kernels::StepArrays av = a;
+  void* args[] = {&pv, &b, &av};
+  PLAB_CUDA_CHECK(cudaLaunchCooperativeKernel(reinterpret_cast<void*>(kernels::finish_small),
+                                              finish_small_blocks(p.n), kernels::kFinishThreads,
+                                              args, 0, s));
 }
 
 /// Blocks of resolve_grid that can all be resident at once (a cooperative launch needs that).

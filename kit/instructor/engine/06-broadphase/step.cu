@@ -9,13 +9,16 @@
 //  GOAL   step.cpp's idea with every phase on the device and no host round trip in a step:
 //         start_step (wall times, last slabs, counters) -> per pass of a few slabs: bin_count ->
 //         CUB scan -> bin_scatter -> find_pairs; then CUB scan of the counts -> place_pairs ->
-//         start_rounds -> resolve -> apply, recorded once as a graph. The grid is chosen on the
+//         start_rounds -> resolve -> apply, recorded once as a graph (from kFinishSmallFrom to
+//         kGridResolveFrom particles, everything after the passes is one cooperative kernel,
+//         finish_small, with grid barriers between its phases). The grid is chosen on the
 //         host from the first state; particles that get faster than v_cut search wider, so it
 //         stays exact for any speed. A step with more pairs than the list holds stops the batch
 //         on the device, and the host redoes it with a longer list.
 //  READ   handouts/engine.md    TEST   ./plab test --impl engine --stage 06 (on a GPU machine)
 // =================================================================================================
 #include <algorithm>
+#include <cstdlib>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,6 +37,47 @@ constexpr double kAlpha = 0.5;  //!< slabs per sqrt(N) v_cut / L (measured best 
 /// measurable difference at N = 10^6 on an H100 (a few kernel launches more a step).
 constexpr long long kEntriesPerPass = 1 << 20;
 
+/// Whether PLAB_ENGINE_KERNELS=separate asks small scenes for the separate kernels after the
+/// passes (scan, place_pairs, start_rounds, the one-block resolve, apply) instead of
+/// finish_small: to measure the difference.
+bool separate_asked() {
+  const char* v = std::getenv("PLAB_ENGINE_KERNELS");
+  return v && std::string(v) == "separate";
+}
+
+/// The device's memory bandwidth in bytes a second: the best of three device-to-device copies
+/// of 256 MiB (each byte read once and written once), timed by CUDA events on `stream`; 0 when
+/// the memory for it cannot be had. What plab bench sets a step's time against.
+double measure_bandwidth(cudaStream_t stream) {
+  constexpr std::size_t kBytes = std::size_t{256} << 20;
+  void* from = nullptr;
+  void* to = nullptr;
+  if (cudaMalloc(&from, kBytes) != cudaSuccess) return 0;
+  if (cudaMalloc(&to, kBytes) != cudaSuccess) {
+    PLAB_CUDA_CHECK(cudaFree(from));
+    return 0;
+  }
+  PLAB_CUDA_CHECK(cudaMemsetAsync(from, 1, kBytes, stream));
+  cudaEvent_t start, stop;
+  PLAB_CUDA_CHECK(cudaEventCreate(&start));
+  PLAB_CUDA_CHECK(cudaEventCreate(&stop));
+  float best = 0;
+  for (int k = 0; k < 3; ++k) {
+    PLAB_CUDA_CHECK(cudaEventRecord(start, stream));
+    PLAB_CUDA_CHECK(cudaMemcpyAsync(to, from, kBytes, cudaMemcpyDeviceToDevice, stream));
+    PLAB_CUDA_CHECK(cudaEventRecord(stop, stream));
+    PLAB_CUDA_CHECK(cudaEventSynchronize(stop));
+    float ms = 0;
+    PLAB_CUDA_CHECK(cudaEventElapsedTime(&ms, start, stop));
+    if (k == 0 || ms < best) best = ms;
+  }
+  PLAB_CUDA_CHECK(cudaEventDestroy(start));
+  PLAB_CUDA_CHECK(cudaEventDestroy(stop));
+  PLAB_CUDA_CHECK(cudaFree(from));
+  PLAB_CUDA_CHECK(cudaFree(to));
+  return best > 0 ? 2.0 * kBytes / (best * 1e-3) : 0;
+}
+
 /// A run of stage 06 on the GPU (the kit's cuda::DeviceStepper holds the particles, the flags
 /// and the timer, and reads the state back).
 class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
@@ -42,8 +86,12 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
       : DeviceStepper(std::move(device), box, p, cuda::Queue::kOwnStream), alpha_(alpha),
         wall_(n_), last_(n_), slots_(n_, n_ / 4 + 1024), best_(n_), resolved_(n_),  // grown as needed
         contested_(n_), partner_(n_), ptime_(n_) {
+    bandwidth_ = measure_bandwidth(main_);
     set_grid(p);
-    if (n_ >= kGridResolveFrom) grid_blocks_ = launch::resolve_grid_blocks();
+    if (n_ >= kGridResolveFrom)
+      grid_blocks_ = launch::resolve_grid_blocks();
+    else
+      finish_small_ = n_ >= kFinishSmallFrom && !separate_asked() && launch::finish_small_fits(n_);
     sync();
   }
 
@@ -54,6 +102,8 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     // steps, so that at most that many are redone.
     if (n_ > 0 && (asked_ == 1 || asked_ % kCheckEvery == 0)) catch_up();
   }
+
+  [[nodiscard]] double memory_bandwidth() const override { return bandwidth_; }
 
  private:
   /// One step: the recorded graph (recorded again after the arrays changed).
@@ -68,17 +118,25 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   /// The kernels of one step.
   void queue_kernels() {
     const auto a = arrays();
-    launch::start_step(p_.view(), box_, a, grid_, main_);
+    // A step of one pass (small scenes): start_step clears what the pass would clear itself.
+    const bool one_pass = per_pass_ >= grid_.g.slabs;
+    launch::start_step(p_.view(), box_, a, grid_, one_pass ? grid_.g.slabs * grid_.cells + 1 : 0,
+                       main_);
     for (int first = 0; first < grid_.g.slabs; first += per_pass_) {
       kernels::DeviceGrid pass = grid_;
       pass.first = first;
       pass.slabs = std::min(per_pass_, grid_.g.slabs - first);
       const int buckets = pass.slabs * grid_.cells + 1;
-      PLAB_CUDA_CHECK(cudaMemsetAsync(filled_.get(), 0, buckets * sizeof(int), main_));
+      if (!one_pass)
+        PLAB_CUDA_CHECK(cudaMemsetAsync(filled_.get(), 0, buckets * sizeof(int), main_));
       launch::bin_count(p_.view(), a, pass, main_);
       cuda::exclusive_scan(filled_.get(), start_.get(), buckets, temp_.get(), temp_.size(), main_);
       launch::bin_scatter(p_.view(), a, pass, main_);
-      launch::find_pairs(p_.view(), box_, a, pass, main_);
+      launch::find_pairs(p_.view(), box_, a, pass, one_pass, main_);
+    }
+    if (finish_small_) {  // the scan, place_pairs, start_rounds, the rounds and apply in one
+      launch::finish_small(p_.view(), box_, a, main_);
+      return;
     }
     cuda::exclusive_scan(a.slots.count, a.slots.end, n_, temp_.get(), temp_.size(), main_);
     launch::place_pairs(a, main_);
@@ -139,6 +197,12 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
 
   static constexpr long long kCheckEvery = 32;  //!< steps between two looks at the flags
   static constexpr int kGridResolveFrom = 50000;  //!< from this N the rounds use the whole GPU
+  /// From this N to kGridResolveFrom, finish_small() after the passes. Measured on an H100
+  /// (2026-11-25, S = 500, the report's box): 3-4% slower than the separate kernels at
+  /// N = 1000, 2000 and 4000, 10% faster at 10^4 and 45% at 4 x 10^4; the crossing, about 5000,
+  /// is interpolated.
+  static constexpr int kFinishSmallFrom = 5000;
+  double bandwidth_ = 0;  //!< measure_bandwidth(), once, before the steps
   double alpha_;  //!< slabs per sqrt(N) v_cut / L (StageOptions::sweep_alpha, or kAlpha)
   kernels::DeviceGrid grid_{};
   int per_pass_ = 1;  //!< slabs one pass of the counting sort takes
@@ -155,6 +219,9 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   cuda::Graph graph_;
   bool stale_ = true;
   int grid_blocks_ = 0;
+  /// Small scenes: finish_small() after the passes, unless PLAB_ENGINE_KERNELS=separate asks
+  /// for the separate kernels (to compare) or the GPU cannot hold its blocks at once.
+  bool finish_small_ = false;
 };
 
 }  // namespace
