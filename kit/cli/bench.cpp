@@ -1,5 +1,8 @@
 /// \file cli/bench.cpp
 /// \brief `plab bench`: timings, medians, speedups, CSV.
+#include <functional>
+#include <utility>
+
 #include "common.hpp"
 
 namespace plab::cli {
@@ -58,6 +61,9 @@ void add_bench(CLI::App& app) {
                 by_ranks ? "ranks" : "threads",
                 "schedule", "median s", "spread", "speedup", "in steps", "ms/step", "device");
     const std::string report = temp_path("bench-report.json");
+    // Rows whose runs differ by more than this share of their median: noise (a shared machine).
+    constexpr double kNoisy = 0.2;
+    std::vector<std::pair<double, std::string>> noisy;  //!< (spread, which row)
     for (const long long n : a->n) {
       const std::string scene = temp_path("bench-" + std::to_string(n) + (a->fixed_density ? "-fd-" : "-") +
                                           std::to_string(a->steps) + "-" + std::to_string(a->seed) +
@@ -108,6 +114,12 @@ void add_bench(CLI::App& app) {
             const bool gpu = device != "cpu";
             if (threads == a->threads.front()) one_thread = median;
             const double spread = (t.back() - t.front()) / median;
+            if (a->runs > 1 && spread > kNoisy) {
+              char what[128];
+              std::snprintf(what, sizeof what, "stage %s N=%lld %s=%d: %.0f%%", id.c_str(), n,
+                            by_ranks ? "ranks" : "threads", threads, 100 * spread);
+              noisy.emplace_back(spread, what);
+            }
             char speedup[32] = "-";
             if (one_thread > 0 && (!gpu || by_ranks))
               std::snprintf(speedup, sizeof speedup, "%.2f", one_thread / median);
@@ -149,6 +161,20 @@ void add_bench(CLI::App& app) {
                 "over %d runs; speedup: over the first thread (or rank) count; in steps: the median of the "
                 "stage's own time in steps (host clock on the CPU, CUDA events on a GPU)\n",
                 a->runs);
+    if (a->runs == 1)
+      std::printf("one run per row (--runs 1): no spread to judge the noise by; take 3 or more\n");
+    if (!noisy.empty()) {
+      std::printf("warning: %zu row(s) whose %d runs differ by more than %.0f%% of their median "
+                  "(largest first):", noisy.size(), a->runs, 100 * kNoisy);
+      std::sort(noisy.begin(), noisy.end(), std::greater<>());
+      for (std::size_t i = 0; i < noisy.size() && i < 5; ++i)
+        std::printf("%s %s", i ? "," : "", noisy[i].second.c_str());
+      std::printf("%s.\n  Other work on the machine (a shared lab machine, other students' runs) "
+                  "slows some runs: the medians are not to be trusted to that much. Measure when "
+                  "the machine is quiet (uptime's load average near 0), or with more runs "
+                  "(--runs %d).\n",
+                  noisy.size() > 5 ? ", ..." : "", std::max(5, 2 * a->runs));
+    }
   });
 }
 
