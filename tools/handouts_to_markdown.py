@@ -15,7 +15,8 @@ import re
 PAGES = {"model_page": ("model.md", "the model"),
          "architecture_page": ("../docs/ARCHITECTURE.md", "the architecture page"),
          "student_page": ("working.md", "How a student works"),
-         "instructors": ("instructors.md", "Instructors"), "viewer_page": ("viewer.md", "plab view")}
+         "instructors": ("instructors.md", "Instructors"),
+         "viewer_page": ("viewer.md", "plab view")}
 
 
 def pages():
