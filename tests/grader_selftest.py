@@ -18,6 +18,15 @@ plab, kit, scratch = sys.argv[1], pathlib.Path(sys.argv[2]), pathlib.Path(sys.ar
 only = set(sys.argv[4:])
 STAGES = {"01": "01-naive", "02": "02-heap", "03": "03-openmp"}
 failures = []
+# The mutants (each a slip a student makes, with what it is) are data, shared with the course
+# guide's common mistakes (tools/mistakes.py): kit/instructor/mutants.json (instructor-only: they
+# quote the solutions).
+MUTANTS = json.loads((kit / "kit" / "instructor" / "mutants.json").read_text())["mutants"]
+
+
+def mutants_of(group):
+    """The mutants of one group of tests/mutants.json, as (stage, old text, new text)."""
+    return [(m["stage"], m["old"], m["new"]) for m in MUTANTS if m["group"] == group]
 
 
 def submission(name, tree="solutions", mutations=()):
@@ -99,21 +108,7 @@ def case_starting_points():
 
 
 def case_mutants_a():
-    root = submission("mutants-a", mutations=[
-        # wrong tie rule: a pair beats a wall at the same time
-        ("02", "return model::key_less(b, a);",
-         "return (a.t != b.t) ? a.t > b.t : a.kind < b.kind;"),
-        # missing stop at a wall after a pair collision (pairs finish the step as if the walls
-        # were infinitely far: the rest of the step never stops at one)
-        ("01", "for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);",
-         "for (int i = 0; i < n; ++i) apply_one(plan.partner[i] >= 0 ? Box{box.L, -1e300} : box, "
-         "p, plan, i);"),
-        # off-by-one in the rounds: the last particle never chooses
-        ("03", "#pragma omp parallel for schedule(static)\n    for (int i = 0; i < n; ++i) {\n"
-               "      if (resolved[i]) continue;\n      model::Event b",
-         "#pragma omp parallel for schedule(static)\n    for (int i = 0; i < n - 1; ++i) {\n"
-         "      if (resolved[i]) continue;\n      model::Event b"),
-    ])
+    root = submission("mutants-a", mutations=mutants_of("mutants-a"))
     tests, out = grade("mutants-a", root)
     t = tests["02: public wall-and-pair-tie"]
     check("tie rule", t["status"] == "failed" and "hits a wall" in t["output"],
@@ -129,14 +124,7 @@ def case_mutants_a():
 
 
 def case_mutants_b():
-    root = submission("mutants-b", mutations=[
-        # the window closed at t = 1 (an event exactly at the end of the step counts)
-        ("02", "const model::Event w = wall_candidate(box, p, i);\n    if (model::in_step(w.t))",
-         "const model::Event w = wall_candidate(box, p, i);\n    if (w.t <= 1)"),
-        # a data race: every thread appends to the first thread's list
-        ("03", "std::vector<FoundPair>& mine = found[omp_get_thread_num()];",
-         "std::vector<FoundPair>& mine = found[0];"),
-    ])
+    root = submission("mutants-b", mutations=mutants_of("mutants-b"))
     tests, _ = grade("mutants-b", root, "--races")
     t = tests["02: public event-at-step-end"]
     check("t <= 1", t["status"] == "failed" and "first difference" in t["output"],
@@ -161,43 +149,13 @@ def case_mutants_b():
 def case_mutants_hidden():
     """Slips that the random hidden scenes alone never catch (they never put an event exactly at
     t = 1 or 0, never tie two events): the family scenes of kit/grade/hidden.py must."""
-    for name, mutations in [
-        ("mutants-c", [
-            # the window closed at t = 1 in the naive loop
-            ("01", "if (!model::in_step(best.t)) break;", "if (best.t > 1) break;"),
-            # the heap ordered by time only: ties (wall before pair, lowest index) by heap luck
-            ("02", "return model::key_less(b, a);", "return a.t > b.t;"),
-            # a round's choice by time only: a pair beats its particle's own wall on equal times
-            ("03", "if (model::key_less(e, b)) b = e;", "if (e.t <= b.t) b = e;"),
-        ]),
-        ("mutants-d", [
-            # the last of equal times wins (<= for <): the highest index, a pair over a wall
-            ("01", "if (model::key_less(e, best)) best = e;",
-             "if (e.t <= best.t) best = e;"),
-            # an event at t = 0 (touching or overlapping at the step start) is not pushed
-            ("02", "if (model::in_step(e.t)) heap.push(e);",
-             "if (e.t > 0 && model::in_step(e.t)) heap.push(e);"),
-            # a wall event exactly at the step start (t = 0) is not a candidate
-            ("03", "model::Event b = model::in_step(wall[i]) ?",
-             "model::Event b = (wall[i] > 0 && model::in_step(wall[i])) ?"),
-        ]),
-    ]:
-        tests, _ = grade(name, submission(name, mutations=mutations))
-        check_hidden(name, tests, [m[0] for m in mutations])
+    for name in ("mutants-c", "mutants-d"):
+        tests, _ = grade(name, submission(name, mutations=mutants_of(name)))
+        check_hidden(name, tests, [m[0] for m in mutants_of(name)])
 
 
 def case_hostile():
-    root = submission("hostile", mutations=[
-        ("01", "void step(const Box& box, Particles& p) {\n",
-         "void step(const Box& box, Particles& p) {\n  volatile int* nothing = nullptr;\n"
-         "  *nothing = 1;\n"),
-        ("02", "void step(const Box& box, Particles& p) {\n",
-         "void step(const Box& box, Particles& p) {\n  for (volatile long k = 0;; k = k + 1) {\n"
-         "  }\n"),
-        ("03", "void step(const Box& box, Particles& p) {\n",
-         "void step(const Box& box, Particles& p) {\n  for (;;) std::fputs(\"spam spam spam\\n\", "
-         "stdout);\n"),
-    ])
+    root = submission("hostile", mutations=mutants_of("hostile"))
     tests, _ = grade("hostile", root)
     total = sum(t["score"] for t in tests.values())
     check("hostile", total == 0, f"scored {total} in all")

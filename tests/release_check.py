@@ -123,7 +123,7 @@ def weekly(plab, clone, scratch):
     check(not re.search(r"^\| 0[4-9] \|", index, re.M), "the week-03 index lists later stages")
     readme = (out / "README.md").read_text()
     check(not re.search(r"^\| 0[4-9] \|", readme, re.M), "the week-03 README lists later stages")
-    check(not re.search(r"ref handout_0[4-9]", " ".join(
+    check(not re.search(r"ref handout_0[4-9]|\]\((?:[\w./-]*/)?0[4-9]-[\w-]*\.md", " ".join(
         p.read_text(errors="replace") for p in out.rglob("*.md"))),
           "the week-03 release refers to a later stage's handout")
     docs_and_reference(out)

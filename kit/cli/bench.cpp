@@ -1,8 +1,10 @@
 /// \file cli/bench.cpp
 /// \brief `plab bench`: timings, medians, speedups, CSV.
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <thread>
+#include <utility>
 
 #include "common.hpp"
 
@@ -96,6 +98,9 @@ void add_bench(CLI::App& app) {
                 by_ranks ? "ranks" : "threads",
                 "schedule", "median s", "spread", "speedup", "in steps", "ms/step", "device");
     const std::string report = temp_path("bench-report.json");
+    // Rows whose runs differ by more than this share of their median: noise (a shared machine).
+    constexpr double kNoisy = 0.2;
+    std::vector<std::pair<double, std::string>> noisy;  //!< (spread, which row)
     for (const long long n : a->n) {
       const std::string scene = temp_path("bench-" + std::to_string(n) + (a->fixed_density ? "-fd-" : "-") +
                                           std::to_string(a->steps) + "-" + std::to_string(a->seed) +
@@ -146,6 +151,12 @@ void add_bench(CLI::App& app) {
             const bool gpu = device != "cpu";
             if (threads == a->threads.front()) one_thread = median;
             const double spread = (t.back() - t.front()) / median;
+            if (a->runs > 1 && spread > kNoisy) {
+              char what[128];
+              std::snprintf(what, sizeof what, "stage %s N=%lld %s=%d: %.0f%%", id.c_str(), n,
+                            by_ranks ? "ranks" : "threads", threads, 100 * spread);
+              noisy.emplace_back(spread, what);
+            }
             char speedup[32] = "-";
             if (one_thread > 0 && (!gpu || by_ranks))
               std::snprintf(speedup, sizeof speedup, "%.2f", one_thread / median);
@@ -205,6 +216,20 @@ void add_bench(CLI::App& app) {
                 "(the engine): the step against the time to read and write the state once at the "
                 "measured bandwidth (CSV: bandwidth in B/s, floor_s a step)\n",
                 a->runs);
+    if (a->runs == 1)
+      std::printf("one run per row (--runs 1): no spread to judge the noise by; take 3 or more\n");
+    if (!noisy.empty()) {
+      std::printf("warning: %zu row(s) whose %d runs differ by more than %.0f%% of their median "
+                  "(largest first):", noisy.size(), a->runs, 100 * kNoisy);
+      std::sort(noisy.begin(), noisy.end(), std::greater<>());
+      for (std::size_t i = 0; i < noisy.size() && i < 5; ++i)
+        std::printf("%s %s", i ? "," : "", noisy[i].second.c_str());
+      std::printf("%s.\n  Other work on the machine (a shared lab machine, other students' runs) "
+                  "slows some runs: the medians are not to be trusted to that much. Measure when "
+                  "the machine is quiet (uptime's load average near 0), or with more runs "
+                  "(--runs %d).\n",
+                  noisy.size() > 5 ? ", ..." : "", std::max(5, 2 * a->runs));
+    }
   });
 }
 

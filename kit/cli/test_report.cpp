@@ -127,6 +127,28 @@ std::optional<Found> find_difference(const std::string& message) {
 
 std::string first_line(const std::string& text) { return text.substr(0, text.find('\n')); }
 
+/// A failure message on one line: its first line, and when that line only announces what follows
+/// (GoogleTest's "Expected equality of these values:", "Value of: ok" then "Actual: false"), the
+/// lines that say which values, joined ("a, which is 3; b, which is 4"): at most 6 lines.
+std::string failure_line(const std::string& message) {
+  const std::vector<std::string> lines = lines_of(message);
+  if (lines.empty()) return "(no message)";
+  std::string out = lines[0];
+  const bool announces = out.ends_with(':') || out.starts_with("Value of:") ||
+                         out.starts_with("Expected:") || out.starts_with("The difference between");
+  if (!announces) return out;
+  for (std::size_t i = 1; i < lines.size() && i <= 6; ++i) {
+    const std::size_t from = lines[i].find_first_not_of(' ');
+    if (from == std::string::npos) break;
+    const std::string line = lines[i].substr(from);
+    if (line.starts_with("Which is: "))
+      out += ", which is " + line.substr(10);
+    else
+      out += (out.ends_with(':') ? " " : "; ") + line;
+  }
+  return out;
+}
+
 /// A path as the student types it: relative to the working folder when inside it.
 std::string shown_path(const std::string& path) {
   const fs::path rel = fs::path(path).lexically_relative(fs::current_path());
@@ -161,7 +183,7 @@ void print_cases(const std::vector<Case>& cases, const Manifest& m) {
       what = "step " + f->step + (f->particle.empty() ? "" : ", particle " + f->particle) + ", " +
              f->field + ": expected " + f->expected + ", got " + f->actual;
     else if (c.status == "failed")
-      what = "failed: " + first_line(c.message);
+      what = "failed: " + failure_line(c.message);
     std::printf("    %-22s %s\n", name.c_str(), what.c_str());
   }
   for (const auto& [key, skip] : skipped)
@@ -182,7 +204,7 @@ void print_summary(const std::string& head, const std::vector<Case>& cases) {
            " cases failed, first " + first->name + ": " +
            (f ? "step " + f->step + (f->particle.empty() ? "" : ", particle " + f->particle) +
                     ", " + f->field
-              : first_line(first->message));
+              : failure_line(first->message));
   }
   std::printf("%s%s\n", head.c_str(), what.c_str());
 }

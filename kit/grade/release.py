@@ -158,7 +158,10 @@ def check_starting_points(release, build):
     return said
 
 
-LATER_REF = re.compile(r"(?:\[([^\]]*)\]\(@ref handout_([0-9][0-9])\))|(?:[\\@]ref handout_([0-9][0-9]))")
+# A reference to a stage's handout: a Markdown link to it ([text](NN-name.md), the handouts' own
+# form) or to its label ([text](@ref handout_NN)), or Doxygen's \ref handout_NN (kit headers).
+LATER_REF = re.compile(r"(?:\[([^\]]*)\]\((?:@ref handout_([0-9][0-9])|(?:[\w./-]*/)?([0-9][0-9])-[\w-]*"
+                       r"\.md(?:#[\w-]*)?)\))|(?:[\\@]ref handout_([0-9][0-9]))")
 
 
 def cut_later_stages(release, through):
@@ -173,7 +176,7 @@ def cut_later_stages(release, through):
         index.write_text("".join(lines))
 
     def plain(m):
-        stage = int(m.group(2) or m.group(3))
+        stage = int(m.group(2) or m.group(3) or m.group(4))
         if stage <= through:
             return m.group(0)
         return m.group(1) if m.group(1) is not None else f"handout {stage:02d} (a later week)"

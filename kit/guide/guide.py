@@ -2,8 +2,9 @@
 """The course guide for instructors and teaching assistants (a docs page, written when `plab docs`
 builds the instructor's docs): per stage, the learning objectives, the expected hours, what the
 student writes, the marking scheme as kit/grade/rubric.json gives it (read here, never retyped),
-what the idea test checks and the hint it prints, the handout's questions and the report's
-deliverable.
+what the idea test checks and the hint it prints, the common mistakes (the grader's mutants with
+the feedback of a real grading, kit/instructor/mistakes.json by tools/mistakes.py), the handout's
+questions and the report's deliverable.
 
   guide.py --kit KIT --out PAGE.md
 """
@@ -30,6 +31,34 @@ def questions(kit, stage):
                 body.append(nxt)
             return "\n".join(body).strip()
     return ""
+
+
+def mistakes(kit, stage):
+    """The stage's common mistakes as Markdown lines: the grader's mutants, each with the points
+    and the feedback of a real grading (kit/instructor/mistakes.json, by tools/mistakes.py)."""
+    path = kit / "kit" / "instructor" / "mistakes.json"
+    found = [m for m in json.loads(path.read_text())["mistakes"] if m["stage"] == stage] \
+        if path.exists() else []
+    out = []
+    for m in found:
+        gated = f", {m['tests_gated']} more right but gated by the idea test" \
+            if m["tests_gated"] else ""
+        out += ["", f"- **{m['mistake']}** (mutant `{m['name']}`): {m['score']:g} of "
+                f"{m['max_score']:g} points; {m['tests_wrong']} of {m['tests']} tests wrong{gated}.",
+                "", "  ```diff"]
+        out += [f"  - {line}" for line in m["old"].rstrip("\n").splitlines()]
+        out += [f"  + {line}" for line in m["new"].rstrip("\n").splitlines()] + ["  ```", ""]
+        if m["idea_failed"]:
+            out.append(f"  The idea test fails: \"{' '.join(m['idea_feedback'])[:300]}\"")
+        if m["first_failed"]:
+            out += [f"  The student reads first (`{m['first_failed']}`):", "", "  ```text"]
+            out += [f"  {line}" for line in m["feedback"]] + ["  ```"]
+    if out:
+        doc = json.loads(path.read_text())
+        out = ["", "**Common mistakes** (the grader's mutants of the solution, each graded alone "
+               f"by `plab grade` at commit {doc['commit']}, {doc['date']}: "
+               "`tools/mistakes.py` writes them):"] + out
+    return out
 
 
 def public_count(manifest, sizes):
@@ -106,6 +135,7 @@ def main():
             if idea:
                 out += ["", f"**The idea test** (it gates this stage's correctness points): "
                         f"{idea['what']}. A student who misses it reads: \"{idea['hint']}\""]
+        out += mistakes(kit, stage)
         q = questions(kit, stage)
         if q:
             out += ["", "**The handout's questions** (for the report and the lab session):", "", q]

@@ -1,10 +1,12 @@
 /// \file solutions/06-broadphase/kernels.cuh
 /// \brief Stage 06's kernels (device code only): each particle hashed to a cell of a uniform grid
 /// in each time slab of the step, the cell starts of the sorted keys, the neighbour search
-/// filing the pairs that meet into one list, the mutual-earliest rounds over it, and apply.
+/// filing the pairs that meet into one list, the mutual-earliest rounds over it, and apply. The
+/// grid and the arrays they share (Grid, StepArrays, Flags, Pair) are in plab/cuda/slab_grid.cuh.
 #pragma once
 
 #include "plab/cuda/particles.hpp"
+#include "plab/cuda/slab_grid.cuh"
 #include "plab/model.hpp"
 #include "plab/plan.hpp"
 #include "plab/scene.hpp"
@@ -12,65 +14,7 @@
 namespace plab::kernels {
 
 using cuda::ParticlesView;
-constexpr int kSelectThreads = 1024;          //!< the one block of select_pairs
-constexpr unsigned long long kNone = ~0ull;  //!< "no pair yet" in best_t and best_pair
-
-/// What the host reads after a batch of steps.
-struct Flags {
-  int pairs;             //!< pairs filed this step
-  int overflow;          //!< pairs a step needed when the list had no room for them (else 0)
-  long long steps_done;  //!< steps applied so far
-};
-
-/// The step split into `slabs` time slabs; in each, a particle is binned by its position at the
-/// slab's midpoint into side x side square cells covering the box (an entry: slab, particle).
-struct Grid {
-  int slabs;         //!< time slabs K of the step
-  int side;          //!< cells along each axis
-  double inv_cell;   //!< 1 / cell width
-  double reach;      //!< 2r + a rounding margin (length units)
-  double per_speed;  //!< a slab's width 1/K, plus a millionth for rounding
-  [[nodiscard]] __host__ __device__ int cells() const { return side * side; }  //!< of a slab
-};
-
-/// One pair event the search files.
-struct Pair {
-  int lo;    //!< the lower particle index
-  int hi;    //!< the higher
-  double t;  //!< the pair time (steps)
-};
-
-/// One step's working arrays (pointers into memory the host class owns).
-struct StepArrays {
-  int* key_in;   //!< per entry k * N + i: its bucket, slab * cells + cell
-  int* id_in;    //!< ... its particle i
-  int* key_out;  //!< the keys, sorted
-  int* id_out;   //!< the particles, in the sorted keys' order
-  int* start;             //!< slabs * cells + 1: bucket b holds entries [start[b], start[b + 1])
-  Pair* list;             //!< the pairs filed this step
-  int capacity;           //!< room in `list`
-  int* partner;           //!< the plan: Plan::kFree, Plan::kWall, or the other particle
-  double* ptime;          //!< the plan's pair time
-  unsigned long long* best_t;     //!< in a round: each particle's earliest pair time (bits)
-  unsigned long long* best_pair;  //!< ... the smallest lo << 32 | hi at that time
-  Flags* flags;           //!< see Flags
-};
-
-/// Midpoint time of slab `k`.
-__device__ inline double slab_mid(int k, const Grid& g) { return (k + 0.5) / g.slabs; }
-
-/// The slab that holds time `t` (0 <= t < 1).
-__device__ inline int slab_of(double t, const Grid& g) {
-  return min(static_cast<int>(t * g.slabs), g.slabs - 1);
-}
-
-/// The cell of coordinate `v` along one axis, clamped to [0, side - 1] (0 for not-a-number):
-/// clamping never separates two neighbours.
-__device__ inline int cell_index(double v, const Grid& g) {
-  const double c = floor(v * g.inv_cell);
-  if (!(c > 0)) return 0;
-  return c >= g.side ? g.side - 1 : static_cast<int>(c);
-}
+constexpr int kSelectThreads = 1024;  //!< the one block of select_pairs
 
 /// How far along each axis a particle of velocity (vx, vy) searches around its midpoint
 /// position: two particles that meet in a slab are at most 2r + h(|v_a| + |v_b|) apart at its

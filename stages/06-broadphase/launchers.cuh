@@ -1,9 +1,8 @@
 /// \file stages/06-broadphase/launchers.cuh
 /// \brief Stage 06's launchers: grid size, launch on a stream, check; the sort of the entries
-/// by bucket is CUB's DeviceRadixSort.
+/// by bucket is CUB's DeviceRadixSort (cuda::key_bits() and cuda::sort_bytes() in
+/// plab/cuda/slab_grid.cuh).
 #pragma once
-
-#include <cub/device/device_radix_sort.cuh>
 
 #include <cstddef>
 
@@ -17,22 +16,6 @@ constexpr int kThreads = 256;  //!< threads per block of the per-particle and pe
 
 /// Blocks of kThreads covering `n`.
 inline unsigned blocks(long long n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
-
-/// The bits of a bucket key of grid `g` (the sort looks at no others).
-inline int key_bits(const kernels::Grid& g) {
-  int bits = 1;
-  while (bits < 31 && (1 << bits) < g.slabs * g.cells()) ++bits;
-  return bits;
-}
-
-/// Bytes of temporary storage the sort of `entries` entries of grid `g` needs.
-inline std::size_t sort_bytes(const kernels::Grid& g, int entries) {
-  std::size_t bytes = 0;
-  int* none = nullptr;
-  PLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, bytes, none, none, none, none, entries,
-                                                  0, key_bits(g)));
-  return bytes;
-}
 
 inline void start_step(int n, const kernels::StepArrays& a, cudaStream_t s) {
   kernels::start_step<<<blocks(n), kThreads, 0, s>>>(n, a);
