@@ -574,8 +574,11 @@ def dense_check(reference, path, plab):
     return [] if {"wall", "pair"} <= kinds else [f"step 0 has events {sorted(kinds)} only"]
 
 
-def family_names(rubric):
-    return list(rubric["correctness"].get("hidden_families", []))
+def family_names(rubric, stage=None):
+    """The hidden families of a stage: its rubric entry's own "hidden_families" when it has one
+    (stage 07 leaves out the jammed lattice, see the rubric), else the correctness section's."""
+    own = rubric.get("stages", {}).get(str(stage), {}).get("hidden_families")
+    return list(own if own is not None else rubric["correctness"].get("hidden_families", []))
 
 
 def hidden_scenes(seed, stage, rubric, plab, out_dir, only=None):
@@ -598,7 +601,7 @@ def hidden_scenes(seed, stage, rubric, plab, out_dir, only=None):
         raise ValueError(f"rubric: hidden families and hidden scenes share names {sorted(clash)}")
     reference = reference_program(plab)
     base = len(corr["hidden_scenes"])
-    for k, family in enumerate(family_names(rubric)):
+    for k, family in enumerate(family_names(rubric, stage)):
         if family not in FAMILIES and family not in TWO_D:
             raise ValueError(f"rubric names an unknown hidden family {family!r}")
         if only and family != only:
