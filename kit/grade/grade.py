@@ -433,8 +433,9 @@ class Grader:
         """The stage's idea, measured by the grader outside the student's code (rubric: the
         stage's "idea"); a failure takes every correctness point of the stage folder.
           scale:   a hidden scene too large for the idea the stage replaces (stage 02: O(N^3)
-                   selection; 06: O(N^2) pair tests), under a time limit that the kit's solution
-                   meets many times over, with the reference's output;
+                   selection; 06: O(N^2) pair tests; 07: a linear scan for each event), under a
+                   time limit that the kit's solution meets many times over, with the
+                   reference's output;
           threads: the stage on `threads` OpenMP threads (waiting passively): at least two
                    threads each used `share` of the program's CPU time (read from /proc), and
                    (`min_syncs_per_round`) it ran that many OpenMP synchronisations for each
