@@ -28,6 +28,12 @@ and, measured by the grader outside the student's code (each must score nothing)
   ideas           02 with stage 01's O(N^3) selection, 03 serial (no OpenMP pragma), 06 with
                   stage 03's O(N^2) rounds, 08 whose rank 0 steps every particle (a patch of the
                   solution's step.cpp; skipped with a message when its shape changed)
+  rounds          03 that selects its events sequentially after a parallel phase, 03 serial with a
+                  thread burning CPU beside it (OpenMP synchronisations counted against the
+                  scene's rounds), 07 with a linear scan for the next event, 08 whose rank 0 steps
+                  everything through gathers and scatters (bytes counted in every MPI call); and
+                  03 as one parallel region with dynamic and guided loops, which keeps its points
+  ties            02 whose heap orders events by time only loses the hidden-ties scene
   shortcuts       the one-step answers (next-state), a stage 02 that skips the work on the timed
                   scene (no performance points), the untouched starting point of 03 (no race points)
   gpu-ideas       (on a GPU) 04 stepping on the host between whole-state copies, 05 on one
@@ -825,9 +831,235 @@ def case_links():
               f"the {label} zip: exit {done.returncode}, message {said!r}")
 
 
+def between(text, start, end, new):
+    """`text` with what lies from `start` up to (not including) `end` replaced by `new`, or None
+    when either marker is missing (the solution changed shape)."""
+    a = text.find(start)
+    b = text.find(end, a + 1) if a >= 0 else -1
+    return None if a < 0 or b < 0 else text[:a] + new + text[b:]
+
+
+# Stage 03's rounds (from "const model::Event none" up to the third exercise) written other ways.
+ROUNDS_03 = {
+    # honest: one parallel region, `omp for` loops inside with a dynamic schedule
+    "one-region": """  const model::Event none = model::pair_event_key(model::never(), n, n);
+  bool open = true;
+#pragma omp parallel
+  {
+    while (open) {
+#pragma omp for schedule(dynamic, 64)
+      for (int i = 0; i < n; ++i) {
+        if (resolved[i]) continue;
+        model::Event b = model::in_step(wall[i]) ? model::wall_event_key(wall[i], i) : none;
+        for (int k = cand.start[i]; k < cand.start[i + 1]; ++k) {
+          const int o = cand.other[k];
+          if (resolved[o]) continue;
+          const model::Event e = model::pair_event_key(cand.time[k], i < o ? i : o, i < o ? o : i);
+          if (model::key_less(e, b)) b = e;
+        }
+        best[i] = b;
+      }
+#pragma omp single
+      open = false;
+#pragma omp for schedule(guided) reduction(|| : open)
+      for (int i = 0; i < n; ++i) {
+        if (resolved[i]) continue;
+        const model::Event& e = best[i];
+        const int o = (e.lo == i) ? e.hi : e.lo;
+        if (!model::in_step(e.t) || e.kind == model::kWall ||
+            (best[o].lo == e.lo && best[o].hi == e.hi && best[o].kind == model::kPair)) {
+          if (model::in_step(e.t)) plan.accept_for(i, e);
+          resolved[i] = 1;
+        } else {
+          open = true;
+        }
+      }
+    }
+  }
+
+""",
+    # cheat: the candidates in parallel, then one sequential sort-and-greedy selection
+    "sequential-selection": """  std::vector<model::Event> all;
+  for (int i = 0; i < n; ++i) {
+    if (model::in_step(wall[i])) all.push_back(model::wall_event_key(wall[i], i));
+    for (int k = cand.start[i]; k < cand.start[i + 1]; ++k)
+      if (i < cand.other[k]) all.push_back(model::pair_event_key(cand.time[k], i, cand.other[k]));
+  }
+  std::sort(all.begin(), all.end(), model::key_less);
+  for (const model::Event& e : all)
+    if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
+  (void)resolved;
+  (void)best;
+
+""",
+}
+
+# Stage 03 with no parallel loop at all, and a thread that only burns CPU while it steps.
+BURNER_03 = """
+void step(const Box& box, Particles& p) {
+  std::atomic<bool> stop{false};
+  std::thread burner([&stop] {
+    volatile double x = 0;
+    while (!stop.load()) x = x + 1;
+  });
+  serial_step(box, p);
+  stop = true;
+  burner.join();
+}
+
+/// Stage 03's entry point"""
+
+# Stage 07: the earliest event found by a linear scan (O(N) an event), put on top of the heap.
+LINEAR_07 = """    const int k = at_[e.i];
+    heap_[k].t = e.t;
+    int m = 0;
+    for (int q = 1; q < static_cast<int>(heap_.size()); ++q) if (heap_[q].t < heap_[m].t) m = q;
+    const Entry top = heap_[0], low = heap_[m];
+    put(0, low);
+    put(m, top);
+"""
+
+# Stage 08: every particle gathered on rank 0 (MPI_Gather(v)), stepped there alone, and
+# scattered back to its owner (MPI_Scatter(v)): rooted collectives only.
+GATHER_08 = """
+void step(const Box& box, const Ranks& r, Local& s) {
+  std::vector<Record> mine;
+  for (int k = 0; k < s.owned; ++k) mine.push_back(s.record(k));
+  int bytes = static_cast<int>(mine.size() * sizeof(Record));
+  std::vector<int> counts(r.ranks), at(r.ranks), back_counts(r.ranks), back_at(r.ranks);
+  MPI_Gather(&bytes, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, r.comm);
+  int total = 0;
+  for (int q = 0; q < r.ranks; ++q) {
+    at[q] = total;
+    total += counts[q];
+  }
+  std::vector<Record> all(r.rank == 0 ? total / sizeof(Record) : 0), back;
+  MPI_Gatherv(mine.data(), bytes, MPI_BYTE, all.data(), counts.data(), at.data(), MPI_BYTE, 0,
+              r.comm);
+  if (r.rank == 0) {
+    Local everything;
+    for (const Record& rec : all) everything.push(rec);
+    everything.owned = everything.size();
+    Ranks one = r;
+    one.comm = MPI_COMM_SELF;
+    one.ranks = 1;
+    real_step(box, one, everything);
+    std::vector<std::vector<Record>> by(r.ranks);
+    for (int k = 0; k < everything.owned; ++k)
+      by[r.owner_of(everything.p.x[k])].push_back(everything.record(k));
+    for (int q = 0; q < r.ranks; ++q) {
+      back_at[q] = static_cast<int>(back.size() * sizeof(Record));
+      back_counts[q] = static_cast<int>(by[q].size() * sizeof(Record));
+      back.insert(back.end(), by[q].begin(), by[q].end());
+    }
+  }
+  int mine_back = 0;
+  MPI_Scatter(back_counts.data(), 1, MPI_INT, &mine_back, 1, MPI_INT, 0, r.comm);
+  std::vector<Record> in(mine_back / sizeof(Record));
+  MPI_Scatterv(back.data(), back_counts.data(), back_at.data(), MPI_BYTE, in.data(), mine_back,
+               MPI_BYTE, 0, r.comm);
+  Local fresh;
+  for (const Record& rec : in) fresh.push(rec);
+  fresh.owned = fresh.size();
+  s = std::move(fresh);
+}
+}  // namespace plab::dist
+"""
+
+
+def stage_folder(root, sid, source):
+    """A copy of the kit's folder `source` as the submission's stage `sid`; its step.cpp path."""
+    dest = root / "stages" / FOLDERS[sid]
+    shutil.copytree(kit / source, dest)
+    return dest / "step.cpp"
+
+
+def case_rounds():
+    """The idea tests that count (stage 03's OpenMP synchronisations against the rounds its scene
+    needs, stage 08's bytes in any MPI call) and stage 07's event queue, each graded alone: 03
+    that selects its events sequentially after a parallel phase, 03 that keeps a thread burning
+    CPU beside a serial step, 07 with a linear scan for the next event, 08 whose rank 0 steps
+    everything through gathers and scatters must score nothing on correctness; 03 written as one
+    parallel region with dynamic and guided `omp for` loops keeps every correctness point."""
+    FOLDERS.update({"07": "07-event-driven"})
+    gradings = []  # (name, stage key, must pass the idea test)
+    sol03 = (kit / "solutions/03-openmp/step.cpp").read_text()
+    for variant, honest in (("one-region", True), ("sequential-selection", False)):
+        name = f"redteam-rounds-{variant}"
+        shutil.rmtree(scratch / name, ignore_errors=True)
+        step = stage_folder(scratch / name, "03", "solutions/03-openmp")
+        text = between(sol03, "  const model::Event none", "  // EXERCISE 3", ROUNDS_03[variant])
+        if text is None:
+            print(f"SKIP {name}: stage 03's solution changed shape", flush=True)
+            continue
+        step.write_text(text.replace("#include <omp.h>", "#include <omp.h>\n\n#include <algorithm>"))
+        gradings.append((name, "03", honest))
+    name = "redteam-rounds-burner"
+    shutil.rmtree(scratch / name, ignore_errors=True)
+    step = stage_folder(scratch / name, "03", "solutions/03-openmp")
+    entry = "/// Stage 03's entry point"
+    if "void step(const Box& box, Particles& p) {" in sol03 and entry in sol03:
+        step.write_text(sol03.replace("#pragma omp", "// (serial) #pragma omp")
+                        .replace("void step(const Box& box, Particles& p) {",
+                                 "void serial_step(const Box& box, Particles& p) {")
+                        .replace(entry, BURNER_03)
+                        .replace("#include <omp.h>", "#include <omp.h>\n\n#include <atomic>\n#include <thread>"))
+        gradings.append((name, "03", False))
+    name = "redteam-rounds-linear-07"
+    shutil.rmtree(scratch / name, ignore_errors=True)
+    step = stage_folder(scratch / name, "07", "solutions/07-event-driven")
+    text = between(step.read_text(), "    const int k = at_[e.i];", "  }\n", LINEAR_07)
+    if text is not None:
+        step.write_text(text)
+        gradings.append((name, "07", False))
+    name = "redteam-rounds-gather-08"
+    shutil.rmtree(scratch / name, ignore_errors=True)
+    if patched(name, "08", "solutions/08-mpi", [(
+            "void step(const Box& box, const Ranks& r, Local& s) {",
+            "void real_step(const Box& box, const Ranks& r, Local& s) {"),
+            ("}  // namespace plab::dist\n", GATHER_08)],
+            "stage 08's solution no longer has the shape the gather patch needs"):
+        gradings.append((name, "08-ranks3", False))
+    for name, key, honest in gradings:
+        tests, doc, _ = grade(name, scratch / name, key, "--no-races")
+        sid = key[:2]
+        idea = next((t for n, t in tests.items() if n.startswith(f"{sid}: idea")), None)
+        mine = correctness(tests, key)
+        got = sum(t["score"] for t in mine.values())
+        most = sum(t["max_score"] for t in mine.values())
+        broken = [t["output"] for t in mine.values() if "does not compile" in t["output"]]
+        said = (idea or {}).get("output", "none")[:400]
+        check("rounds", bool(mine) and not broken, f"{name} was graded and compiles: {broken[:1]}")
+        if honest:
+            check("rounds", idea is not None and idea["status"] == "passed" and got == most,
+                  f"{name} (honest) scored {got} of {most}; its idea test: {said!r}")
+        else:
+            check("rounds", idea is not None and idea["status"] == "failed" and got == 0,
+                  f"{name} scored {got} of {most} on correctness; its idea test: {said!r}")
+
+
+def case_ties():
+    """Stage 02 whose heap orders its events by time only (not model.md's whole key): the hidden
+    tie scenes must cost it points (hidden-ties: every draw holds a wall-and-pair tie whose pair
+    has the lower index, which only the key's kind decides)."""
+    name = "redteam-ties"
+    shutil.rmtree(scratch / name, ignore_errors=True)
+    root = patched(name, "02", "solutions/02-heap", [(
+        "return model::key_less(b, a); }", "return b.t < a.t; }")],
+        "stage 02's solution no longer orders its heap with model::key_less")
+    if root is None:
+        return
+    tests, doc, _ = grade(name, scratch / name, "02", "--no-races")
+    ties = tests.get("02: hidden hidden-ties", {})
+    check("ties", ties.get("score", 1) == 0,
+          f"a time-only heap got {ties.get('score')} of {ties.get('max_score')} on hidden-ties: "
+          f"{ties.get('output', '')[:200]!r}")
+
+
 CASES = {"copy": case_copy, "escape": case_escape, "processes": case_processes,
          "oracle": case_oracle, "mpi": case_mpi, "control": case_control, "ideas": case_ideas,
-         "shortcuts": case_shortcuts, "links": case_links, "gpu-ideas": case_gpu_ideas}
+         "shortcuts": case_shortcuts, "links": case_links, "gpu-ideas": case_gpu_ideas,
+         "rounds": case_rounds, "ties": case_ties}
 scratch.mkdir(parents=True, exist_ok=True)
 try:
     for name, case in CASES.items():

@@ -27,6 +27,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "pyplab"))
 import gpu_idea  # noqa: E402  (the kit's own modules, beside this file)
 import hidden as hidden_module  # noqa: E402
+import ideas  # noqa: E402
 import plabio  # noqa: E402  (the kit's formats, read and compared by its C++ programs)
 import races  # noqa: E402
 import sandbox as isolation  # noqa: E402
@@ -432,10 +433,14 @@ class Grader:
         """The stage's idea, measured by the grader outside the student's code (rubric: the
         stage's "idea"); a failure takes every correctness point of the stage folder.
           scale:   a hidden scene too large for the idea the stage replaces (stage 02: O(N^3)
-                   selection; 06: O(N^2) pair tests), under a time limit that the kit's solution
-                   meets many times over, with the reference's output;
+                   selection; 06: O(N^2) pair tests; 07: a linear scan for each event), under a
+                   time limit that the kit's solution meets many times over, with the
+                   reference's output;
           threads: the stage on `threads` OpenMP threads (waiting passively): at least two
-                   threads each used `share` of the program's CPU time (read from /proc);
+                   threads each used `share` of the program's CPU time (read from /proc), and
+                   (`min_syncs_per_round`) it ran that many OpenMP synchronisations for each
+                   mutual-earliest round of the scene's steps (ideas.RoundsCount: counted by the
+                   kit's preloaded libplab-ompcount.so, the rounds from the kit's plab-rounds);
           ranks:   the stage under mpirun on `ranks` processes: every rank used `share` of the
                    ranks' CPU time (read from /proc), so rank 0 does not step everything.
         Both watched kinds also take `max_share`: the most that one thread or rank may use."""
@@ -464,13 +469,19 @@ class Grader:
         limit = max(idea.get("seconds", 0), idea.get("multiple", 0) * own_seconds)
         threads = str(idea.get("threads", st.threads))
         env = dict(st.env, OMP_WAIT_POLICY="passive") if kind == "threads" else st.env
+        # Threads: the kit's counter (not the student's code) counts the OpenMP synchronisations
+        counter = (ideas.RoundsCount(self.kit_build, self.sandbox, scene)
+                   if "min_syncs_per_round" in idea else None)
+        if counter:
+            env = dict(env, **counter.env(program))
         # Ranks: the kit's MPI layer (not the student's code) counts the bytes the ranks send.
         report = ["--report", "/plab/out/report.json"] if kind == "ranks" else []
         run = self.run_program(program, scene, ["--quiet", "--threads", threads, "--out",
                                                 "/plab/out/out.txt", *report], limit,
                                max(self.rubric["limits"]["output_min_mb"] * 2**20,
                                    4 * len(expected)), st, env=env, watch=kind != "scale",
-                               ranks=idea.get("ranks", st.ranks))
+                               ranks=idea.get("ranks", st.ranks),
+                               extra_ro=counter.mounts() if counter else None)
         what = f"hidden scene N = {sc['n']}, L = {sc['L']}, S = {sc['steps']}"
         problem = None
         if run.reason and "time limit" in run.reason:
@@ -484,6 +495,8 @@ class Grader:
         text = f"the {what}: {run.seconds:.2f} s (the kit's solution: {own_seconds:.2f} s)"
         if problem is None and kind == "ranks" and "max_bytes_per_particle_step" in idea:
             problem, text = self.bytes_sent(idea, run, text)  # counted, so decided first
+        if problem is None and counter:
+            problem, text = counter.check(idea, run, text)  # counted, so decided first
         if problem is None and kind != "scale":
             problem, text = self.work_shared(idea, run, text)
         if problem:

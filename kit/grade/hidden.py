@@ -157,9 +157,10 @@ def fam_step_start(rng, r):
 def fam_ties(rng, r):
     """Ties at a dyadic t in (0, 1): a wall and a pair of the same particle (x - r = u t, the
     chaser's gap = (w - u) t: the wall wins, kind 0 before 1), and two pairs sharing a middle disk
-    (gaps (uL - vM) t and (uR + vM) t: the pair with the lower (lo, hi) wins)."""
+    (gaps (uL - vM) t and (uR + vM) t: the pair with the lower (lo, hi) wins). Every draw holds a
+    wall-and-pair tie whose pair has the lower index (draw()), which only the key's kind decides."""
     groups = []
-    for kind in rng.sample(["wall-pair", "shared", "wall-pair", "shared"], rng.randint(2, 4)):
+    for kind in [rng.choice(["wall-pair", "shared"]) for _ in range(rng.randint(4, 7))]:
         g, m, t = Group(), rng.randint(0, 2), rng.choice(T_INSIDE)
         if kind == "wall-pair":
             u = speed(rng, 1, 2)
@@ -167,7 +168,8 @@ def fam_ties(rng, r):
             i = g.add(r + u * t, -u)
             g.anchored = True
             j = g.add(r + u * t + 2 * r + (w - u) * t, -w)
-            g.checks = [(0, i, "wall", None, t), (0, j, "nopair", None, None)]
+            # "kind": the wall of i and the pair (i, j) tie; the draw keeps one where j < i
+            g.checks = [(0, i, "wall", None, t), (0, j, "nopair", None, None), (0, i, "kind", j, t)]
         else:
             vm = rng.choice([Fraction(0), Fraction(1, 2), Fraction(-1, 2)])
             ul, ur = speed(rng, 1, 3), speed(rng, 1, 3)
@@ -428,6 +430,15 @@ def draw(rng, family):
             new_checks += [(step, o, "nopair", None, None) for o in others]
         else:
             new_checks.append((step, perm[i], kind, None if j is None else perm[j], t))
+    # A wall-and-pair tie is decided by the kind of the events alone (a heap ordered by time, or
+    # by time and indices, takes the pair) only when the pair's lower index is below the wall's
+    # particle: every draw of a family that designs such ties must hold one.
+    kinds = [(i, j) for _, i, kind, j, _ in new_checks if kind == "kind"]
+    if kinds and not any(j < i for i, j in kinds):
+        raise ValueError("no wall-and-pair tie whose pair has the lower index")
+    if family == "hidden-ties" and not kinds:
+        raise ValueError("no wall-and-pair tie")
+    new_checks = [c for c in new_checks if c[2] != "kind"]
     steps = max([c[0] for c in new_checks] + [0]) + rng.randint(10, 24)
     return L, r, steps, new_parts, new_checks
 
@@ -563,8 +574,11 @@ def dense_check(reference, path, plab):
     return [] if {"wall", "pair"} <= kinds else [f"step 0 has events {sorted(kinds)} only"]
 
 
-def family_names(rubric):
-    return list(rubric["correctness"].get("hidden_families", []))
+def family_names(rubric, stage=None):
+    """The hidden families of a stage: its rubric entry's own "hidden_families" when it has one
+    (stage 07 leaves out the jammed lattice, see the rubric), else the correctness section's."""
+    own = rubric.get("stages", {}).get(str(stage), {}).get("hidden_families")
+    return list(own if own is not None else rubric["correctness"].get("hidden_families", []))
 
 
 def hidden_scenes(seed, stage, rubric, plab, out_dir, only=None):
@@ -587,7 +601,7 @@ def hidden_scenes(seed, stage, rubric, plab, out_dir, only=None):
         raise ValueError(f"rubric: hidden families and hidden scenes share names {sorted(clash)}")
     reference = reference_program(plab)
     base = len(corr["hidden_scenes"])
-    for k, family in enumerate(family_names(rubric)):
+    for k, family in enumerate(family_names(rubric, stage)):
         if family not in FAMILIES and family not in TWO_D:
             raise ValueError(f"rubric names an unknown hidden family {family!r}")
         if only and family != only:

@@ -6,6 +6,8 @@
 
 #include <cstdio>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "plab/greedy.hpp"
 #include "plab/model.hpp"
@@ -24,6 +26,55 @@ Plan plan_step(const Box& box, const Particles& p) {
     }
   }
   return greedy_plan(events, p.size());
+}
+
+Plan plan_in_rounds(const Box& box, const Particles& p, int& rounds) {
+  const int n = static_cast<int>(p.size());
+  std::vector<double> wall(n);
+  std::vector<std::vector<std::pair<double, int>>> cand(n);  // each particle's pairs (t, other)
+  for (int i = 0; i < n; ++i) {
+    wall[i] = wall_candidate(box, p, i).t;
+    for (int j = i + 1; j < n; ++j) {
+      const double t = pair_candidate(box, p, i, j).t;
+      if (model::in_step(t)) {
+        cand[i].push_back({t, j});
+        cand[j].push_back({t, i});
+      }
+    }
+  }
+  Plan plan;
+  plan.reset(n);
+  std::vector<char> resolved(n, 0);
+  std::vector<model::Event> best(n);
+  const model::Event none = model::pair_event_key(model::never(), n, n);
+  rounds = 0;
+  for (bool open = true; open; ++rounds) {
+    for (int i = 0; i < n; ++i) {
+      if (resolved[i]) continue;
+      model::Event b = model::in_step(wall[i]) ? model::wall_event_key(wall[i], i) : none;
+      for (const auto& [t, o] : cand[i]) {
+        const model::Event e = model::pair_event_key(t, i < o ? i : o, i < o ? o : i);
+        if (!resolved[o] && model::key_less(e, b)) b = e;
+      }
+      best[i] = b;
+    }
+    open = false;
+    std::vector<int> done;
+    for (int i = 0; i < n; ++i) {
+      if (resolved[i]) continue;
+      const model::Event& e = best[i];
+      const int o = (e.lo == i) ? e.hi : e.lo;
+      if (!model::in_step(e.t) || e.kind == model::kWall ||
+          (best[o].lo == e.lo && best[o].hi == e.hi && best[o].kind == model::kPair)) {
+        if (model::in_step(e.t)) plan.accept_for(i, e);
+        done.push_back(i);
+      } else {
+        open = true;
+      }
+    }
+    for (const int i : done) resolved[i] = 1;
+  }
+  return plan;
 }
 
 std::string describe_events(const Box& box, const Particles& p, const std::vector<int>& which) {

@@ -1,0 +1,70 @@
+"""Instruments of `plab grade`'s idea tests that the kit builds and the grader only reads.
+
+Stage 03 (rubric: the idea's "min_syncs_per_round"): the kit's libplab-ompcount.so, preloaded
+into the student's program, counts the OpenMP synchronisations it runs (parallel regions
+started, barriers and ends of work-sharing loops passed by thread 0 of a team: the program's code
+is not asked), and the kit's plab-rounds says how many mutual-earliest rounds the scene's steps
+need (JSON, from the same C++ as the kit's oracle). A stage that selects its events in rounds of
+parallel loops passes at least two synchronisations a round; one that runs a parallel phase and
+then selects sequentially, or keeps a thread busy beside a sequential program, a few a step.
+"""
+import json
+import os
+import secrets
+import shutil
+import subprocess
+
+LIBRARY = "libplab-ompcount.so"
+INSIDE = "/plab/ompcount.so"  # where the sandbox (bubblewrap) shows the library
+
+
+class RoundsCount:
+    """The synchronisations of one watched run of stage 03 against the rounds its scene needs."""
+
+    def __init__(self, kit_build, sandbox, scene):
+        lib, tool = kit_build / "bin" / LIBRARY, kit_build / "bin" / "plab-rounds"
+        if not lib.is_file() or not tool.is_file():
+            raise RuntimeError(f"the kit's {lib.name} or {tool.name} is not built: run ./plab once "
+                               "in the kit")
+        self.sandbox = sandbox
+        self.lib = sandbox.shared_dir("bin") / LIBRARY  # readable by the sandbox's uid
+        shutil.copyfile(lib, self.lib)
+        os.chmod(self.lib, 0o755)
+        self.secret = secrets.token_hex(16)
+        r = subprocess.run([tool, scene], capture_output=True, text=True)
+        if r.returncode != 0:
+            raise RuntimeError(f"plab-rounds failed on {scene}: {r.stderr}")
+        self.rounds = json.loads(r.stdout)
+
+    def mounts(self):
+        return {INSIDE: self.lib}
+
+    def env(self, program):
+        """The run's environment: the library preloaded, the secret it signs its counts with,
+        and the program it counts (its path as the program sees it)."""
+        bwrap = self.sandbox.mode == "bwrap"
+        return {"LD_PRELOAD": INSIDE if bwrap else str(self.lib), "PLAB_OMP_COUNT": self.secret,
+                "PLAB_OMP_COUNT_PROGRAM": "/plab/stage" if bwrap else str(program)}
+
+    def check(self, idea, run, text):
+        """(problem or None, text): at least min_syncs_per_round synchronisations a round."""
+        try:
+            counts = json.loads(run.read_output("omp-count.json") or "")
+            assert counts["secret"] == self.secret
+            seen = int(counts["regions"]) + int(counts["syncs"])
+        except (ValueError, KeyError, TypeError, AssertionError):
+            return ("its run left no count of its OpenMP synchronisations (the kit's counter "
+                    "reads libgomp's entry points: the stage must use OpenMP, built by the "
+                    "kit's CMake)"), text
+        rounds, steps = self.rounds["total"], self.rounds["steps"]
+        need = idea["min_syncs_per_round"] * rounds
+        text += (f"; {seen} OpenMP synchronisations ({counts['regions']} parallel regions, "
+                 f"{counts['syncs']} barriers and loop ends) for the {rounds} rounds of its "
+                 f"{steps} steps")
+        if seen < need:
+            return (f"it ran {seen} OpenMP synchronisations (parallel regions, barriers, ends of "
+                    f"work-sharing loops) in {steps} steps whose event selection takes {rounds} "
+                    f"mutual-earliest rounds ({self.rounds['rounds']}); a round of parallel loops "
+                    f"passes at least one, so at least {need:g} were expected. "
+                    f"{idea['hint']}"), text
+        return None, text
