@@ -160,7 +160,7 @@ def case_mutants_b():
 
 def case_mutants_hidden():
     """Slips that the random hidden scenes alone never catch (they never put an event exactly at
-    t = 1 or 0, never tie two events): the family scenes of kit/grade/hidden.py must."""
+    t = 1 or 0, never tie two events): the family scenes of plab.grade.hidden must."""
     for name, mutations in [
         ("mutants-c", [
             # the window closed at t = 1 in the naive loop

@@ -1,11 +1,10 @@
-#!/usr/bin/env python3
 """The course guide for instructors and teaching assistants (a docs page, written when `plab docs`
 builds the instructor's docs): per stage, the learning objectives, the expected hours, what the
 student writes, the marking scheme as kit/grade/rubric.json gives it (read here, never retyped),
 what the idea test checks and the hint it prints, the handout's questions and the report's
 deliverable.
 
-  guide.py --kit KIT --out PAGE.md
+  python3 -m plab.guide --kit KIT --out PAGE.md
 """
 import argparse
 import json

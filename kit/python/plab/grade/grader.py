@@ -1,15 +1,13 @@
-#!/usr/bin/env python3
 """plab grade: builds a submission's stages against the kit's own code, checks them against the
 reference, and writes Gradescope's results.json, JUnit XML and a readable summary.
 
-`./plab grade --submission DIR` starts this with the kit's folders; see `./plab grade --help`.
+`./plab grade --submission DIR` runs `python3 -m plab.grade` (plab/grade/__main__.py: the options,
+one grading or a class's) with the kit's folders; see `./plab grade --help`.
 Every threshold and point comes from the rubric (kit/grade/rubric.json). results.json is written
 after every test, so whatever happens later (a crash, a hang, the grader itself failing) the tests
 already run keep their results.
 """
-import argparse
 import json
-import math
 import os
 import pathlib
 import re
@@ -20,16 +18,14 @@ import subprocess
 import sys
 import tempfile
 import time
-import traceback
 from xml.sax.saxutils import escape, quoteattr
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "pyplab"))
-import hidden as hidden_module  # noqa: E402  (the kit's own modules, beside this file)
-import plabio  # noqa: E402  (the kit's formats, read and compared by its C++ programs)
-import races  # noqa: E402
-import sandbox as isolation  # noqa: E402
-import upload  # noqa: E402
+from plab import plabio  # the kit's formats, read and compared by its C++ programs
+from plab.grade import hidden as hidden_module
+from plab.grade import leaderboard
+from plab.grade import races
+from plab.grade import sandbox as isolation
+from plab.grade import upload
 
 
 class Results:
@@ -39,6 +35,7 @@ class Results:
         self.json_path, self.junit_path = pathlib.Path(json_path), pathlib.Path(junit_path)
         self.tests, self.notes, self.start = [], [], time.time()
         self.extra = {}  # results.json's extra_data: for the instructor, not shown to students
+        self.leaderboard = []  # results.json's leaderboard: the grader's measured times
         self.banner = ""  # printed before every test's output (--no-sandbox)
         self.write()
 
@@ -59,6 +56,7 @@ class Results:
         doc = {"score": round(total, 3), "execution_time": round(time.time() - self.start, 1),
                "output": summary, "visibility": "visible", "stdout_visibility": "hidden",
                "extra_data": self.extra,
+               **({"leaderboard": self.leaderboard} if self.leaderboard else {}),
                "tests": [{k: v for k, v in t.items() if k != "seconds"} for t in self.tests]}
         atomic_write(self.json_path, json.dumps(doc, indent=2) + "\n")
         failures = sum(t["status"] == "failed" for t in self.tests)
@@ -159,6 +157,8 @@ class Grader:
                                   f"{a.submission} --seed {self.seed}")
         self.notes = self.results.notes
         self.idea_failed, self.idea_done = {}, set()  # stage folder -> why its idea test failed
+        if a.leaderboard_name:
+            self.notes.append(f"your name on the class's leaderboard: {a.leaderboard_name}")
         self.notes.append(f"hidden scenes from seed {self.seed} (replay: ./plab grade "
                           f"--submission SUBMISSION --seed {self.seed})")
         self.isolate()
@@ -359,14 +359,14 @@ class Grader:
         return tests
 
     def hidden_tests(self, st, folder):
-        """The hidden scenes of this grading's seed (kit/grade/hidden.py: the rubric's random
+        """The hidden scenes of this grading's seed (plab.grade.hidden: the rubric's random
         scenes and the public edge cases' families drawn afresh), with the reference's output."""
         corr = self.rubric["correctness"]
         tests = []
         for name, scene in hidden_module.hidden_scenes(self.seed, st.sid, self.rubric, self.plab,
                                                        folder):
             expected = self.expected_for(st, scene, folder / f"{name}.out")
-            how = (f"python3 kit/grade/hidden.py --seed {self.seed} --stage {st.sid} --only {name} "
+            how = (f"PYTHONPATH=kit/python python3 -m plab.grade.hidden --seed {self.seed} --stage {st.sid} --only {name} "
                    "--out hidden.in && ")
             tests.append((name, scene, expected, corr["hidden_points_each"], True,
                           (how, "hidden.in", "expected.out")))
@@ -792,12 +792,17 @@ class Grader:
         # Full points up to full_up_to, none from zero_at_ratio, linear in log(ratio) between:
         # bounded, continuous, and no division by a small time (the reference's is >= 1 ms).
         full, zero = perf["full_up_to_ratio"], perf["zero_at_ratio"]
-        fraction = min(1.0, max(0.0, 1 - math.log(max(ratio, full) / full) / math.log(zero / full)))
+        fraction = leaderboard.fraction(ratio, full, zero)
         text = (f"median {mm:.3f} s against the reference's {rm:.3f} s (ratio {ratio:.2f}; full "
                 f"points up to {full}, none from {zero}), {perf['runs']} runs each on "
                 f"N = {s['n']}, S = {s['steps']}, {st.threads} thread(s); spread {100 * spread:.0f}%")
         if spread > perf["noisy_spread"]:
             text += f". TOO NOISY (spread above {100 * perf['noisy_spread']:.0f}%): rerun on a quieter machine"
+        if perf.get("relative", "reference") != "reference":
+            text += (f". The rubric scores these points against the class ({perf['relative']}): "
+                     "plab grade --class gives them again from every student's time")
+        # The leaderboard holds the time the grader measured, never one the program printed
+        self.results.leaderboard.append(leaderboard.entry(st.key, mm))
         self.results.add(test, perf["points"] * fraction, perf["points"], fraction >= 0.999, text,
                          False, sum(mine))
 
@@ -842,75 +847,3 @@ class Grader:
             print(st.title, flush=True)
             self.grade_stage(st, built[st.sid])
 
-
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--submission", required=True,
-                    help="the upload: the kit folder, a stages/ folder, a zip, or flat files")
-    ap.add_argument("--stages", default="", help="e.g. 01,06 (default: every stage it has)")
-    ap.add_argument("--out", default="results.json")
-    ap.add_argument("--junit", default="")
-    ap.add_argument("--seed", "--hidden-seed", dest="seed", type=int,
-                    help="the hidden scenes' seed (default: random; recorded in the summary)")
-    ap.add_argument("--rubric", required=True)
-    ap.add_argument("--kit-source", required=True)
-    ap.add_argument("--kit-build", required=True)
-    ap.add_argument("--scratch", default="")
-    ap.add_argument("--keep", action="store_true")
-    ap.add_argument("--races", action="store_true",
-                    help="(the default) build the stages whose rubric marks races again with "
-                         "ThreadSanitizer and report the first race")
-    ap.add_argument("--no-races", action="store_true",
-                    help="skip the ThreadSanitizer check (its points are then not given)")
-    ap.add_argument("--sandbox", choices=("auto", "bwrap", "user"), default="auto",
-                    help="how student code is isolated (default: the strongest that works)")
-    ap.add_argument("--make-private", action="store_true",
-                    help="with the unprivileged-user sandbox: take group and other permissions "
-                         "from the kit's answers (solutions, goldens, build) before grading")
-    ap.add_argument("--no-sandbox", action="store_true",
-                    help="run student code with the grader's own rights (printed on every result)")
-    a = ap.parse_args()
-    a.junit = a.junit or str(pathlib.Path(a.out).with_suffix(".xml"))
-    summary_path = pathlib.Path(a.out).with_suffix(".summary.txt")
-    g, status = None, 0
-    try:
-        g = Grader(a)
-        g.grade()
-    except Refused as e:
-        status = 2
-        if g is None:
-            g = type("G", (), {})()
-            g.results = Results(a.out, a.junit)
-        g.results.notes.append(f"NOT GRADED: {e}")
-        g.results.add("not graded", 0, 0, False, str(e))
-        print(f"plab grade: {e}", file=sys.stderr)
-    except BaseException:  # the grader's own failure still leaves a results.json
-        status = 1
-        if g is None:
-            g = type("G", (), {})()
-            g.results = Results(a.out, a.junit)
-        g.results.add("grader error", 0, 0, False, traceback.format_exc())
-    finally:
-        if g is not None:
-            total, most = g.results.total()
-            report = [f"total: {total:.2f} / {most:g}   (results: {a.out}, JUnit: {a.junit})"]
-            report += [f"  {note}" for note in g.results.notes]
-            failed = [t for t in g.results.tests if t["status"] == "failed"]
-            shown = set()
-            for t in failed:
-                stage = t["name"].split(":")[0]
-                if stage not in shown:
-                    shown.add(stage)
-                    report.append(f"\nfirst failure of stage {stage}: {t['name']}\n"
-                                  + "\n".join("  " + ln for ln in t["output"].splitlines()[:14]))
-            text = "\n".join(report)
-            print("\n" + text)
-            atomic_write(summary_path, text + "\n")  # the instructor's copy, seed included
-            print(f"summary: {summary_path}")
-            if hasattr(g, "scratch") and not a.keep:
-                shutil.rmtree(g.scratch, ignore_errors=True)
-    sys.exit(status)
-
-
-if __name__ == "__main__":
-    main()

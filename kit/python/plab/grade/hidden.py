@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Hidden scenes of `plab grade`, drawn from the grading's secret seed.
 
 Two kinds: the rubric's random scenes (`plab gen ... --seed`, as before), and scenes from the same
@@ -17,9 +16,9 @@ meeting. After drawing a scene, each designed event is checked with the kit's re
 (`--explain STEP:i,...`): the scene is drawn again (from the same seed, next attempt) if any is not
 exactly as designed, so every returned scene really exercises its edge. Expected outputs are
 never made here: the grader computes them with the reference at grading time.
-The reference's events file is read by the kit's own reader (`plab read`, kit/pyplab/plabio.py).
+The reference's events file is read by the kit's own reader (`plab read`, plab.plabio).
 
-  python3 kit/grade/hidden.py --seed S --stage NN --only hidden-ties --out hidden.in
+  PYTHONPATH=kit/python python3 -m plab.grade.hidden --seed S --stage NN --only hidden-ties --out hidden.in
 """
 import argparse
 import json
@@ -30,10 +29,7 @@ import subprocess
 import sys
 from fractions import Fraction
 
-HERE = pathlib.Path(__file__).resolve().parent
-KIT = HERE.parent.parent
-sys.path.insert(0, str(KIT / "kit" / "pyplab"))
-import plabio  # noqa: E402  (the kit's formats and programs)
+from plab import KIT, plabio  # the kit's source folder; its formats and programs
 
 # Fractions of a step at which designed events happen: exact in binary.
 T_INSIDE = (Fraction(1, 4), Fraction(1, 2), Fraction(3, 4))
@@ -605,7 +601,7 @@ def main():
     ap.add_argument("--only", help="one scene name (e.g. hidden-ties); default: every one")
     ap.add_argument("--out", help="with --only: write the scene here (default NAME.in)")
     ap.add_argument("--dir", default=".", help="without --only: folder for NAME.in files")
-    ap.add_argument("--rubric", default=str(HERE / "rubric.json"), help="the grading rubric")
+    ap.add_argument("--rubric", default=str(KIT / "kit" / "grade" / "rubric.json"), help="the grading rubric")
     ap.add_argument("--plab", default=str(KIT / "build" / "bin" / "plab"),
                     help="the kit's plab program (its folder holds the reference)")
     a = ap.parse_args()
@@ -615,7 +611,7 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         made = hidden_scenes(a.seed, a.stage, rubric, a.plab, pathlib.Path(tmp), a.only)
         if a.only and not made:
-            sys.exit(f"hidden.py: no hidden scene named {a.only!r}")
+            sys.exit(f"plab.grade.hidden: no hidden scene named {a.only!r}")
         for name, path in made:
             dest = pathlib.Path(a.out) if (a.only and a.out) else pathlib.Path(a.dir) / f"{name}.in"
             shutil.copyfile(path, dest)
