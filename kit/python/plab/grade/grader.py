@@ -645,14 +645,15 @@ class Grader:
             before = velocities(self.kit_programs, work / "expected.out", k - 1, i) if k >= 1 else None
             after = velocities(self.kit_programs, work / "actual.out", k, i) if before else None
             if before and after:
-                ref = subprocess.run([reference, scene, "--explain", f"{k - 1}:{i}"],
-                                     capture_output=True, text=True).stdout.strip()
-                partner = re.search(r"with (\d+)", ref)
-                if partner:
-                    j = int(partner.group(1))
-                    ref += "\n  " + subprocess.run(
-                        [reference, scene, "--explain", f"{k - 1}:{j}"],
-                        capture_output=True, text=True).stdout.strip()
+                # The partner from the reference's JSON; the student reads its English lines
+                try:
+                    said = hidden_module.explain(reference, scene, k - 1, [i]).get(i, {})
+                except (subprocess.CalledProcessError, ValueError):
+                    said = {}
+                ids = [i, said["partner"]] if said.get("event") == "pair" else [i]
+                ref = "\n  ".join(subprocess.run(
+                    [reference, scene, "--explain", f"{k - 1}:{','.join(map(str, ids))}"],
+                    capture_output=True, text=True).stdout.strip().splitlines())
                 lines.append(f"In step {k - 1} (from the correct state at its start) the reference "
                              f"has:\n  {ref}")
                 lines.append(f"Yours: particle {i} {implied(before, after)}.")
