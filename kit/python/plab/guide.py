@@ -52,9 +52,15 @@ def scheme(rubric, manifest, key, conf):
         rows.append(("no data race (ThreadSanitizer; only for a correct stage)", "",
                      corr["races_points"]))
     if conf.get("performance"):
-        rows.append((f"speed against the reference ({perf['runs']} timed runs, outputs compared; "
-                     f"full marks up to {perf['full_up_to_ratio']}x its time, none from "
-                     f"{perf['zero_at_ratio']}x)", "", perf["points"]))
+        mode = perf.get("relative", "reference")
+        yardstick = {"reference": "the reference", "class_best": "the class's best time",
+                     "curve": "the class"}.get(mode, mode)
+        how = ("by rank in the class (the fastest gets full marks)" if mode == "curve" else
+               f"full marks up to {perf['full_up_to_ratio']}x its time, none from "
+               f"{perf['zero_at_ratio']}x")
+        rows.append((f"speed against {yardstick} ({perf['runs']} timed runs, outputs compared; "
+                     f"{how}; the grader's measured times go on the leaderboard)", "",
+                     perf["points"]))
     return rows
 
 
