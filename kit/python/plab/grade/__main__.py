@@ -21,7 +21,9 @@ import traceback
 
 from plab import KIT
 from plab.grade import classroom
-from plab.grade.grader import Grader, Refused, Results, atomic_write
+from plab.grade.grader import Grader
+from plab.grade.results import Results, atomic_write
+from plab.grade.stage import Refused
 
 
 def parser():
