@@ -29,8 +29,8 @@ class Correctness:
         for name, scene in hidden_module.hidden_scenes(self.seed, st.sid, self.rubric, self.plab,
                                                        folder):
             expected = self.expected_for(st, scene, folder / f"{name}.out")
-            how = (f"PYTHONPATH=kit/python python3 -m plab.grade.hidden --seed {self.seed} --stage {st.sid} --only {name} "
-                   "--out hidden.in && ")
+            how = (f"PYTHONPATH=kit/python python3 -m plab.grade.hidden --seed {self.seed} "
+                   f"--stage {st.sid} --only {name} --out hidden.in && ")
             tests.append((name, scene, expected, corr["hidden_points_each"], True,
                           (how, "hidden.in", "expected.out")))
         return tests

@@ -20,7 +20,8 @@ does it. Expected outputs are never made here: the grader computes them with the
 grading time.
 The reference's events file is read by the kit's own reader (`plab read`, plab.plabio).
 
-  PYTHONPATH=kit/python python3 -m plab.grade.hidden --seed S --stage NN --only hidden-ties --out hidden.in
+  PYTHONPATH=kit/python python3 -m plab.grade.hidden --seed S --stage NN --only hidden-ties \
+      --out hidden.in
 """
 import argparse
 import json
@@ -567,7 +568,8 @@ def main():
     ap.add_argument("--only", help="one scene name (e.g. hidden-ties); default: every one")
     ap.add_argument("--out", help="with --only: write the scene here (default NAME.in)")
     ap.add_argument("--dir", default=".", help="without --only: folder for NAME.in files")
-    ap.add_argument("--rubric", default=str(KIT / "kit" / "grade" / "rubric.json"), help="the grading rubric")
+    ap.add_argument("--rubric", default=str(KIT / "kit" / "grade" / "rubric.json"),
+                    help="the grading rubric")
     ap.add_argument("--plab", default=str(KIT / "build" / "bin" / "plab"),
                     help="the kit's plab program (its folder holds the reference)")
     a = ap.parse_args()
