@@ -26,24 +26,34 @@ from plab.grade.results import Results, atomic_write
 from plab.grade.stage import Refused
 
 
+def existing(kind):
+    """An argparse type: a path that exists (kind "path") or a folder (kind "folder")."""
+    def check(text):
+        path = pathlib.Path(text)
+        if not (path.is_dir() if kind == "folder" else path.exists()):
+            raise argparse.ArgumentTypeError(f"no such {kind}: {text}")
+        return text if kind == "path" else path
+    return check
+
+
 def parser():
     ap = argparse.ArgumentParser(
         prog="plab grade", description=__doc__.split("\n\n")[1].replace("\n", " "))
     what = ap.add_mutually_exclusive_group(required=True)
-    what.add_argument("--submission", metavar="PATH",
+    what.add_argument("--submission", metavar="PATH", type=existing("path"),
                       help="what the student uploaded: the kit folder, a stages/ folder, a zip of "
                            "either, or one stage's files flat")
-    what.add_argument("--class", dest="klass", metavar="DIR", type=pathlib.Path,
+    what.add_argument("--class", dest="klass", metavar="DIR", type=existing("folder"),
                       help="grade a class: a folder with one submission (folder or zip) per "
                            "student, each in its own sandbox; writes OUT/gradebook.csv, "
                            "OUT/summary.html, OUT/leaderboard.html and "
                            "OUT/students/NAME/results.json (resumable)")
-    ap.add_argument("--jobs", type=int, default=max(1, (os.cpu_count() or 2) // 2),
+    ap.add_argument("--jobs", type=int, metavar="J", default=max(1, (os.cpu_count() or 2) // 2),
                     help="with --class: submissions graded at a time (default: one per two cores)")
     ap.add_argument("--regrade", action="store_true",
                     help="with --class: grade again the submissions already graded (default: "
                          "resume)")
-    ap.add_argument("--stages", default="",
+    ap.add_argument("--stages", default="", metavar="LIST",
                     help="stages to grade, e.g. 01,06 (default: every stage the submission has; "
                          "06 means 06 on the CPU and, with a GPU, 06-gpu)")
     ap.add_argument("--out", default=None,
@@ -51,14 +61,14 @@ def parser():
                          "summary goes beside it, NAME.summary.txt); with --class, the folder of "
                          "the class's results (default grades)")
     ap.add_argument("--junit", default="", help="JUnit XML to write (default: beside --out, .xml)")
-    ap.add_argument("--seed", "--hidden-seed", dest="seed", type=int, default=None,
+    ap.add_argument("--seed", "--hidden-seed", dest="seed", type=int, default=None, metavar="K",
                     help="the hidden scenes' seed: replays a grading (default: random, recorded "
                          "in the summary and in results.json's extra_data). `plab grade` passes "
                          "it in the environment (PLAB_GRADE_SEED), which other users cannot read")
     ap.add_argument("--rubric", default=str(KIT / "kit" / "grade" / "rubric.json"),
                     help="the rubric: every point, limit and scene (default: the kit's "
                          "kit/grade/rubric.json)")
-    ap.add_argument("--leaderboard-name", default="",
+    ap.add_argument("--leaderboard-name", default="", metavar="NAME",
                     help="the name this submission's times carry on a class's leaderboard page "
                          "(--class gives each student an anonymous one)")
     ap.add_argument("--scratch", default="", help="where to build and run (default: the system's "
