@@ -217,6 +217,10 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
     if not everyone:
         sys.exit(f"plab grade --class: {klass} holds no submission (a folder or a zip per student)")
     rubric = json.loads(pathlib.Path(rubric_path).read_text())
+    try:
+        leaderboard.check_mode(rubric["performance"])
+    except ValueError as e:
+        sys.exit(f"plab grade --class: {e}")
     out.mkdir(parents=True, exist_ok=True)
     anonymous = anonymous_names(out, everyone)
     todo, done = [], []

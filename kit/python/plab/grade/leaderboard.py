@@ -49,12 +49,23 @@ def times(data):
     return out
 
 
+MODES = ("reference", "class_best", "curve")
+
+
+def check_mode(perf):
+    """The rubric's performance.relative, or ValueError naming the choices."""
+    mode = perf.get("relative", "reference")
+    if mode not in MODES:
+        raise ValueError(f"the rubric's performance.relative is {mode!r}: one of {', '.join(MODES)}")
+    return mode
+
+
 def class_fractions(by_student, perf):
     """{student: share of the points} of one stage, from {student: seconds}, under the rubric's
     relative mode (class_best or curve)."""
+    mode = check_mode(perf)
     if not by_student:
         return {}
-    mode = perf.get("relative", "reference")
     if mode == "class_best":
         best = max(min(by_student.values()), 1e-3)
         return {s: fraction(t / best, perf["full_up_to_ratio"], perf["zero_at_ratio"])
@@ -63,8 +74,7 @@ def class_fractions(by_student, perf):
         n = len(by_student)
         return {s: (n - sum(u < t for u in by_student.values())) / n
                 for s, t in by_student.items()}
-    raise ValueError(f"the rubric's performance.relative is {mode!r}: reference, class_best or "
-                     "curve")
+    return {s: 1.0 for s in by_student}  # reference: the points stay as graded
 
 
 def rescore(graded, perf):
@@ -72,7 +82,7 @@ def rescore(graded, perf):
     graded ({student: results.json's data}); returns {"changed": the students whose data
     changed}. Nothing changes under "reference"."""
     changed = set()
-    if perf.get("relative", "reference") == "reference":
+    if check_mode(perf) == "reference":
         return {"changed": changed}
     per_stage = {}
     for student, data in graded.items():

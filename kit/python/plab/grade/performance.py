@@ -89,7 +89,7 @@ class Performance:
                 f"N = {s['n']}, S = {s['steps']}, {st.threads} thread(s); spread {100 * spread:.0f}%")
         if spread > perf["noisy_spread"]:
             text += f". TOO NOISY (spread above {100 * perf['noisy_spread']:.0f}%): rerun on a quieter machine"
-        if perf.get("relative", "reference") != "reference":
+        if leaderboard.check_mode(perf) != "reference":
             text += (f". The rubric scores these points against the class ({perf['relative']}): "
                      "plab grade --class gives them again from every student's time")
         # The leaderboard holds the time the grader measured, never one the program printed
