@@ -3,7 +3,8 @@
 a zip, the untouched starting point, one that does not compile, one flat upload): the batch is
 killed once the first student is graded, started again, and must grade only those left; then the
 gradebook has one row per student with the right totals, each student has results.json, and the
-summary page shows the histogram. Run by CTest (label grader).
+summary page shows the histogram; the leaderboard page is written and each student has an
+anonymous name there. Run by CTest (label grader).
 
   grader_class.py PLAB_PROGRAM KIT_SOURCE SCRATCH_DIR
 """
@@ -69,6 +70,11 @@ for name, what in expected.items():
 assert "build" in rows["cat"]["flags"], rows["cat"]
 page = (out / "summary.html").read_text()
 assert "data:image/png;base64," in page and "stage 01" in page, "the summary has no histogram"
+board = (out / "leaderboard.html").read_text()
+assert board.startswith("<!DOCTYPE html>") and "http" not in board, "no offline leaderboard page"
+anonymous = {r["leaderboard name"] for r in rows.values()}
+assert len(anonymous) == 5 and all(a.startswith("anon-") for a in anonymous), anonymous
+assert not any(f">{name}<" in board for name in expected), "a student's name on the leaderboard"
 shutil.rmtree(scratch)
 print(f"plab grade --class: killed after {len(graded)} of 5, resumed with the other "
       f"{5 - len(graded)}; gradebook of 5 rows")

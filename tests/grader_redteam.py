@@ -42,6 +42,9 @@ and, measured by the grader outside the student's code (each must score nothing)
                   marks
   links           a stage folder and a step.cpp that are links into the kit's solutions/, an
                   empty zip and a zip of links (the three-line message, no traceback)
+  leaderboard     a stage 02 solution that prints a fake time (1e-6 s) on stdout and stderr: the
+                  leaderboard of its results.json holds the grader's measured median, the one its
+                  performance test states, never the printed number
 and, as a control, read-golden, run-solution, include-path and before-main again with
 --no-sandbox (and without the idea tests), where they must win. (call-oracle no longer wins
 there either: since the oracle moved to kit/instructor/, its header is on no graded build's
@@ -50,6 +53,7 @@ include path, so its source included by path does not compile.)
 import json
 import os
 import pathlib
+import re
 import shutil
 import socket
 import subprocess
@@ -701,7 +705,7 @@ def gpu_cheats(root):
 
 
 def case_gpu_ideas():
-    """The GPU stages' ideas, traced on the device (kit/grade/gpu_idea.py): 04 stepping on the
+    """The GPU stages' ideas, traced on the device (kit/python/plab/grade/gpu_idea.py): 04 stepping on the
     host between copies, 05 on one stream, 06's GPU path with O(N^2) pair tests each score
     nothing on correctness; the honest solutions of 04, 05 and 06-gpu keep full marks. Skipped
     without a GPU. PLAB_REDTEAM_GRADE_ARGS adds options to both gradings (on a machine without
@@ -1056,10 +1060,35 @@ def case_ties():
           f"{ties.get('output', '')[:200]!r}")
 
 
+def case_leaderboard():
+    """The leaderboard is what the grader measured: a stage 02 that claims 1e-6 s gets its real
+    median time, the one its performance test reports."""
+    name = "redteam-leaderboard"
+    shutil.rmtree(scratch / name, ignore_errors=True)
+    root = patched(name, "02", "solutions/02-heap", [
+        ("#include <queue>", "#include <cstdio>\n#include <queue>"),
+        ("void step(const Box& box, Particles& p) {",
+         "void step(const Box& box, Particles& p) {\n  static bool said = false;\n"
+         "  if (!said) std::printf(\"time: 0.000001 s\\n\"), "
+         "std::fprintf(stderr, \"elapsed 0.000001 s\\n\");\n  said = true;")],
+        "stage 02's solution changed shape")
+    if root is None:
+        return
+    tests, doc, _ = grade(name, scratch / name, "02", "--no-races")
+    perf = tests.get("02: performance", {})
+    board = {e["name"]: e for e in doc.get("leaderboard", [])}
+    mine = board.get("02: time (s)", {})
+    said = re.search(r"median ([0-9.]+) s", perf.get("output", ""))
+    check("leaderboard", perf.get("score", 0) > 0 and said is not None
+          and mine.get("order") == "asc" and mine.get("value", 0) > 1e-4
+          and abs(mine["value"] - float(said.group(1))) < 1e-3,
+          f"leaderboard {doc.get('leaderboard')}, performance test {perf.get('output', '')[:120]!r}")
+
+
 CASES = {"copy": case_copy, "escape": case_escape, "processes": case_processes,
          "oracle": case_oracle, "mpi": case_mpi, "control": case_control, "ideas": case_ideas,
          "shortcuts": case_shortcuts, "links": case_links, "gpu-ideas": case_gpu_ideas,
-         "rounds": case_rounds, "ties": case_ties}
+         "rounds": case_rounds, "ties": case_ties, "leaderboard": case_leaderboard}
 scratch.mkdir(parents=True, exist_ok=True)
 try:
     for name, case in CASES.items():

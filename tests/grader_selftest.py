@@ -148,7 +148,7 @@ def case_mutants_b():
 
 def case_mutants_hidden():
     """Slips that the random hidden scenes alone never catch (they never put an event exactly at
-    t = 1 or 0, never tie two events): the family scenes of kit/grade/hidden.py must."""
+    t = 1 or 0, never tie two events): the family scenes of plab.grade.hidden must."""
     for name in ("mutants-c", "mutants-d"):
         tests, _ = grade(name, submission(name, mutations=mutants_of(name)))
         check_hidden(name, tests, [m[0] for m in mutants_of(name)])

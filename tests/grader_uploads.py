@@ -72,7 +72,7 @@ def case_flat_and_replay():
     lost = [n for n, t in hidden(tests).items() if "same text" not in t]
     check("mutant", len(lost) > 0, f"the wrong comparison loses {len(lost)} hidden tests")
     repro = next((t for t in hidden(tests).values() if "Reproduce:" in t), "")
-    check("reproduce", "EXPECTED" not in repro and "hidden.py --seed" in repro and "./plab diff" in repro,
+    check("reproduce", "EXPECTED" not in repro and "plab.grade.hidden --seed" in repro and "./plab diff" in repro,
           "a hidden failure's Reproduce line is real commands: "
           + repro[repro.find("Reproduce:"):][:200])
 
@@ -113,8 +113,7 @@ def case_refusals():
 
 def case_links():
     """A program that leaves a link to a golden file as its output gets nothing for it."""
-    sys.path.insert(0, str(kit / "kit" / "grade"))
-    import sandbox
+    from plab.grade import sandbox  # PYTHONPATH=kit/python (CTest sets it)
     golden = kit / "datasets" / "golden" / "course-1.out"
     out = scratch / "links"
     out.mkdir(parents=True)

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Unit test of kit/grade/races.py's first_race() on a real TSan report (tests/tsan/).
+"""Unit test of plab.grade.races's first_race() on a real TSan report (tests/tsan/).
 
 mutant03-report.txt: the stderr of stage 03's solution with `found[0]` in place of
 `found[omp_get_thread_num()]` (tests/tsan_mutant_check.py's mutant), clang 14, libomp + Archer,
@@ -11,8 +11,7 @@ import unittest
 
 SOURCE_DIR = pathlib.Path(sys.argv.pop(1) if len(sys.argv) > 1 else
                           pathlib.Path(__file__).resolve().parent.parent)
-sys.path.insert(0, str(SOURCE_DIR / "kit" / "grade"))
-import races  # noqa: E402
+from plab.grade import races  # noqa: E402  (PYTHONPATH=kit/python: CTest sets it)
 
 REPORT = (SOURCE_DIR / "tests" / "tsan" / "mutant03-report.txt").read_text()
 

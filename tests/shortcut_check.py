@@ -2,7 +2,7 @@
 """Shortcut tests (CTest label shortcut, with release so that CI runs it): no exercise's answer is
 in what a student receives.
 
-Writes the files of a student release of the kit's HEAD (kit/grade/release.py --files-only: the
+Writes the files of a student release of the kit's HEAD (plab.grade.release --files-only: the
 very selection `plab release` ships, without its build), then compiles, against that release
 alone, "shortcut" stages: a stage whose EXERCISEs are done by calling a function that does them,
 named from the instructor's kit (greedy_plan() and apply() for stages 01-03, the team's selection
@@ -199,9 +199,10 @@ def main():
     scratch = pathlib.Path(a.keep).resolve() if a.keep else pathlib.Path(tempfile.mkdtemp(prefix="plab-shortcut-"))
     release = scratch / "release"
     try:
-        done = subprocess.run([sys.executable, str(source / "kit" / "grade" / "release.py"),
+        done = subprocess.run([sys.executable, "-m", "plab.grade.release",
                                "--kit-source", str(source), "--out", str(release), "--allow-dirty",
-                               "--files-only"], capture_output=True, text=True)
+                               "--files-only"], capture_output=True, text=True,
+                              env=dict(os.environ, PYTHONPATH=str(source / "kit" / "python")))
         if done.returncode != 0:
             print(f"shortcut_check: FAIL: the release could not be written:\n{done.stdout}{done.stderr}")
             return 1

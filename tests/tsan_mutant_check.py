@@ -7,7 +7,7 @@ In a scratch folder: copies solutions/03-openmp/step.cpp, makes every thread of 
 parallel region push into found[0] (instead of its own found[omp_get_thread_num()]), compiles it
 with the tsan build's own compile command, links it in place of the stage 03 solution's library
 with the build's own link command (ninja -t commands), runs it on dense-box.in (40 particles in a small box) with three threads
-(schedule static: each thread has rows of its own) and the environment of kit/grade/races.py, and checks that TSan stopped it (exit code 66) with a
+(schedule static: each thread has rows of its own) and the environment of plab.grade.races, and checks that TSan stopped it (exit code 66) with a
 data race whose first_race() message names step.cpp and a line. The scratch folder is removed.
 """
 import json
@@ -32,8 +32,7 @@ def main():
     source_dir, binary_dir, ninja = (pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2]),
                                      sys.argv[3])
     keep = sys.argv[5] if len(sys.argv) > 5 and sys.argv[4] == "--keep-report" else None
-    sys.path.insert(0, str(source_dir / "kit" / "grade"))
-    import races  # noqa: E402  (kit/grade/races.py, what the autograder imports)
+    from plab.grade import races  # what the autograder imports (PYTHONPATH=kit/python)
 
     problem = races.toolchain_problem()
     if problem:

@@ -3,7 +3,7 @@
 kit/instructor/mutants.json (a slip a student makes: one exact replacement in a solution's
 step.cpp) is graded alone, as a student's upload of that one stage, and what the student then
 reads is recorded in kit/instructor/mistakes.json: the points, how many tests failed, and the
-first failed test with its feedback as results.json gives it. kit/guide/guide.py shows it.
+first failed test with its feedback as results.json gives it. plab.guide (kit/python/plab/guide.py) shows it.
 
 Rerun it when the grader's messages or the mutants change (about a minute a mutant on 2 cores):
 

@@ -3,8 +3,8 @@
 scene, started bare (no sandbox), as an unprivileged user, and in bubblewrap, interleaved, with
 the median and spread of each and the medians' differences.
 
-  tools/sandbox-overhead.py [--program build/bin/plab-run-01-solution]
-                            [--scene datasets/scenes/course-1.in] [--runs 21]
+  PYTHONPATH=kit/python tools/sandbox-overhead.py [--program build/bin/plab-run-01-solution]
+                                                  [--scene datasets/scenes/course-1.in] [--runs 21]
 """
 import argparse
 import os
@@ -15,8 +15,7 @@ import sys
 import tempfile
 
 root = pathlib.Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(root / "kit" / "grade"))
-import sandbox  # noqa: E402
+from plab.grade import sandbox  # noqa: E402  (run with PYTHONPATH=kit/python)
 
 
 def main():

@@ -31,7 +31,7 @@ void add_accuracy(CLI::App& app) {
     for (const StageDir& s : stages("engine")) engine = engine || s.id == a->stepped;
     const Manifest m = load_manifest(source_dir() + "/datasets");
     if (m.exact_stage.empty()) throw std::runtime_error("the manifest names no exact stage");
-    std::vector<std::string> args{"python3", source_dir() + "/kit/accuracy/accuracy.py",
+    std::vector<std::string> args{"python3", "-m", "plab.accuracy",
                                   "--stepped",
                                   require_stage(a->stepped, engine ? "engine" : "solution"),
                                   "--exact", require_stage(m.exact_stage, "solution"),

@@ -22,7 +22,7 @@ void add_gradescope(CLI::App& app) {
   c->callback([out] {
     if (default_impl() != "solution")
       throw std::runtime_error("the autograder needs the instructor's kit (with solutions/)");
-    exec_program({"python3", source_dir() + "/kit/grade/gradescope.py", "--kit-source",
+    exec_program({"python3", "-m", "plab.grade.gradescope", "--kit-source",
                   source_dir(), "--out", *out});
   });
 }

@@ -2,12 +2,19 @@
 /// \brief `plab`: the kit's command line (run, gen, diff, read, golden, test, docs, demo, bench, render, view).
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <string>
 
 #include "commands.hpp"
+#include "project.hpp"
 
 int main(int argc, char** argv) {
+  // The kit's Python is one package, kit/python/plab: every program a command starts finds it
+  // here (`python3 -m plab.grade ...`), without a path of its own.
+  const std::string python = plab::cli::source_dir() + "/kit/python";
+  const char* given = std::getenv("PYTHONPATH");
+  setenv("PYTHONPATH", (given && *given ? python + ":" + given : python).c_str(), 1);
   CLI::App app{"plab: the particle-lab kit. Simulate scenes with any stage, make scenes, compare "
                "outputs, check golden files, run the tests, build the docs."};
   app.name("plab");  // the usage line names the command, not where this machine keeps it

@@ -1,7 +1,7 @@
 /// \file cli/read.cpp
 /// \brief `plab read`: a scene, an output or an events file read with the kit's own parser
 /// (io.hpp) and printed as JSON, or a clear error. The kit's Python tools read every file of
-/// these formats through it (kit/pyplab/plabio.py). A leaf: it never starts another program.
+/// these formats through it (kit/python/plab/plabio.py). A leaf: it never starts another program.
 #include <charconv>
 #include <limits>
 

@@ -29,7 +29,7 @@ void add_release(CLI::App& app) {
   c->callback([a] {
     if (default_impl() != "solution")
       throw std::runtime_error("this is already a student copy (it has no solutions/)");
-    std::vector<std::string> args{"python3", source_dir() + "/kit/grade/release.py",
+    std::vector<std::string> args{"python3", "-m", "plab.grade.release",
                                   "--kit-source", a->kit.empty() ? source_dir() : a->kit,
                                   "--out", a->out};
     if (a->allow_dirty) args.push_back("--allow-dirty");

@@ -34,7 +34,7 @@ void add_render(CLI::App& app) {
     const Scene scene = load_scene(a->scene, kDefaultSeed);
     std::string out = a->out;
     if (out.empty()) out = fs::path(a->scene).stem().string() + ".gif";
-    std::vector<std::string> args{"python3", source_dir() + "/kit/render/render.py",
+    std::vector<std::string> args{"python3", "-m", "plab.render",
                                   "--box", fmt_double(scene.box.L), "--radius",
                                   fmt_double(scene.box.r), "--out", out, "--fps",
                                   fmt_double(a->fps), "--plab", bin_dir() + "/plab"};

@@ -85,7 +85,7 @@ void add_report(CLI::App& app) {
     std::fflush(stdout);
     if (const int rc = run_program(bench); rc != 0)
       throw std::runtime_error("the timings failed (plab bench exit " + std::to_string(rc) + ")");
-    const std::vector<std::string> draw{"python3", source_dir() + "/kit/report/report.py",
+    const std::vector<std::string> draw{"python3", "-m", "plab.report",
                                         "--csv", csv, "--stage", id, "--impl", impl,
                                         "--kit", source_dir(), "--out", out,
                                         "--counts", mpi ? "ranks" : "threads"};

@@ -1,6 +1,6 @@
 /// \file cli/similar.cpp
 /// \brief `plab similar`: a class's submissions of one stage ranked by shared code (copydetect),
-/// the starting point ignored. The options are kit/similar/similar.py's own: this command hands it
+/// the starting point ignored. The options are kit/python/plab/similar.py's own: this command hands it
 /// its arguments untouched (`plab similar --help` prints them).
 #include "common.hpp"
 
@@ -14,7 +14,7 @@ void add_similar(CLI::App& app) {
   c->prefix_command();  // everything after `similar` goes to the script as it was typed
   c->set_help_flag();
   c->callback([c] {
-    std::vector<std::string> args{"python3", source_dir() + "/kit/similar/similar.py", "--kit",
+    std::vector<std::string> args{"python3", "-m", "plab.similar", "--kit",
                                   source_dir()};
     for (const std::string& s : c->remaining()) args.push_back(s);
     g_status = run_program(args);

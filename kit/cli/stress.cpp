@@ -36,7 +36,7 @@ void add_stress(CLI::App& app) {
     if (ids.empty())
       for (const StageDir& s : stages(impl))
         if (s.id != m.exact_stage && fs::exists(stage_program(s.id, impl))) ids.push_back(s.id);
-    std::vector<std::string> args{"python3", source_dir() + "/kit/stress/stress.py",
+    std::vector<std::string> args{"python3", "-m", "plab.stress",
                                   "--plab", bin_dir() + "/plab",
                                   "--ulps-program", bin_dir() + "/plab-pairtime-ulps",
                                   "--work", build_dir() + "/stress",

@@ -65,7 +65,7 @@ void add_test(CLI::App& app) {
     check_impl(which);
     if (*races) {
       if (stage->empty()) throw std::runtime_error("--races needs --stage (03 or 06)");
-      g_status = run_program({"python3", source_dir() + "/kit/grade/race_check.py", "--source",
+      g_status = run_program({"python3", "-m", "plab.grade.race_check", "--source",
                               source_dir(), "--build", build_dir(), "--stage", two_digits(*stage),
                               "--impl", which});
       return;

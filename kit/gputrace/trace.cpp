@@ -13,7 +13,7 @@
 ///      "intervals": [[kind, stream, start_ns, end_ns], ...], "dropped": D}
 ///
 /// kind is 0 for a kernel, 1 a copy, 2 a memset; `intervals` holds the first kMaxIntervals of
-/// them (`dropped` counts the others). The grader (kit/grade/gpu_idea.py) reads it: kernels per
+/// them (`dropped` counts the others). The grader (kit/python/plab/grade/gpu_idea.py) reads it: kernels per
 /// step and their device time (stage 04), kernels on two streams at the same time (stage 05),
 /// the device time of a large scene (stage 06's GPU path). A graph's kernels carry the stream the
 /// graph was launched on.

@@ -41,9 +41,14 @@ void add_options(CLI::App& app, Options& o) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--step-from-each", o.step_from,
                  "grading: from each block of this print-mode output, run one step and print it");
-  app.add_option("--explain", o.explain,
-                 "grading: K:i,j,... says the events of particles i, j, ... in step K (by the kit's "
-                 "greedy oracle, from this stage's state at the start of step K)");
+  auto* explain = app.add_option(
+      "--explain", o.explain,
+      "grading: K:i,j,... says the events of particles i, j, ... in step K (by the kit's greedy "
+      "oracle, from this stage's state at the start of step K)");
+  app.add_flag("--json", o.json,
+               "with --explain: the events as JSON, each time in full precision (what the "
+               "grader reads)")
+      ->needs(explain);
   app.add_option("--report", o.report_path,
                  "write the run's timing as JSON to this file (what plab bench reads)");
   app.add_option("--substeps", o.substeps,

@@ -89,7 +89,9 @@ void explain(const Options& o, const Scene& scene) {
   const auto stage = make_stepper(scene.box, p, o.stage);
   for (long long s = 0; s < k; ++s) stage->step();
   stage->read(p);
-  std::fputs(describe_events(scene.box, p, which).c_str(), stdout);
+  const std::string said = o.json ? describe_events_json(scene.box, p, which)
+                                  : describe_events(scene.box, p, which);
+  std::fputs(said.c_str(), stdout);
 #endif
 }
 

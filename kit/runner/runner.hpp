@@ -28,6 +28,7 @@ struct Options {
   long long steps = -1;     //!< steps instead of the scene's S (-1: the scene's)
   std::string step_from;    //!< grading: one step from each block of this output
   std::string explain;      //!< grading: `K:i,j,...`, the events of those particles in step K
+  bool json = false;        //!< with explain: the events as JSON (what the grader reads)
   std::string schedule = "dynamic,16";  //!< the OpenMP schedule of schedule(runtime) loops
   int threads = 0;          //!< threads (0: all cores)
   std::uint64_t seed = 0;   //!< seed for scenes without particle lines

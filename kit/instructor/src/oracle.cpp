@@ -99,4 +99,34 @@ std::string describe_events(const Box& box, const Particles& p, const std::vecto
   return s.str();
 }
 
+std::string describe_events_json(const Box& box, const Particles& p,
+                                 const std::vector<int>& which) {
+  const Plan plan = plan_step(box, p);
+  std::ostringstream s;
+  char t[64];
+  s << "{\"particles\": [";
+  const char* sep = "";
+  for (const int i : which) {
+    if (i < 0 || i >= static_cast<int>(p.size())) continue;
+    s << sep << "{\"i\": " << i << ", ";
+    sep = ", ";
+    const int j = plan.partner[i];
+    if (j == Plan::kFree) {
+      s << "\"event\": \"free\"}";
+      continue;
+    }
+    // %.17g: the double itself (it reads back bit for bit), never a rounded text
+    const double when = j == Plan::kWall
+                            ? model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r)
+                            : plan.time[i];
+    std::snprintf(t, sizeof t, "%.17g", when);
+    if (j == Plan::kWall)
+      s << "\"event\": \"wall\", \"t\": " << t << "}";
+    else
+      s << "\"event\": \"pair\", \"partner\": " << j << ", \"t\": " << t << "}";
+  }
+  s << "]}\n";
+  return s.str();
+}
+
 }  // namespace plab

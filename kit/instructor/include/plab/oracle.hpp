@@ -33,4 +33,10 @@ Plan plan_in_rounds(const Box& box, const Particles& p, int& rounds);
 /// `particle 8: moves freely`.
 std::string describe_events(const Box& box, const Particles& p, const std::vector<int>& which);
 
+/// The same events as JSON, what the grader reads (`--explain K:i,... --json`):
+/// `{"particles": [{"i": 17, "event": "pair", "partner": 42, "t": 0.3127}, {"i": 3, "event":
+/// "wall", "t": 0.5}, {"i": 8, "event": "free"}]}`, each time the double itself (`%.17g`).
+std::string describe_events_json(const Box& box, const Particles& p,
+                                 const std::vector<int>& which);
+
 }  // namespace plab

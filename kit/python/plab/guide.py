@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """The course guide for instructors and teaching assistants (a docs page, written when `plab docs`
 builds the instructor's docs): per stage, the learning objectives, the expected hours, what the
 student writes, the marking scheme as kit/grade/rubric.json gives it (read here, never retyped),
@@ -6,7 +5,7 @@ what the idea test checks and the hint it prints, the common mistakes (the grade
 the feedback of a real grading, kit/instructor/mistakes.json by tools/mistakes.py), the handout's
 questions and the report's deliverable.
 
-  guide.py --kit KIT --out PAGE.md
+  python3 -m plab.guide --kit KIT --out PAGE.md
 """
 import argparse
 import json
@@ -82,9 +81,15 @@ def scheme(rubric, manifest, key, conf):
         rows.append(("no data race (ThreadSanitizer; only for a correct stage)", "",
                      corr["races_points"]))
     if conf.get("performance"):
-        rows.append((f"speed against the reference ({perf['runs']} timed runs, outputs compared; "
-                     f"full marks up to {perf['full_up_to_ratio']}x its time, none from "
-                     f"{perf['zero_at_ratio']}x)", "", perf["points"]))
+        mode = perf.get("relative", "reference")
+        yardstick = {"reference": "the reference", "class_best": "the class's best time",
+                     "curve": "the class"}.get(mode, mode)
+        how = ("by rank in the class (the fastest gets full marks)" if mode == "curve" else
+               f"full marks up to {perf['full_up_to_ratio']}x its time, none from "
+               f"{perf['zero_at_ratio']}x")
+        rows.append((f"speed against {yardstick} ({perf['runs']} timed runs, outputs compared; "
+                     f"{how}; the grader's measured times go on the leaderboard)", "",
+                     perf["points"]))
     return rows
 
 

@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """plab accuracy: run time against error, the stepped model against exact hard-disk dynamics.
 
 Started by `./plab accuracy`. For each scene it runs the exact event-driven stage (07) and, against
@@ -9,7 +8,7 @@ CPU and, where there is a GPU, on the GPU (double). Errors, at equal physical ti
   overlap     the mean fraction of disks overlapping another at the printed times, and the deepest
   position    the mean distance from the exact positions after 1, 2 and 4 printed steps, in r
   energy      the largest relative change of the kinetic energy over the run
-Scenes and outputs are read by the kit's own reader (`plab read --json`, kit/pyplab/plabio.py).
+Scenes and outputs are read by the kit's own reader (`plab read --json`, plab.plabio).
 """
 import argparse
 import csv
@@ -19,8 +18,7 @@ import os
 import pathlib
 import sys
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "pyplab"))
-import plabio  # noqa: E402  (the kit's formats and programs)
+from plab import load_module, plabio  # the kit's formats and programs
 
 SCENES = {
     "report": ("the 2019 report's scene: N = 10^4, L = 20000, r = 1, model.md's speeds",
@@ -144,8 +142,7 @@ def main():
     if args.csv:
         print(f"wrote {args.csv}")
     if args.plot:
-        sys.path.insert(0, args.figures)
-        import plot_bench
+        plot_bench = load_module(pathlib.Path(args.figures) / "plot_bench.py")
         plot_bench.accuracy_frontier(table, args.plot)
         print(f"wrote {args.plot}")
     return 0

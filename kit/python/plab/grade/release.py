@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """plab release: writes the student version of the kit into a new folder, from what git's HEAD
 holds (never the working folder): the kit without the solutions, the instructor's CI, logs, build
 and scratch files; a README written for students; the reference stage's solution as a compiled
@@ -10,7 +9,7 @@ yet", exit code 3). The release is made in a temporary folder beside OUT and ren
 end: one that fails part-way leaves nothing behind. No hidden-test seed is stored anywhere in the
 kit: `plab grade` takes it at grading time.
 
-  release.py --kit-source DIR --out DIR [--allow-dirty] [--through NN] [--files-only]
+  python3 -m plab.grade.release --kit-source DIR --out DIR [--allow-dirty] [--through NN] [--files-only]
 
 --through NN makes a weekly release: stages 01..NN only, with their handouts and specs (a given
 file of a later stage may hold an earlier stage's answer, so a week's copy holds nothing past its
@@ -37,10 +36,11 @@ import tempfile
 # README's own source (it becomes README.md), the instructor-only code, the instructor's README
 # (replaced), the instructor's pages (the measurement logs of the reference solutions and of the
 # kit's engine: the handouts ask the student to measure) and the similarity test's submissions
-# (independent stage 03 solutions).
+# (independent stage 03 solutions), the course guide (its data and its writer).
 INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "README.md",
                    "handouts/measurements.md", "handouts/engine.md", "handouts/engine-gpu.md",
-                   "handouts/engine-08.md", "tests/similar/", "kit/guide/")
+                   "handouts/engine-08.md", "tests/similar/", "kit/guide/",
+                   "kit/python/plab/guide.py")
 # Files that belong to nobody's copy even when tracked by mistake: logs, build folders, scratch.
 SCRATCH = ("*.log", "*.partial", "*.orig", "*.rej", "*.swp", "*~", "*.pyc", "__pycache__/*",
            "build/*", "build-*/*", ".configure.log")

@@ -1,14 +1,16 @@
-#!/usr/bin/env python3
 """plab grade --class: grades every submission of a class folder (one folder or zip per student),
 each by its own grader process in its own sandbox, J at a time, and writes the gradebook.
 
-  classroom.py --class DIR --out OUT --jobs J [--stages 01,02] [--regrade] -- GRADER ARGS...
+  python3 -m plab.grade --class DIR --out OUT --jobs J [--stages 01,02] [--regrade] [GRADER OPTIONS]
 
 OUT/students/NAME/ holds each student's results.json (Gradescope's format), JUnit XML and the
 summary a student is shown. A batch that was stopped starts again where it stopped: a student
 whose results.json exists for the same upload (its hash in OUT/students/NAME/upload.sha256) is
 not graded twice unless --regrade. At the end: OUT/gradebook.csv (one row per student: each
-stage's points, the total, flags) and OUT/summary.html (the score histogram of every stage).
+stage's points, the total, flags, the student's anonymous leaderboard name), OUT/summary.html
+(the score histogram of every stage) and OUT/leaderboard.html (plab.grade.leaderboard: the
+grader's measured times under anonymous names; with the rubric's relative scoring, the
+performance points against the class).
 """
 import argparse
 import base64
@@ -20,12 +22,15 @@ import io
 import json
 import os
 import pathlib
+import secrets
 import subprocess
 import sys
 import threading
 import time
 
-HERE = pathlib.Path(__file__).resolve().parent
+from plab import python_env
+from plab.grade import leaderboard
+
 
 
 def upload_hash(entry):
@@ -84,11 +89,11 @@ def grade_one(name, entry, out, grader_args, stages, jobs_cpu):
     mine = out / "students" / name
     mine.mkdir(parents=True, exist_ok=True)
     results = mine / "results.json"
-    cmd = [sys.executable, str(HERE / "grade.py"), "--submission", str(entry), "--out",
+    cmd = [sys.executable, "-m", "plab.grade", "--submission", str(entry), "--out",
            str(results), *grader_args]
     if stages:
         cmd += ["--stages", stages]
-    env = dict(os.environ, PLAB_BUILD_JOBS=str(jobs_cpu))
+    env = dict(python_env(), PLAB_BUILD_JOBS=str(jobs_cpu))
     t0 = time.monotonic()
     with open(mine / "grader.log", "w") as log:
         subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
@@ -152,10 +157,10 @@ def histogram_png(values, most, title):
 def write_outputs(out, rows, keys):
     with open(out / "gradebook.csv", "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["student", *keys, "total", "max", "flags"])
+        w.writerow(["student", *keys, "total", "max", "flags", "leaderboard name"])
         for r in rows:
             w.writerow([r["name"], *[f"{r['per'].get(k, (0, 0))[0]:g}" for k in keys],
-                        f"{r['total']:g}", f"{r['max']:g}", " ".join(r["flags"])])
+                        f"{r['total']:g}", f"{r['max']:g}", " ".join(r["flags"]), r["anonymous"]])
     parts = [f"<h1>Class summary: {len(rows)} students</h1>",
              "<p>Score histograms per stage (points), from each student's results.json. "
              "The gradebook is gradebook.csv beside this page.</p><div>"]
@@ -183,37 +188,56 @@ def write_outputs(out, rows, keys):
                                       "</body></html>")
 
 
-def main():
-    argv = sys.argv[1:]
-    grader_args = argv[argv.index("--") + 1:] if "--" in argv else []
-    argv = argv[:argv.index("--")] if "--" in argv else argv
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--class", dest="klass", required=True, type=pathlib.Path)
-    ap.add_argument("--out", required=True, type=pathlib.Path)
-    ap.add_argument("--jobs", type=int, default=max(1, (os.cpu_count() or 2) // 2))
-    ap.add_argument("--stages", default="")
-    ap.add_argument("--regrade", action="store_true")
-    a = ap.parse_args(argv)
-    if not a.klass.is_dir():
-        sys.exit(f"plab grade --class: {a.klass} is not a folder")
-    everyone = students(a.klass)
+def anonymous_names(out, everyone):
+    """{student: anonymous name} for the leaderboard, kept in OUT/leaderboard-names.json so that a
+    resumed batch keeps them (random: a name says nothing about who it is; the instructor's
+    gradebook.csv pairs them)."""
+    path = out / "leaderboard-names.json"
+    try:
+        names = json.loads(path.read_text())
+    except (OSError, ValueError):
+        names = {}
+    taken = set(names.values())
+    for student, _ in everyone:
+        while student not in names:
+            name = f"anon-{secrets.token_hex(2)}"
+            if name not in taken:
+                names[student] = name
+                taken.add(name)
+    path.write_text(json.dumps(names, indent=1, sort_keys=True) + "\n")
+    return names
+
+
+def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
+    """Grades the class folder into out; returns the exit status (1 if a grading left no
+    results.json)."""
+    if not klass.is_dir():
+        sys.exit(f"plab grade --class: {klass} is not a folder")
+    everyone = students(klass)
     if not everyone:
-        sys.exit(f"plab grade --class: {a.klass} holds no submission (a folder or a zip per student)")
-    a.out.mkdir(parents=True, exist_ok=True)
+        sys.exit(f"plab grade --class: {klass} holds no submission (a folder or a zip per student)")
+    rubric = json.loads(pathlib.Path(rubric_path).read_text())
+    try:
+        leaderboard.check_mode(rubric["performance"])
+    except ValueError as e:
+        sys.exit(f"plab grade --class: {e}")
+    out.mkdir(parents=True, exist_ok=True)
+    anonymous = anonymous_names(out, everyone)
     todo, done = [], []
     for name, entry in everyone:
-        mine = a.out / "students" / name
+        mine = out / "students" / name
         same = (mine / "results.json").is_file() and (mine / "upload.sha256").is_file() and \
             (mine / "upload.sha256").read_text().strip() == upload_hash(entry)
-        (done if same and not a.regrade else todo).append((name, entry))
+        (done if same and not regrade else todo).append((name, entry))
     cores = os.cpu_count() or 2
-    per_job = max(1, cores // max(1, a.jobs))
+    per_job = max(1, cores // max(1, jobs))
     print(f"plab grade --class: {len(everyone)} submissions, {len(done)} graded already, "
-          f"{len(todo)} to grade, {a.jobs} at a time ({per_job} cores each)", flush=True)
+          f"{len(todo)} to grade, {jobs} at a time ({per_job} cores each)", flush=True)
     progress = Progress(len(everyone), len(done))
     failures = []
-    with concurrent.futures.ThreadPoolExecutor(max_workers=a.jobs) as pool:
-        futures = [pool.submit(grade_one, n, e, a.out, grader_args, a.stages, per_job)
+    with concurrent.futures.ThreadPoolExecutor(max_workers=jobs) as pool:
+        futures = [pool.submit(grade_one, n, e, out,
+                               [*grader_args, "--leaderboard-name", anonymous[n]], stages, per_job)
                    for n, e in todo]
         for fut in concurrent.futures.as_completed(futures):
             name, data, seconds = fut.result()
@@ -224,23 +248,32 @@ def main():
                 per = stage_points(data)
                 progress.tick(name, f"{sum(s for s, _ in per.values()):g}/"
                                     f"{sum(m for _, m in per.values()):g} in {seconds:.0f} s")
+    graded = {}
+    for name, _ in everyone:
+        try:
+            graded[name] = json.loads((out / "students" / name / "results.json").read_text())
+        except (OSError, ValueError):
+            pass
+    board = leaderboard.rescore(graded, rubric["performance"])
+    for name, data in graded.items():
+        if name in board["changed"]:
+            leaderboard.write_results(out / "students" / name / "results.json", data)
     rows = []
     for name, _ in everyone:
-        path = a.out / "students" / name / "results.json"
-        try:
-            data = json.loads(path.read_text())
-        except (OSError, ValueError):
-            rows.append({"name": name, "per": {}, "total": 0, "max": 0, "flags": ["not-graded"]})
+        if name not in graded:
+            rows.append({"name": name, "anonymous": anonymous[name], "per": {}, "total": 0,
+                         "max": 0, "flags": ["not-graded"]})
             continue
+        data = graded[name]
         per = stage_points(data)
-        rows.append({"name": name, "per": per, "total": sum(s for s, _ in per.values()),
+        rows.append({"name": name, "anonymous": anonymous[name], "per": per,
+                     "total": sum(s for s, _ in per.values()),
                      "max": sum(m for _, m in per.values()), "flags": flags(data)})
     keys = sorted({k for r in rows for k in r["per"]})
-    write_outputs(a.out, rows, keys)
-    print(f"plab grade --class: gradebook {a.out / 'gradebook.csv'}, summary {a.out / 'summary.html'}"
+    write_outputs(out, rows, keys)
+    leaderboard.write_page(out / "leaderboard.html", {anonymous[n]: d for n, d in graded.items()},
+                           rubric["performance"])
+    print(f"plab grade --class: gradebook {out / 'gradebook.csv'}, summary {out / 'summary.html'}, "
+          f"leaderboard {out / 'leaderboard.html'}"
           + (f"; {len(failures)} without results: {', '.join(failures)}" if failures else ""))
-    sys.exit(1 if failures else 0)
-
-
-if __name__ == "__main__":
-    main()
+    return 1 if failures else 0

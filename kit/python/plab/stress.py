@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """plab stress: hostile scenes on every stage, invariants at every step, all stages bit-identical.
 
 Started by `./plab stress` (which passes the stage programs). For each scene it runs each stage with
@@ -12,7 +11,7 @@ Started by `./plab stress` (which passes the stage programs). For each scene it 
   - every stage's digests identical to the first stage's.
 It prints a table and exits 1 on any violation. It also measures the pair-time formula itself
 (plab-pairtime-ulps) and can draw that distribution (--plot). Scenes are read and digests compared
-by the kit's own programs (`plab read --json`, `plab diff`, through kit/pyplab/plabio.py).
+by the kit's own programs (`plab read --json`, `plab diff`, through plab.plabio).
 """
 import argparse
 import csv
@@ -25,8 +24,7 @@ import subprocess
 import sys
 import time
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "pyplab"))
-import plabio  # noqa: E402  (the kit's formats and programs)
+from plab import load_module, plabio  # the kit's formats and programs
 
 OUTSIDE_ULPS = 4      # a centre may be this many ulps of L outside [r, L - r] (rounding of x + t v)
 COLLISION_ULPS = 16   # a collision may change the energy of its disks by this many ulps (model.md
@@ -217,8 +215,7 @@ def main():
             w.writerows(rows)
         print(f"wrote {args.csv}")
     if args.plot:
-        sys.path.insert(0, args.figures)
-        import plot_bench
+        plot_bench = load_module(pathlib.Path(args.figures) / "plot_bench.py")
         plot_bench.pairtime_ulps(ulps_csv, args.plot)
         print(f"wrote {args.plot}")
     print(f"\n{len(rows)} scenes, {violations} with violations")

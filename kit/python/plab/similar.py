@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """plab similar: ranks the pairs of a class's submissions of one stage by how much code they share,
 with copydetect (winnowed fingerprints of the token stream, names normalised, so renamed
 identifiers, moved functions and changed comments do not hide a copy) and the stage's starting
@@ -19,6 +18,8 @@ import tempfile
 import zipfile
 
 from copydetect import CopyDetector
+
+from plab import KIT
 
 EXTENSIONS = (".cpp", ".cu", ".cuh", ".hpp", ".h", ".cc")
 
@@ -164,7 +165,7 @@ def main():
     ap.add_argument("--json", type=pathlib.Path, default=None,
                     help="also write the ranking as JSON (pairs, similarity, flagged)")
     ap.add_argument("--show", type=int, default=20, help="pairs shown side by side (default %(default)s)")
-    ap.add_argument("--kit", type=pathlib.Path, default=pathlib.Path(__file__).resolve().parents[2],
+    ap.add_argument("--kit", type=pathlib.Path, default=KIT,
                     help=argparse.SUPPRESS)
     a = ap.parse_args()
     stage = a.stage.zfill(2)

@@ -1,7 +1,6 @@
-#!/usr/bin/env python3
 """`plab test --races`: a stage's data races, found by ThreadSanitizer, for the student.
 
-  race_check.py --source DIR --build DIR --stage NN --impl student|solution [--scene FILE ...]
+  python3 -m plab.grade.race_check --source DIR --build DIR --stage NN --impl student|solution [--scene FILE ...]
 
 Builds the stage's program with ThreadSanitizer in its own folder (DIR/races-NN: clang++, LLVM's
 OpenMP and its Archer tool, the cmake arguments of races.py, no tests: only the stage's program),
@@ -10,7 +9,7 @@ deals every loop's iterations round-robin, so every thread works in every loop),
 first race: it prints the file and line of both accesses (the stage's own files first) and keeps
 TSan's whole report in DIR/races-NN/report.txt. Exit code 0: no race seen; 1: a race; 2: the check
 could not run (no clang++, libomp or Archer; the build failed). The same build and run as the
-grader's race check (kit/grade/grade.py), without the sandbox and the hidden scene.
+grader's race check (plab.grade.grader), without the sandbox and the hidden scene.
 """
 import argparse
 import os
@@ -20,8 +19,7 @@ import subprocess
 import sys
 import time
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-import races  # noqa: E402  (the grader's race machinery: TSan's build, environment and report)
+from plab.grade import races  # the grader's race machinery: TSan's build, environment and report
 
 #: The scenes a race check runs by default: crowded ones, where every loop has work for every
 #: thread and particles meet (dense-box: 40 disks in a small box; course-1).

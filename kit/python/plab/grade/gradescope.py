@@ -1,11 +1,10 @@
-#!/usr/bin/env python3
 """plab gradescope: writes Gradescope's autograder zip. At its root: setup.sh and run_autograder
 (from kit/grade/gradescope/, mode 0755) and the instructor's kit: the files git tracks (`git
 ls-files`, solutions/ included: the grader needs the reference), without build trees, logs or
 scratch. Gradescope unpacks the zip into /autograder/source, runs setup.sh once (packages, build,
 the kit made private to root) and run_autograder for each submission.
 
-  gradescope.py --kit-source DIR --out ZIP
+  python3 -m plab.grade.gradescope --kit-source DIR --out ZIP
 """
 import argparse
 import fnmatch

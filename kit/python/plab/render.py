@@ -1,16 +1,15 @@
-#!/usr/bin/env python3
 """Animates particle-lab outputs with matplotlib: the box, the disks at their true radius, one
 frame per step, the step's collisions marked. `plab render` runs a stage and calls this; it can
 also be run on any print-mode output (a golden file, a student's output).
 
-  render.py --output FILE [--events FILE] --box L --radius R [--steps A:B] [--follow I]
+  python3 -m plab.render --output FILE [--events FILE] --box L --radius R [--steps A:B] [--follow I]
             [--out anim.gif|anim.mp4|frame.svg|frame.png] [--plab PLAB]
-  render.py --output EXPECTED --output ACTUAL --mark STEP:PARTICLE:TEXT ...   (side by side)
+  python3 -m plab.render --output EXPECTED --output ACTUAL --mark STEP:PARTICLE:TEXT ...   (side by side)
 
 Frame k shows the state at the start of step k and marks the particles that collide during that
 step: orange for a wall, red for another particle. Without --events, collisions are read from the
 velocities of the next printed step (a flip of signs with equal magnitudes counts as a wall).
-The files are read by the kit's own reader (`plab read --json`, through kit/pyplab/plabio.py).
+The files are read by the kit's own reader (`plab read --json`, through plab.plabio).
 """
 import argparse
 import pathlib
@@ -25,8 +24,7 @@ from matplotlib import animation  # noqa: E402
 from matplotlib.collections import EllipseCollection  # noqa: E402
 from matplotlib.patches import Circle, Rectangle  # noqa: E402
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "pyplab"))
-import plabio  # noqa: E402  (the kit's formats, read by its C++ reader)
+from plab import plabio  # noqa: E402  (the kit's formats, read by its C++ reader)
 
 COLOURS = {"none": "#4c72b0", "wall": "#ff9f1c", "pair": "#d62728", "follow": "#2ca02c"}
 

@@ -13,7 +13,7 @@ The leaves, which never start Python (nor any other program):
     plab gen ...            a reproducible random scene (kit/cli/gen.cpp)
     plab diff [--json] A B  where two outputs differ, also step by step (kit/cli/diff.cpp)
     plab-run-NN-IMPL        a stage's runner (kit/runner/main.cpp), run by the tools directly or,
-                            for student code, in the grader's sandbox (kit/grade/sandbox.py)
+                            for student code, in the grader's sandbox (plab.grade.sandbox)
 The `plab` commands that start Python (render, grade, accuracy, stress, release, gradescope;
 test through CTest's Python checks, docs through its figure and offline scripts) are never called
 from a tool: a tool that needs what one of them does calls the leaves it is made of. (Before this
@@ -25,7 +25,7 @@ import json
 import pathlib
 import subprocess
 
-KIT = pathlib.Path(__file__).resolve().parent.parent.parent  # the kit's source folder
+from plab import KIT  # the kit's source folder
 
 
 class FormatError(Exception):

@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Hidden scenes of `plab grade`, drawn from the grading's secret seed.
 
 Two kinds: the rubric's random scenes (`plab gen ... --seed`, as before), and scenes from the same
@@ -14,26 +13,25 @@ quantity of the designed event is exact in double arithmetic (the exact arithmet
 next to each family below). Most groups of particles move along one axis in their own lane
 (lanes at least 2r + 1 apart, no velocity across them), so several groups share one scene without
 meeting. After drawing a scene, each designed event is checked with the kit's reference program
-(`--explain STEP:i,...`): the scene is drawn again (from the same seed, next attempt) if any is not
-exactly as designed, so every returned scene really exercises its edge. Expected outputs are
-never made here: the grader computes them with the reference at grading time.
-The reference's events file is read by the kit's own reader (`plab read`, kit/pyplab/plabio.py).
+(`--explain STEP:i,... --json`, its event times as doubles): the scene is drawn again (from the
+same seed, next attempt) if any is not exactly as designed, so every returned scene really
+exercises its edge. No physics is computed here (no event time, no collision): the kit's C++
+does it. Expected outputs are never made here: the grader computes them with the reference at
+grading time.
+The reference's events file is read by the kit's own reader (`plab read`, plab.plabio).
 
-  python3 kit/grade/hidden.py --seed S --stage NN --only hidden-ties --out hidden.in
+  PYTHONPATH=kit/python python3 -m plab.grade.hidden --seed S --stage NN --only hidden-ties \
+      --out hidden.in
 """
 import argparse
 import json
-import math
 import pathlib
 import random
 import subprocess
 import sys
 from fractions import Fraction
 
-HERE = pathlib.Path(__file__).resolve().parent
-KIT = HERE.parent.parent
-sys.path.insert(0, str(KIT / "kit" / "pyplab"))
-import plabio  # noqa: E402  (the kit's formats and programs)
+from plab import KIT, plabio  # the kit's source folder; its formats and programs
 
 # Fractions of a step at which designed events happen: exact in binary.
 T_INSIDE = (Fraction(1, 4), Fraction(1, 2), Fraction(3, 4))
@@ -461,74 +459,39 @@ def scene_text(L, r, steps, parts):
     return "\n".join(lines) + "\n"
 
 
-def model_pair_time(pi, pj, r):
-    """model.md's pair time, the same double operations in the same order as model::pair_time()
-    (Python floats are IEEE doubles, never fused)."""
-    dx, dy, dvx, dvy = pi[0] - pj[0], pi[1] - pj[1], pi[2] - pj[2], pi[3] - pj[3]
-    c = (dx * dx + dy * dy) - (4 * r) * r
-    b = 2 * (dx * dvx + dy * dvy)
-    a = dvx * dvx + dvy * dvy
-    disc = b * b - (4 * a) * c
-    if a == 0 or disc < 0:
-        return math.inf
-    t1 = (-math.sqrt(disc) - b) / (2 * a)
-    if t1 > 0:
-        return t1
-    return 0.0 if (math.sqrt(disc) - b) / (2 * a) > 0 else math.inf
-
-
-def model_wall_time(p, L, r):
-    """model.md's wall time min(t_x, t_y), as model::wall_time()."""
-    def axis(pos, v):
-        if v == 0:
-            return math.inf
-        return (pos - r) / (0 - v) if v < 0 else ((L - pos) - r) / v
-    tx, ty = axis(p[0], p[2]), axis(p[1], p[3])
-    return ty if ty < tx else tx
-
-
-def exact_in_doubles(L, r, parts, checks):
-    """Every designed event inside a step (0 < t < 1; its particles moved freely until then, by
-    design) computed in doubles from the designed state: it must be t exactly, not t rounded."""
-    bad = []
-    for step, i, kind, j, t in checks:
-        if kind not in ("wall", "pair") or not 0 < t < 1:
-            continue
-        at = [[float(p[0] + step * p[2]), float(p[1] + step * p[3]), float(p[2]), float(p[3])]
-              for p in parts]
-        got = (model_wall_time(at[i], float(L), float(r)) if kind == "wall" else
-               model_pair_time(at[min(i, j)], at[max(i, j)], float(r)))
-        if got != float(t):
-            bad.append(f"step {step} particle {i}: {kind} at {got!r} in doubles, designed {t}")
-    return bad
-
-
-def explain_lines(reference, scene, step, ids):
+def explain(reference, scene, step, ids):
+    """{particle: its event in the step} as the reference's greedy oracle sees it, read from its
+    JSON (`--explain STEP:i,... --json`): {"event": "free" | "wall" | "pair", "partner", "t"},
+    each t the reference's own double."""
     out = subprocess.run([str(reference), str(scene), "--explain",
-                          f"{step}:{','.join(map(str, ids))}"],
+                          f"{step}:{','.join(map(str, ids))}", "--json"],
                          capture_output=True, text=True, check=True).stdout
-    return {int(line.split(":")[0].split()[1]): line.split(": ", 1)[1]
-            for line in out.splitlines() if line.startswith("particle ")}
+    return {e["i"]: e for e in json.loads(out)["particles"]}
 
 
 def verify(reference, scene, checks):
-    """The designed events, as the reference's greedy oracle sees them; a list of mismatches."""
+    """The designed events, as the reference's greedy oracle sees them; a list of mismatches.
+    A designed wall or pair event inside a step (0 < t < 1) must be the designed t exactly, not t
+    rounded: the kit's C++ computes it (model.hpp, in the reference), never this file."""
     bad, by_step = [], {}
     for c in checks:
         by_step.setdefault(c[0], []).append(c)
     for step, cs in sorted(by_step.items()):
-        said = explain_lines(reference, scene, step, sorted({c[1] for c in cs}))
+        said = explain(reference, scene, step, sorted({c[1] for c in cs}))
         for _, i, kind, j, t in cs:
-            got = said.get(i, "")
+            got = said.get(i, {})
             if kind == "nopair":  # lost a tie: free, or its own wall later in the step
-                if got.startswith("pair collision") or not got:
-                    bad.append(f"step {step} particle {i}: want no pair, reference says {got!r}")
+                if got.get("event", "pair") == "pair":
+                    bad.append(f"step {step} particle {i}: want no pair, reference says {got}")
                 continue
-            want = {"free": "moves freely",
-                    "wall": f"hits a wall at t = {float(t or 0):.8f}",
-                    "pair": f"pair collision with {j} at t = {float(t or 0):.8f}"}[kind]
-            if got != want:
-                bad.append(f"step {step} particle {i}: want {want!r}, reference says {got!r}")
+            if got.get("event") != kind or (kind == "pair" and got.get("partner") != j):
+                bad.append(f"step {step} particle {i}: want {kind}"
+                           f"{f' with {j}' if kind == 'pair' else ''}, reference says {got}")
+            elif kind in ("wall", "pair") and f"{got['t']:.8f}" != f"{float(t or 0):.8f}":
+                bad.append(f"step {step} particle {i}: {kind} at t = {got['t']!r}, designed {t}")
+            elif kind in ("wall", "pair") and 0 < t < 1 and got["t"] != float(t):
+                bad.append(f"step {step} particle {i}: {kind} at {got['t']!r} in doubles, "
+                           f"designed {t} (not exact)")
     return bad
 
 
@@ -555,7 +518,7 @@ def make_family(seed, stage, k, family, reference, path, plab):
             problems = [str(e)]
             continue
         path.write_text(scene_text(L, r, steps, parts))
-        problems = exact_in_doubles(L, r, parts, checks) + verify(reference, path, checks)
+        problems = verify(reference, path, checks)
         if family == "hidden-lattice":
             problems += dense_check(reference, path, plab)
         if not problems:
@@ -619,7 +582,8 @@ def main():
     ap.add_argument("--only", help="one scene name (e.g. hidden-ties); default: every one")
     ap.add_argument("--out", help="with --only: write the scene here (default NAME.in)")
     ap.add_argument("--dir", default=".", help="without --only: folder for NAME.in files")
-    ap.add_argument("--rubric", default=str(HERE / "rubric.json"), help="the grading rubric")
+    ap.add_argument("--rubric", default=str(KIT / "kit" / "grade" / "rubric.json"),
+                    help="the grading rubric")
     ap.add_argument("--plab", default=str(KIT / "build" / "bin" / "plab"),
                     help="the kit's plab program (its folder holds the reference)")
     a = ap.parse_args()
@@ -629,7 +593,7 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         made = hidden_scenes(a.seed, a.stage, rubric, a.plab, pathlib.Path(tmp), a.only)
         if a.only and not made:
-            sys.exit(f"hidden.py: no hidden scene named {a.only!r}")
+            sys.exit(f"plab.grade.hidden: no hidden scene named {a.only!r}")
         for name, path in made:
             dest = pathlib.Path(a.out) if (a.only and a.out) else pathlib.Path(a.dir) / f"{name}.in"
             shutil.copyfile(path, dest)

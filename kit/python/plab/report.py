@@ -1,9 +1,8 @@
-#!/usr/bin/env python3
 """The student's report skeleton (`plab report`): from the CSV that `plab bench --csv` wrote for
 the student's own stage, a Markdown report with this machine's description, the tables, figures
 of time against N, speedup and efficiency (matplotlib), and the stage handout's questions.
 
-  report.py --csv BENCH.csv --stage NN --impl IMPL --kit KIT --out DIR [--counts threads|ranks]
+  python3 -m plab.report --csv BENCH.csv --stage NN --impl IMPL --kit KIT --out DIR [--counts threads|ranks]
 
 `plab report --help` is the command to run; this script is its second half.
 """

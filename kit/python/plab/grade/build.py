@@ -1,0 +1,103 @@
+"""Building a submission's stages with the kit's own CMake, kit and runner, in the sandbox."""
+import os
+import pathlib
+import shutil
+
+from plab.grade import upload
+
+
+def readable_by_all(folder):
+    """Folders 0755 and files 0644 (0755 where the owner may run them) under `folder`: a copy that
+    the sandbox's uid can read whatever the modes of what it was copied from."""
+    for path in [folder, *folder.rglob("*")]:
+        if path.is_symlink():
+            continue
+        mode = path.stat().st_mode
+        os.chmod(path, 0o755 if path.is_dir() or mode & 0o100 else 0o644)
+
+
+class Build:
+    """Building: a mixin of Grader (plab.grade.grader)."""
+
+    # -- building --------------------------------------------------------------------------------
+    def build(self, stages, found):
+        """Builds each stage's program from the submission's sources and the kit's own CMake, kit
+        and runner, in the sandbox (the compiler sees the system, the kit's public part and the
+        submission, nothing else: not the kit's greedy oracle, a whole step that a stage could
+        call or include, so the runner is built there without it). Returns {folder id: program
+        path or error text}."""
+        folders = self.kit_folders
+        src = self.sandbox.shared_dir("src")
+        for item in ("CMakeLists.txt", "CMakePresets.json", "cmake", "kit", "docs"):
+            source = self.kit / item
+            if source.is_dir():
+                shutil.copytree(source, src / item, ignore=shutil.ignore_patterns(
+                    "grade", "__pycache__", "instructor"))
+            else:
+                shutil.copy2(source, src / item)
+        built = {}
+        limit_kb = self.rubric["limits"]["source_kb"]
+        for sid in sorted({s.sid for s in stages}):
+            dest = src / "stages" / folders[sid]
+            dest.mkdir(parents=True)
+            for declared in ("CMakeLists.txt", "stage.json"):  # never theirs
+                shutil.copy2(self.kit / "stages" / folders[sid] / declared, dest)
+            if sid not in found:
+                built[sid] = f"the submission has no stages/{folders[sid]}/"
+                continue
+            sources = upload.sources(found[sid])
+            size = sum(f.stat().st_size for f in sources)
+            if size > limit_kb * 1024:  # room for any solution, not for an embedded program
+                built[sid] = (f"its sources are {size // 1024} KB, more than the rubric's "
+                              f"{limit_kb} KB (the kit's solution of a stage is under 40 KB)")
+                continue
+            for f in sources:
+                shutil.copy2(f, dest / f.name)
+            # A given file the solution does not change lives once, in the starting point (the
+            # kit's solutions/NN-name leaves it out): an upload without it gets the kit's.
+            given = self.kit / "stages" / folders[sid]
+            for f in sorted(given.iterdir()):
+                if (f.is_file() and not (self.kit / "solutions" / folders[sid] / f.name).exists()
+                        and not (dest / f.name).exists()):
+                    shutil.copy2(f, dest / f.name)
+        readable_by_all(src)  # the kit may be private (Gradescope's setup.sh makes it so)
+        build = self.sandbox.writable_dir(self.sandbox.box, "build-")
+        mounts = ({"/plab/src": src}, {"/plab/build": build})
+        print(f"building stages {', '.join(sorted({s.sid for s in stages}))} in the sandbox",
+              flush=True)
+        kit_lib = self.kit_build / "kit" / "libplab_kit.a"  # the kit, compiled once already
+        prebuilt = []
+        if kit_lib.is_file():
+            shutil.copyfile(kit_lib, self.sandbox.shared_dir("kitlib") / kit_lib.name)
+            mounts[0]["/plab/kitlib"] = self.sandbox.box / "kitlib"
+            prebuilt = [f"-DPLAB_PREBUILT_KIT=/plab/kitlib/{kit_lib.name}"]
+        # No stage graded on a GPU (none here): the CPU paths only, without nvcc's minutes
+        cuda = [] if any(s.gpu for s in stages) else ["-DPLAB_ENABLE_CUDA=OFF"]
+        conf = self.sandbox.run(["cmake", "-S", "/plab/src", "-B", "/plab/build", "-G", "Ninja",
+                                 "-DCMAKE_BUILD_TYPE=Release", "-DPLAB_BUILD_TESTS=OFF",
+                                 "-DPLAB_CCACHE=OFF", *cuda, *prebuilt], *mounts, "/plab/build",
+                                600, 2**30, memory=False)
+        if conf.rc != 0 or conf.reason:
+            log = pathlib.Path(conf.stdout).read_text(errors="replace") + conf.stderr
+            return {sid: built.get(sid, "the kit's build could not be configured: " +
+                                   (conf.reason or log[-1500:])) for sid in folders}
+        bin_dir = self.sandbox.shared_dir("bin")
+        for sid in sorted({s.sid for s in stages}):
+            if sid in built:
+                continue
+            target = f"plab-run-{sid}-student"
+            b = self.sandbox.run(["cmake", "--build", "/plab/build", "--target", target, "-j",
+                                  os.environ.get("PLAB_BUILD_JOBS") or str(os.cpu_count() or 2)], *mounts, "/plab/build", 900, 2**30,
+                                 memory=False)
+            program = build / "bin" / target
+            if b.rc == 0 and not b.reason and program.is_file() and not program.is_symlink():
+                mine = bin_dir / f"stage{sid}"  # a copy student code cannot change
+                shutil.copyfile(program, mine)
+                os.chmod(mine, 0o755)
+                built[sid] = mine
+            else:
+                log = pathlib.Path(b.stdout).read_text(errors="replace") + b.stderr
+                errors = [ln for ln in log.splitlines() if "error" in ln.lower()]
+                text = b.reason or "\n".join((errors or log.splitlines()[-25:])[:25])
+                built[sid] = "it does not compile:\n" + text.replace("/plab/src/", "")
+        return built

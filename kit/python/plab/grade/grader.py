@@ -1,0 +1,212 @@
+"""plab grade: builds a submission's stages against the kit's own code, checks them against the
+reference, and writes Gradescope's results.json, JUnit XML and a readable summary.
+
+`./plab grade --submission DIR` runs `python3 -m plab.grade` (plab/grade/__main__.py: the options,
+one grading or a class's) with the kit's folders; see `./plab grade --help`.
+Every threshold and point comes from the rubric (kit/grade/rubric.json). results.json is written
+after every test, so whatever happens later (a crash, a hang, the grader itself failing) the tests
+already run keep their results.
+"""
+import json
+import os
+import pathlib
+import secrets
+import subprocess
+import tempfile
+
+from plab import plabio  # the kit's formats, read and compared by its C++ programs
+from plab.grade import gpu_idea
+from plab.grade import sandbox as isolation
+from plab.grade import upload
+from plab.grade.build import Build
+from plab.grade.correctness import Correctness
+from plab.grade.ideas import Ideas
+from plab.grade.performance import Performance
+from plab.grade.racecheck import RaceCheck
+from plab.grade.results import Results
+from plab.grade.run import Run
+from plab.grade.stage import Refused, Stage
+
+
+class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
+    """One grading of one submission: the sandbox, the stages built, each stage's tests (the
+    mixins' methods, one module per concern), results.json."""
+
+    def __init__(self, a):
+        self.a = a
+        self.kit = pathlib.Path(a.kit_source).resolve()
+        self.kit_build = pathlib.Path(a.kit_build).resolve()
+        self.rubric = json.loads(pathlib.Path(a.rubric).read_text())
+        self.results = Results(a.out, a.junit)
+        self.scratch = pathlib.Path(tempfile.mkdtemp(prefix="plab-grade-", dir=a.scratch or None))
+        self.private = self.scratch / "private"  # expected outputs, hidden scenes: never mounted
+        self.private.mkdir(mode=0o700)
+        self.plab = self.kit_build / "bin" / "plab"
+        self.kit_programs = plabio.Plab(self.plab)  # its leaf commands: gen, diff, read
+        self.manifest = json.loads((self.kit / "datasets" / "manifest.json").read_text())
+        given = a.seed if a.seed is not None else os.environ.pop("PLAB_GRADE_SEED", None)
+        self.seed = int(given) if given is not None else secrets.randbelow(2**32)
+        self.results.extra.update(seed=self.seed, replay=f"./plab grade --submission "
+                                  f"{a.submission} --seed {self.seed}")
+        self.notes = self.results.notes
+        self.idea_failed, self.idea_done = {}, set()  # stage folder -> why its idea test failed
+        if a.leaderboard_name:
+            self.notes.append(f"your name on the class's leaderboard: {a.leaderboard_name}")
+        self.notes.append(f"hidden scenes from seed {self.seed} (replay: ./plab grade "
+                          f"--submission SUBMISSION --seed {self.seed})")
+        self.isolate()
+        for sid in {self.manifest["reference_stage"], "01"}:
+            if not self.solution(sid).exists():
+                raise RuntimeError(f"the kit's reference program {self.solution(sid)} is not "
+                                   "built: run ./plab once in the kit")
+
+    # -- isolation -------------------------------------------------------------------------------
+    def isolate(self):
+        """Chooses the sandbox, or refuses to grade without one."""
+        request = "none" if self.a.no_sandbox else self.a.sandbox
+        mode, why = isolation.choose(request, self.scratch)
+        if mode is None:
+            raise Refused(f"no sandbox can run student code here ({why}). Install bubblewrap "
+                          "where namespaces are allowed, run the grader as root (it then runs "
+                          "student code as an unprivileged user), or pass --no-sandbox to grade "
+                          "with the grader's own rights (printed on every result).")
+        if mode == "user":
+            private = [self.kit / "solutions", self.kit / "datasets" / "golden",
+                       self.kit_build / "bin", self.kit / "kit" / "grade" / "rubric.json",
+                       self.kit / "kit" / "instructor", self.private]
+            # No namespaces: the sandbox's uid reads every file others may read. The grader
+            # refuses while the kit's answers (its solutions, goldens, builds) are readable by
+            # others, and says how to close them (`--make-private` does it); it never changes
+            # them unasked: other gradings of this kit (a class, the tests) may be using them.
+            if self.a.make_private:
+                isolation.make_private(private[:-1] + [self.kit_build])
+            seen = isolation.private_readable(private)
+            if seen:
+                raise Refused(
+                    f"no namespaces here, so student code would run as uid {isolation.SANDBOX_UID}, "
+                    f"which can read {', '.join(seen)}. Make the kit private first "
+                    f"(chmod -R go-rwx {self.kit} {self.kit_build}, or grade with --make-private; "
+                    "the Gradescope setup.sh does).")
+            copies = isolation.readable_copies(skip=[self.kit / "solutions", self.kit_build,
+                                                     self.scratch, pathlib.Path(
+                                                         self.a.submission).resolve()])
+            if copies:
+                raise Refused(
+                    f"no namespaces here, so student code would run as uid {isolation.SANDBOX_UID}, "
+                    f"which can read other copies of the kit's answers: {', '.join(copies[:6])}"
+                    f"{' ...' if len(copies) > 6 else ''}; remove them or make them private "
+                    "(chmod -R go-rwx FOLDER) first.")
+            self.notes.append(
+                f"sandbox without namespaces: student code runs as uid {isolation.SANDBOX_UID} and "
+                "can still read every world-readable file of this machine (the system, /tmp, other "
+                "users' public files) and reach the network; no copy of the kit's answers was "
+                "found readable (searched 6 folders deep from /)")
+            print(self.notes[-1], flush=True)
+        self.sandbox = isolation.Sandbox(self.scratch, self.rubric["limits"], mode)
+        self.results.extra["sandbox"] = mode
+        self.notes.append(f"sandbox: {isolation.NAMES[mode]}")
+        if mode == "none":
+            self.results.banner = "[UNSANDBOXED: graded with --no-sandbox] "
+        print(f"sandbox: {isolation.NAMES[mode]}", flush=True)
+
+    # -- the kit's programs ----------------------------------------------------------------------
+    def solution(self, sid):
+        return self.kit_build / "bin" / f"plab-run-{sid}-solution"
+
+    def gpu_here(self):
+        """Whether this machine has a CUDA device (the kit's stage 04 says so)."""
+        if not hasattr(self, "_gpu"):
+            probe = self.solution("04")
+            self._gpu = probe.exists() and subprocess.run(
+                [probe, self.kit / "datasets/scenes/course-1.in", "--quiet", "--out", os.devnull],
+                capture_output=True).returncode != 4
+        return self._gpu
+
+    # -- one stage: its tests in order (the mixins' methods) --------------------------------------
+    def grade_stage(self, st, program):
+        if isinstance(program, str):
+            self.notes.append(f"{st.title}: {program.splitlines()[0]}")
+        limits = self.rubric["limits"]
+        stopped = None  # why later runs of this stage are not started (a time-out)
+        folder = self.private / f"stage{st.key}"
+        folder.mkdir()
+        if st.gpu and st.idea and st.idea["kind"] == "gpu" and st.key not in self.idea_done:
+            self.idea_done.add(st.key)  # a GPU entry's own idea, traced (gpu_idea.py)
+            gpu_idea.idea_test(self, st, program, folder)
+        if st.sid not in self.idea_done:  # once per stage folder, before its correctness tests
+            self.idea_done.add(st.sid)
+            idea = next((e for e in self.entries([st.sid])
+                         if e.idea and e.idea["kind"] != "gpu"), None)
+            if idea is not None:
+                self.idea_test(idea, program, folder)
+        tests = self.public_tests(st) + self.hidden_tests(st, folder)
+        all_right, any_right = True, False
+        for name, scene, expected, points, hidden, how in tests:
+            test = f"{st.key}: {'hidden' if hidden else 'public'} {name}"
+            if isinstance(program, str) or stopped:
+                why = f"stage {st.sid} {program}" if isinstance(program, str) else stopped
+                self.results.add(test, 0, points, False, f"not run: {why}", hidden)
+                all_right = False
+                continue
+            budget = max(limits["min_seconds"],
+                         limits["time_multiple"] * self.ref_seconds(st, scene))
+            cap = max(limits["output_min_mb"] * 2**20, limits["output_multiple"] * len(expected))
+            run = self.run_program(program, scene, ["--quiet", "--threads", st.threads, "--out",
+                                                    "/plab/out/out.txt"], budget, cap, st)
+            verdict = self.verdict(st, run, scene, expected, how)
+            if run.reason and "time limit" in run.reason:
+                stopped = f"an earlier test of stage {st.key} ran out of time ({name})"
+            self.add_correctness(st, test, points if verdict is None else 0, points,
+                                 verdict is None, verdict or "same text as the reference, bit for bit",
+                                 hidden, run.seconds)
+            all_right &= verdict is None
+            any_right |= verdict is None
+        all_right &= self.one_step(st, program, stopped, folder)
+        correct = (all_right and not stopped and not self.idea_failed.get(st.sid)
+                   and not self.idea_failed.get(st.key))
+        if st.conf.get("races") and not self.a.no_races:
+            self.race_check(st, program, folder, correct, any_right)
+        if st.conf.get("performance"):
+            self.performance(st, program, correct)
+
+    # -- the whole grading -----------------------------------------------------------------------
+    def entries(self, ids):
+        """The rubric's entries for stage folder ids ("06": "06" and "06-gpu"), or Refused."""
+        out = []
+        for sid in ids:
+            keys = [k for k, c in self.rubric["stages"].items()
+                    if k == sid or c.get("folder") == sid]
+            if sid not in self.kit_folders or not keys:
+                raise Refused(f"no stage {sid} in the kit's rubric (it grades stages "
+                              f"{', '.join(sorted(self.rubric['stages']))})")
+            out += [Stage(k, self.rubric["stages"][k], self.manifest) for k in keys]
+        return out
+
+    def grade(self):
+        self.kit_folders = {p.name[:2]: p.name for p in sorted((self.kit / "stages").iterdir())
+                            if p.is_dir() and p.name[:2].isdigit()}
+        wanted = [s.split("-")[0] for s in self.a.stages.split(",")] if self.a.stages else []
+        for sid in wanted:
+            self.entries([sid])  # a stage the rubric does not know: refused before any work
+        try:
+            found, layout = upload.find_stages(self.a.submission, self.kit_folders, wanted,
+                                               self.private)
+        except upload.UploadError as e:
+            raise Refused(f"the upload is not a submission: {e}")
+        self.notes.append(f"submission: {layout}")
+        print(f"submission: {layout}", flush=True)
+        stages = self.entries(wanted or sorted(found))
+        if self.a.stages and any("-" in s for s in self.a.stages.split(",")):
+            stages = [s for s in stages if s.key in self.a.stages.split(",")]
+        runnable = []
+        for st in stages:
+            if st.gpu and not self.gpu_here():
+                idea = " and its idea test" if st.idea else ""
+                self.notes.append(f"{st.title}{idea}: not graded: no CUDA device on this machine")
+                print(f"{st.title}{idea}: skipped: no CUDA device on this machine", flush=True)
+            else:
+                runnable.append(st)
+        built = self.build(runnable, found) if runnable else {}
+        for st in runnable:
+            print(st.title, flush=True)
+            self.grade_stage(st, built[st.sid])

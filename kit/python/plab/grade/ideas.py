@@ -1,0 +1,138 @@
+"""The stage's idea, measured outside its code (rubric.json's per-stage "idea"): the work
+shared by the threads or ranks, the bytes sent, the time against a scene only the idea makes
+fast."""
+import json
+import os
+import subprocess
+import time
+
+from plab.grade.rounds_count import RoundsCount
+
+
+class Ideas:
+    """The idea tests: a mixin of Grader (plab.grade.grader)."""
+
+    # -- the stage's idea, measured outside its code -----------------------------------------------
+    def idea_test(self, st, program, folder):
+        """The stage's idea, measured by the grader outside the student's code (rubric: the
+        stage's "idea"); a failure takes every correctness point of the stage folder.
+          scale:   a hidden scene too large for the idea the stage replaces (stage 02: O(N^3)
+                   selection; 06: O(N^2) pair tests; 07: a linear scan for each event), under a
+                   time limit that the kit's solution meets many times over, with the
+                   reference's output;
+          threads: the stage on `threads` OpenMP threads (waiting passively): at least two
+                   threads each used `share` of the program's CPU time (read from /proc), and
+                   (`min_syncs_per_round`) it ran that many OpenMP synchronisations for each
+                   mutual-earliest round of the scene's steps (rounds_count.RoundsCount: counted
+                   by the kit's preloaded libplab-ompcount.so, the rounds from plab-rounds);
+          ranks:   the stage under mpirun on `ranks` processes: every rank used `share` of the
+                   ranks' CPU time (read from /proc), so rank 0 does not step everything.
+        Both watched kinds also take `max_share`: the most that one thread or rank may use."""
+        idea = st.idea
+        test = f"{st.sid}: idea ({idea['what']})"
+        if isinstance(program, str):
+            self.results.add(test, 0, 0, False, f"not run: stage {st.sid} {program.splitlines()[0]}")
+            self.idea_failed[st.sid] = f"stage {st.sid} {program.splitlines()[0]}"
+            return
+        sc = idea["scene"]
+        scene = folder / "idea.in"
+        speed = ("--speed", sc["speed"]) if "speed" in sc else ()
+        self.kit_programs.gen(scene, "--n", sc["n"], "--l", sc["L"], "--r", sc["r"], "--steps",
+                              sc["steps"], "--mode", "perf", "--seed",
+                              (self.seed * 13 + int(st.sid)) % 2**32, *speed)
+        own = self.solution(st.sid)  # the stage's own solution: the same bits, its speed
+        start = time.time()
+        r = subprocess.run([own, scene, "--quiet", "--threads", str(idea.get("threads", 1)),
+                            "--out", folder / "idea.out"], capture_output=True, text=True,
+                           env=dict(os.environ, **st.env))
+        own_seconds = time.time() - start
+        if r.returncode != 0:
+            raise RuntimeError(f"the kit's solution of stage {st.sid} failed on {scene}: {r.stderr}")
+        expected = (folder / "idea.out").read_text()
+        kind = idea["kind"]
+        limit = max(idea.get("seconds", 0), idea.get("multiple", 0) * own_seconds)
+        threads = str(idea.get("threads", st.threads))
+        env = dict(st.env, OMP_WAIT_POLICY="passive") if kind == "threads" else st.env
+        # Threads: the kit's counter (not the student's code) counts the OpenMP synchronisations
+        counter = (RoundsCount(self.kit_build, self.sandbox, scene)
+                   if "min_syncs_per_round" in idea else None)
+        if counter:
+            env = dict(env, **counter.env(program))
+        # Ranks: the kit's MPI layer (not the student's code) counts the bytes the ranks send.
+        report = ["--report", "/plab/out/report.json"] if kind == "ranks" else []
+        run = self.run_program(program, scene, ["--quiet", "--threads", threads, "--out",
+                                                "/plab/out/out.txt", *report], limit,
+                               max(self.rubric["limits"]["output_min_mb"] * 2**20,
+                                   4 * len(expected)), st, env=env, watch=kind != "scale",
+                               ranks=idea.get("ranks", st.ranks),
+                               extra_ro=counter.mounts() if counter else None)
+        what = f"hidden scene N = {sc['n']}, L = {sc['L']}, S = {sc['steps']}"
+        problem = None
+        if run.reason and "time limit" in run.reason:
+            problem = (f"it did not finish the {what} in {limit:.0f} s (the kit's solution takes "
+                       f"{own_seconds:.2f} s): {idea['hint']}")
+        elif run.reason or run.rc != 0:
+            problem = f"the run on the {what} {run.reason or 'exited ' + str(run.rc)}: " \
+                      f"{run.stderr.strip()[-300:]}"
+        elif run.read_output() != expected:
+            problem = f"its output on the {what} differs from the reference's"
+        text = f"the {what}: {run.seconds:.2f} s (the kit's solution: {own_seconds:.2f} s)"
+        if problem is None and kind == "ranks" and "max_bytes_per_particle_step" in idea:
+            problem, text = self.bytes_sent(idea, run, text)  # counted, so decided first
+        if problem is None and counter:
+            problem, text = counter.check(idea, run, text)  # counted, so decided first
+        if problem is None and kind != "scale":
+            problem, text = self.work_shared(idea, run, text)
+        if problem:
+            self.idea_failed[st.sid] = f"the idea test of stage {st.sid} failed: {problem}"
+        self.results.add(test, 0, 0, problem is None, problem or text, False, run.seconds)
+
+    def bytes_sent(self, idea, run, text):
+        """(problem or None, text): the bytes the ranks sent a particle and step, counted by the
+        kit's MPI layer, against the rubric's most. The halo and the rounds' messages of a
+        slow scene are a few bytes; every particle sent to one rank and back, about 75."""
+        sc, most = idea["scene"], idea["max_bytes_per_particle_step"]
+        try:
+            sent = float(json.loads(run.read_output("report.json") or "")["bytes_sent"])
+        except (ValueError, KeyError, TypeError):
+            return "its run left no report of the bytes its ranks sent", text
+        per = sent / (sc["n"] * sc["steps"])
+        text += f"; its ranks sent {per:.1f} bytes a particle and step"
+        if per > most:
+            return (f"its ranks sent {per:.1f} bytes a particle and step (at most {most:g} may: "
+                    f"the halo and the rounds' messages; every particle sent to one rank and "
+                    f"back is about 75). {idea['hint']}"), text
+        return None, text
+
+    def work_shared(self, idea, run, text):
+        """(problem or None, text) of a watched run: who did the work, threads or ranks."""
+        share = idea["share"]
+        if idea["kind"] == "threads":
+            pids = {pid for pid, _ in run.cpu}
+            if len(pids) != 1:
+                return f"expected one process, saw {len(pids)}", text
+            parts = sorted(run.cpu.values(), reverse=True)
+            who = "threads"
+        else:
+            per_rank = {}
+            for (pid, _), seconds in run.cpu.items():
+                per_rank[pid] = per_rank.get(pid, 0) + seconds
+            parts = sorted(per_rank.values(), reverse=True)
+            who = "ranks"
+        total = sum(parts)
+        shown = ", ".join(f"{x:.2f}" for x in parts[:8])
+        text += f"; CPU seconds of its {who}: {shown} (total {total:.2f})"
+        if total < idea["min_cpu_seconds"]:
+            return None, text + " (too little to judge: not held against it)"
+        need = 2 if idea["kind"] == "threads" else idea["ranks"]
+        real = [x for x in parts if x >= share * total]
+        if len(real) < need:
+            return (f"{len(real)} of its {who} did a real share of the work (at least "
+                    f"{100 * share:.0f}% of its CPU time each); {need} must. CPU seconds of its "
+                    f"{who}: {shown} (total {total:.2f}). {idea['hint']}"), text
+        most = idea.get("max_share", 1.0)
+        if parts[0] > most * total:
+            return (f"one of its {who} did {100 * parts[0] / total:.0f}% of the work (at most "
+                    f"{100 * most:.0f}% may). CPU seconds of its {who}: {shown} (total "
+                    f"{total:.2f}). {idea['hint']}"), text
+        return None, text

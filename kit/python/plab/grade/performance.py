@@ -1,0 +1,98 @@
+"""The performance test: alternate timed runs of the reference and the submission in the same
+sandbox, scored by plab.grade.leaderboard (against the reference, or the class), the measured
+median time on the leaderboard."""
+import os
+import shutil
+import statistics
+import subprocess
+
+from plab.grade import leaderboard
+
+
+class Performance:
+    """The performance test: a mixin of Grader (plab.grade.grader)."""
+
+    def performance(self, st, program, correct):
+        perf = self.rubric["performance"]
+        test = f"{st.key}: performance"
+        if isinstance(program, str) or not correct:
+            self.results.add(test, 0, perf["points"], False,
+                             "not timed: every correctness test must pass first")
+            return
+        s = perf["scene"]
+        scene = self.private / f"perf-{st.key}.in"
+        # The grading's secret seed: a program cannot recognise the timed scene and skip the work
+        self.kit_programs.gen(scene, "--n", s["n"], "--l", s["L"], "--r", s["r"], "--steps",
+                              s["steps"], "--mode", "perf", "--seed",
+                              (self.seed * 31 + int(st.sid) + 1) % 2**32)
+        limits = self.rubric["limits"]
+        own = self.solution(st.sid)
+        kit_prog = own if own.exists() else self.solution(self.manifest["reference_stage"])
+        r = subprocess.run([kit_prog, scene, "--quiet", "--threads", st.threads, "--out",
+                            self.private / f"perf-{st.key}.out"], capture_output=True, text=True,
+                           env=dict(os.environ, **st.env))
+        if r.returncode != 0:
+            raise RuntimeError(f"the reference failed on {scene}: {r.stderr}")
+        expected = (self.private / f"perf-{st.key}.out").read_text()
+        ref_prog = self.sandbox.shared_dir("bin") / f"reference-{st.key}"  # the sandbox's uid
+        shutil.copyfile(kit_prog, ref_prog)  # may not read the kit's build folder
+        os.chmod(ref_prog, 0o755)
+        args = ["--quiet", "--threads", st.threads, "--out", "/plab/out/out.txt"]
+        cap = limits["output_min_mb"] * 2**20
+        # Runs alternate (reference, submission, ...) so that a change in the machine's load
+        # falls on both alike; the reference runs in the same sandbox, paying its costs alike.
+        ref, mine = [], []
+        try:
+            self.timed_runs(st, program, ref_prog, scene, args, cap, ref, mine, expected)
+        finally:
+            ref_prog.unlink()  # no later stage may find a correct program beside its own
+        if len(mine) < perf["runs"]:
+            return
+        self.score_performance(st, test, ref, mine)
+
+    def timed_runs(self, st, program, ref_prog, scene, args, cap, ref, mine, expected):
+        """Alternate runs of the reference and the submission; each of the submission's outputs
+        is compared with the reference's like any other run's (a fast wrong program earns
+        nothing)."""
+        limits, perf = self.rubric["limits"], self.rubric["performance"]
+        test = f"{st.key}: performance"
+        for _ in range(perf["runs"]):
+            r = self.run_program(ref_prog, scene, args, 3600, cap, st)
+            if r.rc != 0:
+                raise RuntimeError(f"the reference failed on {scene}: {r.stderr}")
+            ref.append(r.seconds)
+            r = self.run_program(program, scene, args,
+                                 max(limits["min_seconds"], limits["time_multiple"] * max(ref)),
+                                 cap, st)
+            if r.rc != 0 or r.reason:
+                self.results.add(test, 0, perf["points"], False,
+                                 f"the timed run {r.reason or 'exited ' + str(r.rc)}")
+                return
+            if r.read_output() != expected:
+                self.results.add(test, 0, perf["points"], False,
+                                 "the timed run's output differs from the reference's (the "
+                                 "timed scene is a hidden one: every run must be right)")
+                return
+            mine.append(r.seconds)
+
+    def score_performance(self, st, test, ref, mine):
+        perf, s = self.rubric["performance"], self.rubric["performance"]["scene"]
+        rm, mm = statistics.median(ref), statistics.median(mine)
+        spread = max((max(ref) - min(ref)) / rm, (max(mine) - min(mine)) / mm)
+        ratio = mm / max(rm, 1e-3)
+        # Full points up to full_up_to, none from zero_at_ratio, linear in log(ratio) between:
+        # bounded, continuous, and no division by a small time (the reference's is >= 1 ms).
+        full, zero = perf["full_up_to_ratio"], perf["zero_at_ratio"]
+        fraction = leaderboard.fraction(ratio, full, zero)
+        text = (f"median {mm:.3f} s against the reference's {rm:.3f} s (ratio {ratio:.2f}; full "
+                f"points up to {full}, none from {zero}), {perf['runs']} runs each on "
+                f"N = {s['n']}, S = {s['steps']}, {st.threads} thread(s); spread {100 * spread:.0f}%")
+        if spread > perf["noisy_spread"]:
+            text += f". TOO NOISY (spread above {100 * perf['noisy_spread']:.0f}%): rerun on a quieter machine"
+        if leaderboard.check_mode(perf) != "reference":
+            text += (f". The rubric scores these points against the class ({perf['relative']}): "
+                     "plab grade --class gives them again from every student's time")
+        # The leaderboard holds the time the grader measured, never one the program printed
+        self.results.leaderboard.append(leaderboard.entry(st.key, mm))
+        self.results.add(test, perf["points"] * fraction, perf["points"], fraction >= 0.999, text,
+                         False, sum(mine))

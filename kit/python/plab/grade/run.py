@@ -1,0 +1,131 @@
+"""Running student code in the sandbox, the reference's expected outputs, and the verdict of a
+run (with its diagnosis: where it first differs and what the reference did there)."""
+import os
+import pathlib
+import re
+import shutil
+import subprocess
+import tempfile
+import time
+
+from plab import plabio  # the kit's formats, read and compared by its C++ programs
+from plab.grade import hidden as hidden_module
+
+
+def implied(before, after):
+    """What a particle did in a step, from its printed velocities (vx, vy) before and after."""
+    v0, v1 = list(before), list(after)
+    if v0 == v1:
+        return "moved freely (velocity unchanged)"
+    if [abs(v) for v in v0] == [abs(v) for v in v1]:
+        return "hit a wall (a velocity component flipped)"
+    return f"changed velocity as in a pair collision ({v0[0]:.8f}, {v0[1]:.8f}) -> ({v1[0]:.8f}, {v1[1]:.8f})"
+
+
+def velocities(plab, path, step, i):
+    """Particle i's printed (vx, vy) in the block of `step` of an output, or None when the output
+    has no such block or particle, or is not an output at all (a student's may be anything)."""
+    try:
+        blocks = plab.read_output(path, steps=(step, step))["blocks"]
+    except plabio.FormatError:
+        return None
+    if not blocks or i >= len(blocks[0]["vx"]):
+        return None
+    return blocks[0]["vx"][i], blocks[0]["vy"][i]
+
+
+class Run:
+    """Running and judging one run: a mixin of Grader (plab.grade.grader)."""
+
+    # -- running student code --------------------------------------------------------------------
+    def run_program(self, program, scene, args, seconds, cap, st, stdin_text=None, env=None,
+                    memory=True, watch=False, ranks=None, extra_ro=None):
+        """Runs a stage program in the sandbox on one scene, under its neutral names (`ranks`:
+        how many processes mpirun starts, default the stage's; `watch`: Run.cpu)."""
+        ranks = st.ranks if ranks is None else ranks
+        run_dir = pathlib.Path(tempfile.mkdtemp(prefix="run-", dir=self.sandbox.box))
+        os.chmod(run_dir, 0o755)
+        shutil.copyfile(scene, run_dir / "scene.in")
+        os.chmod(run_dir / "scene.in", 0o644)
+        out = self.sandbox.writable_dir(run_dir, "out-")
+        ro = {"/plab/stage": program, "/plab/scene.in": run_dir / "scene.in", **(extra_ro or {})}
+        argv = ["/plab/stage", "/plab/scene.in", *args]
+        if stdin_text is not None:  # read through a pipe, never a file the program could reopen
+            argv = ["/plab/stage", "/plab/scene.in", *[a if a != "STDIN" else "/dev/stdin"
+                                                       for a in args]]
+        if ranks > 1:  # every rank in the same sandbox, under the same limits
+            argv = [shutil.which("mpirun") or "mpirun", "--quiet", "--oversubscribe", "-np",
+                    str(ranks), *argv]
+        log = pathlib.Path(tempfile.mkdtemp(prefix="log-", dir=self.private))
+        return self.sandbox.run(argv, ro, {"/plab/out": out}, "/plab/out", seconds, cap,
+                                gpu=st.gpu, env=env or st.env, log_dir=log, stdin_text=stdin_text,
+                                memory=memory, watch=watch)
+
+    # -- the reference's outputs, a run's verdict ---------------------------------------------------
+    def expected_for(self, st, scene, out):
+        """The reference's output of a scene (computed now, in the grader's private folder)."""
+        r = subprocess.run([self.solution(st.reference), scene, "--quiet", "--out", out],
+                           capture_output=True, text=True)
+        if r.returncode != 0:
+            raise RuntimeError(f"the reference failed on {scene}: {r.stderr}")
+        return pathlib.Path(out).read_text()
+
+    def ref_seconds(self, st, scene):
+        """How long the reference takes on a scene (measured once per scene)."""
+        cache = getattr(self, "_ref_times", {})
+        self._ref_times = cache
+        if (st.reference, scene) not in cache:
+            t = time.time()
+            subprocess.run([self.solution(st.reference), scene, "--quiet", "--out", os.devnull],
+                           capture_output=True)
+            cache[st.reference, scene] = time.time() - t
+        return cache[st.reference, scene]
+
+    def verdict(self, st, run, scene, expected, how):
+        """None when the run printed the expected text, else what went wrong and why."""
+        if run.reason:
+            return f"{run.reason}\n{run.stderr[-1500:]}".strip()
+        if run.rc == 3:
+            return run.stderr.strip().splitlines()[-1]  # "stage NN: EXERCISE n (...) is not done yet"
+        if run.rc != 0:
+            return f"exited with status {run.rc}:\n{run.stderr[-1500:]}".strip()
+        actual = run.read_output()
+        if actual is None:
+            return "exited 0 but wrote no output (a plain file /plab/out/out.txt)"
+        if actual == expected:
+            return None
+        return self.diagnose(st, scene, expected, actual, how)
+
+    def diagnose(self, st, scene, expected, actual, how):
+        work = pathlib.Path(tempfile.mkdtemp(prefix="diff-", dir=self.private))
+        (work / "expected.out").write_text(expected)
+        (work / "actual.out").write_text(actual)
+        diff = self.kit_programs.diff(work / "expected.out", work / "actual.out")
+        lines = [diff["text"]]
+        first = diff["first"] or {}
+        reference = self.solution(st.reference)
+        if re.fullmatch(r"\d+", first.get("step", "")) and re.fullmatch(r"\d+", first.get("particle", "")):
+            k, i = int(first["step"]), int(first["particle"])
+            before = velocities(self.kit_programs, work / "expected.out", k - 1, i) if k >= 1 else None
+            after = velocities(self.kit_programs, work / "actual.out", k, i) if before else None
+            if before and after:
+                # The partner from the reference's JSON; the student reads its English lines
+                try:
+                    said = hidden_module.explain(reference, scene, k - 1, [i]).get(i, {})
+                except (subprocess.CalledProcessError, ValueError):
+                    said = {}
+                ids = [i, said["partner"]] if said.get("event") == "pair" else [i]
+                ref = "\n  ".join(subprocess.run(
+                    [reference, scene, "--explain", f"{k - 1}:{','.join(map(str, ids))}"],
+                    capture_output=True, text=True).stdout.strip().splitlines())
+                lines.append(f"In step {k - 1} (from the correct state at its start) the reference "
+                             f"has:\n  {ref}")
+                lines.append(f"Yours: particle {i} {implied(before, after)}.")
+        setup, scene_arg, expected_arg = how
+        if setup:  # a hidden scene: regenerate it and its expected output with the solution
+            setup += (f"./plab run --stage {st.reference} --impl solution hidden.in --out "
+                      f"expected.out && ")
+        lines.append(f"Reproduce: {setup}./plab run --stage {st.sid} --impl student {scene_arg} "
+                     f"--out mine.out && ./plab diff {expected_arg} mine.out")
+        shutil.rmtree(work, ignore_errors=True)
+        return "\n".join(lines)
