@@ -64,8 +64,13 @@ class Run:
     # -- the reference's outputs, a run's verdict ---------------------------------------------------
     def expected_for(self, st, scene, out):
         """The reference's output of a scene (computed now, in the grader's private folder)."""
-        r = subprocess.run([self.solution(st.reference), scene, "--quiet", "--out", out],
-                           capture_output=True, text=True)
+        limit = self.rubric["limits"].get("reference_max_seconds", 600)
+        try:  # the kit's own program, but a scene may still be one it cannot finish: never hang
+            r = subprocess.run([self.solution(st.reference), scene, "--quiet", "--out", out],
+                               capture_output=True, text=True, timeout=limit)
+        except subprocess.TimeoutExpired:
+            raise RuntimeError(f"the reference ({st.reference}) did not finish {scene} in "
+                               f"{limit} s") from None
         if r.returncode != 0:
             raise RuntimeError(f"the reference failed on {scene}: {r.stderr}")
         return pathlib.Path(out).read_text()
