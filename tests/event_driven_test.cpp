@@ -14,6 +14,7 @@
 #include "plab/audit.hpp"
 #include "plab/datasets.hpp"
 #include "plab/diff.hpp"
+#include "plab/errors.hpp"
 #include "plab/driver.hpp"
 #include "plab/generate.hpp"
 #include "plab/io.hpp"
@@ -101,6 +102,33 @@ TEST(ExactGolden, EveryScene) {
 
 // Energy to rounding, no overlap deeper than 1e-9 r, every centre in the box, on a dense gas
 // with many collisions per particle.
+/// A row of disks that touch each other and both walls: moving one starts collisions that never
+/// let time advance (hard disks have no answer for a jammed cluster). Stage 07 must stop with an
+/// input error that says so, not run forever; the same row with a gap runs.
+plab::Scene row(double L) {
+  plab::Scene s;
+  s.box = plab::Box{L, 1.0};
+  s.steps = 2;
+  s.mode = plab::Mode::kPrint;
+  s.particles.resize(4);
+  for (int i = 0; i < 4; ++i) {
+    s.particles.x[i] = 1 + 2 * i;
+    s.particles.y[i] = 4;
+  }
+  s.particles.vx[0] = 1;
+  return s;
+}
+
+TEST(Jammed, TouchingRowStopsWithAMessage) {
+  try {
+    run_exact(row(8));
+    FAIL() << "a jammed row ran to its end";
+  } catch (const plab::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("jammed"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(run_exact(row(9)));
+}
+
 TEST(Conservation, DenseGas) {
   const plab::Scene scene = gas(600, 0.35, 40, 11);
   plab::Particles p = scene.particles;

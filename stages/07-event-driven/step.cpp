@@ -20,6 +20,7 @@
 // =================================================================================================
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "plab/stage.hpp"
@@ -89,7 +90,8 @@ class EventQueue {
 class EventDriven final : public Stepper {
  public:
   EventDriven(const Box& box, const Particles& p)
-      : box_(box), p_(p), queue_(static_cast<int>(p.size())) {
+      : box_(box), p_(p), particles_(static_cast<long long>(p.size())),
+        queue_(static_cast<int>(p.size())) {
     const int n = static_cast<int>(p.size());
     t_.assign(n, 0.0);
     hits_.assign(n, 0);
@@ -227,6 +229,8 @@ class EventDriven final : public Stepper {
   void run_until(double end) {
     while (!queue_.empty() && queue_.top().t < end) {
       const Event e = queue_.top();  // each branch below predicts e.i again, replacing it
+      if (e.t != now_) at_instant_ = 0;
+      else if (++at_instant_ > 64 * particles_ + 1024) jammed();
       now_ = e.t;
       // EXERCISE 2: a pair event whose partner has collided since it was predicted (its hits_
       // changed) is stale: predict e.i again instead of colliding.
@@ -264,6 +268,17 @@ class EventDriven final : public Stepper {
     last_[j] = i;
   }
 
+  /// Stops a run that cannot advance: disks that touch each other and a wall, packed so that none
+  /// can move, collide again and again at one instant (hard disks in continuous time have no
+  /// answer for such a jammed cluster; the stepped stages, one collision a particle a step, do).
+  [[noreturn]] void jammed() const {
+    throw InputError("stage 07: at t = " + std::to_string(now_) + " the run processed " +
+                     std::to_string(at_instant_) +
+                     " events without time advancing: the scene holds disks that touch each "
+                     "other and the walls (a jammed cluster), which continuous-time hard disks "
+                     "cannot resolve. Give them a gap (the stepped stages 01-06 run this scene).");
+  }
+
   Box box_;
   Particles p_;                    //!< positions at each particle's own time t_[i]
   std::vector<double> t_;          //!< the time each particle's position is stored at
@@ -276,6 +291,8 @@ class EventDriven final : public Stepper {
   int cells_ = 1;                  //!< cells along each axis
   double cell_side_ = 0;           //!< their side (at least 2r)
   double now_ = 0;                 //!< the current time
+  long long at_instant_ = 0;       //!< events processed at now_ without time advancing
+  long long particles_ = 0;        //!< N (a jam: many events a particle at one instant)
   EventQueue queue_;               //!< every particle's next event
 };
 
