@@ -65,12 +65,16 @@ class Build:
         mounts = ({"/plab/src": src}, {"/plab/build": build})
         print(f"building stages {', '.join(sorted({s.sid for s in stages}))} in the sandbox",
               flush=True)
-        kit_lib = self.kit_build / "kit" / "libplab_kit.a"  # the kit, compiled once already
+        # The kit and the runner's command line, compiled once already outside the sandbox from
+        # the kit's own sources: a submission's build compiles its stage and run.cpp alone.
         prebuilt = []
-        if kit_lib.is_file():
-            shutil.copyfile(kit_lib, self.sandbox.shared_dir("kitlib") / kit_lib.name)
-            mounts[0]["/plab/kitlib"] = self.sandbox.box / "kitlib"
-            prebuilt = [f"-DPLAB_PREBUILT_KIT=/plab/kitlib/{kit_lib.name}"]
+        for option, name in (("PLAB_PREBUILT_KIT", "libplab_kit.a"),
+                             ("PLAB_PREBUILT_RUNNER", "libplab_runner_base.a")):
+            lib = self.kit_build / "kit" / name
+            if lib.is_file():
+                shutil.copyfile(lib, self.sandbox.shared_dir("kitlib") / name)
+                mounts[0]["/plab/kitlib"] = self.sandbox.box / "kitlib"
+                prebuilt.append(f"-D{option}=/plab/kitlib/{name}")
         # No stage graded on a GPU (none here): the CPU paths only, without nvcc's minutes
         cuda = [] if any(s.gpu for s in stages) else ["-DPLAB_ENABLE_CUDA=OFF"]
         conf = self.sandbox.run(["cmake", "-S", "/plab/src", "-B", "/plab/build", "-G", "Ninja",
