@@ -4,7 +4,9 @@ realistic mix (complete solutions, solutions with one slip that the grader must 
 starting points, one that does not compile, one that never ends), graded J at a time; prints the
 wall time, the students graded a minute, the time a student, and the time 200 students would take
 at that rate. `--limit S` stops the batch after S seconds (the class grading is resumable: what was
-graded stays graded), for a measurement that must fit a time box.
+graded stays graded), for a measurement that must fit a time box; run again with the same `--out`
+(and seed), it grades the rest, and OUT/class-bench.json adds up the batches' times, so a class
+measured in several time boxes is reported as a whole.
 
   tools/class-bench.py [--students 200] [--jobs J] [--stages 01,02,03] [--limit S]
                        [--out DIR] [--keep] [-- GRADER ARGS...]
@@ -92,6 +94,7 @@ def main():
             student(scratch / "class" / name, kind, rng, stages)
         print(f"class-bench: {a.students} students ({', '.join(f'{sum(v == m for v in kinds.values())} {m}' for m, _ in MIX)}), "
               f"stages {a.stages}, {a.jobs} at a time on {os.cpu_count()} cores", flush=True)
+        before = {d.parent.name for d in out.glob("students/*/upload.sha256")}
         cmd = [str(root / "plab"), "grade", "--class", str(scratch / "class"), "--stages", a.stages,
                "--out", str(out), "--jobs", str(a.jobs), *grader_args]
         t0 = time.monotonic()
@@ -110,16 +113,26 @@ def main():
         if refused:  # the grader refused (e.g. no sandbox possible): nothing was measured
             sys.exit(f"class-bench: the grader refused {len(refused)} students, e.g. "
                      f"{out / 'students' / refused[0] / 'grader.log'}")
-        n = len(graded)
+        n = len(set(graded) - before)  # graded by this batch
         if not n:
             sys.exit("class-bench: no student graded")
         per = wall / n
+        ledger = out / "class-bench.json"  # the batches so far of this class (a resumed class)
+        batches = json.loads(ledger.read_text()) if ledger.is_file() else []
+        batches.append({"graded": n, "seconds": round(wall, 1), "jobs": a.jobs,
+                        "cores": os.cpu_count()})
+        ledger.write_text(json.dumps(batches, indent=1) + "\n")
         by_kind = {}
         for name, r in graded.items():
             by_kind.setdefault(kinds[name], []).append(r.get("score", 0))
         print(f"class-bench: {n} students graded in {wall:.0f} s: {60 * n / wall:.1f} a minute, "
               f"{per:.1f} s a student at {a.jobs} at a time; 200 students at this rate: "
               f"{200 * per / 60:.0f} min", flush=True)
+        if len(batches) > 1:
+            total = sum(b["seconds"] for b in batches)
+            print(f"class-bench: the class so far, {len(batches)} batches: {len(graded)} of "
+                  f"{a.students} graded in {total:.0f} s of grading ({total / 60:.1f} min), "
+                  f"{total / len(graded):.1f} s a student", flush=True)
         for kind, scores in sorted(by_kind.items()):
             print(f"  {kind:15s} {len(scores):4d} graded, median score {statistics.median(scores):g}")
         if (out / "gradebook.csv").exists():
