@@ -63,6 +63,7 @@ class Build:
         readable_by_all(src)  # the kit may be private (Gradescope's setup.sh makes it so)
         build = self.sandbox.writable_dir(self.sandbox.box, "build-")
         mounts = ({"/plab/src": src}, {"/plab/build": build})
+        self.built_in = (src, build)  # for probes compiled later (branches.py)
         print(f"building stages {', '.join(sorted({s.sid for s in stages}))} in the sandbox",
               flush=True)
         # The kit and the runner's command line, compiled once already outside the sandbox from

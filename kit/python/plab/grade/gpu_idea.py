@@ -15,6 +15,10 @@ sandbox (traced), and requires the reference's output. Then, by the entry's keys
   min_overlap_share                steps in which two kernels or copies ran at the same time on
                                    different streams (stage 05's streams), and none with
                                    `--off` `off_run` (the stepper's switch turns them off);
+  branchless                       {"hint": ...}: the student's BranchlessWall, compiled by the
+                                   grader's probe to PTX in the sandbox, leaves no more
+                                   conditional branches than the model's wall times alone
+                                   (stage 05's branchless wall; branches.py);
   seconds, multiple                the time limit: max(seconds, multiple x the solution's time)
                                    (stage 06's GPU path: a scene too large for O(N^2) pairs).
 A failure takes the entry's correctness points (Grader.add_correctness). Without a GPU the whole
@@ -24,9 +28,12 @@ test says that it could not measure and is not held against the stage.
 import json
 import os
 import pathlib
+import re
 import shutil
 import subprocess
 import time
+
+from plab.grade import branches
 
 #: The trace library's name in the kit's build (kit/CMakeLists.txt: plab_gputrace).
 LIBRARY = "libplab_gputrace.so"
@@ -154,6 +161,9 @@ def idea_test(g, st, program, folder):
     else:
         text += f"; its device work: {summary(mine)}; the solution's: {summary(own)}"
         problem = judge(g, st, program, scene, idea, mine, own, limit, expected, lib)
+    if "branchless" in idea and not problem:
+        problem, measured = branch_probe(g, st, idea["branchless"].get("hint", ""))
+        text += f"; {measured}"
     if problem:
         g.idea_failed[st.key] = f"the idea test of stage {st.key} failed: {problem}"
     g.results.add(test, 0, 0, problem is None, problem or text, False, run.seconds)
@@ -201,3 +211,31 @@ def judge(g, st, program, scene, idea, mine, own, limit, expected, lib):
                         f"beside another stream's (the switch must turn the second stream "
                         f"off, to measure what it buys). {idea['hint']}")
     return None
+
+
+def branch_probe(g, st, hint):
+    """The grader's probe of the student's branchless wall (branches.py), compiled to PTX in the
+    sandbox beside the stage's sources with the nvcc that configured its build. Returns
+    (problem or None, what was measured)."""
+    src, build = g.built_in
+    folder = next((src / "stages").glob(f"{st.sid}-*"))
+    cache = (build / "CMakeCache.txt").read_text(errors="replace")
+    found = re.search(r"^CMAKE_CUDA_COMPILER:\w+=(.+)$", cache, re.M)
+    if not found:
+        return "the kit's build found no CUDA compiler to compile the branch probe with", ""
+    probe_dir = g.sandbox.writable_dir(g.sandbox.box, "probe-")
+    for f in folder.iterdir():  # the stage's sources (read-only there) and the probe beside them
+        if f.is_file():
+            shutil.copyfile(f, probe_dir / f.name)
+    (probe_dir / branches.SOURCE).write_text(branches.PROBE)
+    for f in probe_dir.iterdir():
+        os.chmod(f, 0o666)
+    cmd = branches.nvcc_command(found.group(1).strip(), "/plab/src/kit/include", "/plab/probe")
+    run = g.sandbox.run(cmd, {"/plab/src": src}, {"/plab/probe": probe_dir}, "/plab/probe",
+                        300, 2**28, memory=False)
+    out = probe_dir / branches.OUTPUT
+    if run.rc != 0 or run.reason or not out.is_file() or out.is_symlink():
+        log = pathlib.Path(run.stdout).read_text(errors="replace") + run.stderr
+        return (f"the grader's probe of kernels::BranchlessWall (kernels.cuh) did not compile: "
+                f"{(run.reason or log)[-600:]}"), ""
+    return branches.judge(out.read_text(errors="replace"), hint)

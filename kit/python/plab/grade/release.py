@@ -283,18 +283,27 @@ def build_release(kit, head, work, say, through=None):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+    ap = argparse.ArgumentParser(prog="plab release", description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--kit-source", required=True, help="the instructor's kit (a git checkout)")
+    ap.add_argument("--kit-source", required=True, help=argparse.SUPPRESS)  # `plab` gives its own
+    ap.add_argument("--kit", metavar="DIR",
+                    help="the kit checkout to release (default: this one)")
     ap.add_argument("--out", required=True, help="a new (or empty) folder")
     ap.add_argument("--allow-dirty", action="store_true",
-                    help="release HEAD's stages/ even when stages/ has uncommitted changes")
+                    help="release HEAD's stages/ even when stages/ has uncommitted changes (they "
+                         "are left out, and named)")
     ap.add_argument("--through", type=int, metavar="NN",
-                    help="a weekly release: stages 01..NN only (default: every stage)")
+                    help="a weekly release: stages 01..NN only, with their handouts (a later "
+                         "stage's given files may hold an earlier stage's answer); default: "
+                         "every stage")
     ap.add_argument("--files-only", action="store_true",
                     help="only the files a release ships: no build, check, reference or docs")
     a = ap.parse_args()
-    kit, out = pathlib.Path(a.kit_source).resolve(), pathlib.Path(a.out).resolve()
+    kit, out = pathlib.Path(a.kit or a.kit_source).resolve(), pathlib.Path(a.out).resolve()
+    if not kit.is_dir():
+        fail(f"--kit {kit}: no such folder")
+    if a.through is not None and not 1 <= a.through <= 99:
+        fail(f"--through {a.through}: a stage number, 1 to 99")
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         fail(f"{out} exists and is not empty; name a new folder")
     if out.is_relative_to(kit):

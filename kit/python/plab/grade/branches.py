@@ -1,0 +1,77 @@
+"""Stage 05's branchless wall event (its exercise 2), measured outside the student's code.
+
+The tests compare bits, and the branchy model::wall_event() gives the same bits as a branchless
+one: so the grader reads the code the compiler made. It compiles a probe of its own (PROBE) with
+nvcc to PTX: one kernel calls the student's kernels::BranchlessWall on one particle, another does
+only what the kit gives for it (model::wall_times() and model::wall_time(), whose `v == 0` tests
+are branches of their own). A conditional branch (`@%p bra`) is a place where a warp can split;
+the student's wall event may leave no more of them than the given part alone. Measured with nvcc
+13.0 (sm_90, --fmad=false): the given part leaves 4, the solution 4; model::wall_event() (the
+kit's BranchyWall) 6, and the same event written with if/else 6.
+
+No GPU is needed to compile (tests/branchless_check.py runs this on CI's machine); the grader
+runs it in the sandbox, on the student's own stage folder, as part of stage 05's idea test.
+"""
+import re
+
+#: The probe (the grader's own source, beside the student's kernels.cuh).
+PROBE = r"""// The grader's probe of stage 05's branchless wall event (kit/python/plab/grade/branches.py).
+#include "kernels.cuh"
+
+extern "C" __global__ void plab_probe_given(double* x, double* y, double* vx, double* vy,
+                                            long long* wc, double L, double r) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  const plab::model::WallTimesOf<double> w = plab::model::wall_times(x[i], y[i], vx[i], vy[i], L, r);
+  x[i] = plab::model::wall_time(w);
+  y[i] = w.tx;
+  vx[i] = w.ty;
+  wc[i] = wc[i] + 1;
+}
+
+extern "C" __global__ void plab_probe_student(double* x, double* y, double* vx, double* vy,
+                                              long long* wc, double L, double r) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  plab::kernels::BranchlessWall{}(x[i], y[i], vx[i], vy[i], wc[i], L, r);
+}
+"""
+
+#: Where the probe is written, and its PTX, in the stage's folder of the sandbox's sources.
+SOURCE, OUTPUT = "plab_branch_probe.cu", "plab_branch_probe.ptx"
+
+_ENTRY = re.compile(r"\.entry\s+(\w+)\s*\(")
+_COND_BRANCH = re.compile(r"^\s*@!?%p\d+\s+bra(\.uni)?\b")
+
+
+def nvcc_command(nvcc, include, stage_dir, arch="90"):
+    """The compiler's command line: the probe, in `stage_dir`, to PTX (the kit's flags)."""
+    return [str(nvcc), "-std=c++17", f"-arch=sm_{arch}", "--fmad=false", "-ptx",
+            f"-I{include}", f"-I{stage_dir}", f"{stage_dir}/{SOURCE}", "-o",
+            f"{stage_dir}/{OUTPUT}"]
+
+
+def conditional_branches(ptx):
+    """{kernel name: conditional branches in its PTX}."""
+    counts, entry = {}, None
+    for line in ptx.splitlines():
+        m = _ENTRY.search(line)
+        if m:
+            entry = m.group(1)
+            counts[entry] = 0
+        elif entry and _COND_BRANCH.match(line):
+            counts[entry] += 1
+    return counts
+
+
+def judge(ptx, hint=""):
+    """(problem or None, what was measured) for the probe's PTX."""
+    counts = conditional_branches(ptx)
+    given, mine = counts.get("plab_probe_given"), counts.get("plab_probe_student")
+    if given is None or mine is None:
+        return "the probe's PTX has not both kernels (the compiler's output was not read)", ""
+    text = (f"its BranchlessWall leaves {mine} conditional branches in the compiled code, the "
+            f"model's wall times alone {given}")
+    if mine > given:
+        return (f"{text}: the wall event itself branches ({mine - given} more; "
+                f"model::wall_event() leaves 2 more, as does the same event written with "
+                f"if/else). {hint}").strip(), text
+    return None, text
