@@ -131,34 +131,20 @@ def idea_test(g, st, program, folder):
         g.idea_failed[st.key] = f"stage {st.sid} {program.splitlines()[0]}"
         return
     lib = library(g.kit_build)
-    sc = idea["scene"]
-    scene = folder / "idea.in"
-    speed = ("--speed", sc["speed"]) if "speed" in sc else ()
-    g.kit_programs.gen(scene, "--n", sc["n"], "--l", sc["L"], "--r", sc["r"], "--steps",
-                       sc["steps"], "--mode", "perf", "--seed",
-                       (g.seed * 13 + int(st.sid)) % 2**32, *speed)
+    scene, what = g.idea_scene(st, folder)
     own_seconds, own = run_own(g, st, scene, folder / "idea.out", folder / "own-trace.json", lib)
     expected = (folder / "idea.out").read_text()
     limit = max(idea.get("seconds", 0), idea.get("multiple", 0) * own_seconds)
-    what = f"hidden scene N = {sc['n']}, L = {sc['L']}, S = {sc['steps']}"
     run, mine = run_traced(g, st, program, scene, limit, expected, lib)
-    problem = None
     text = f"the {what}: {run.seconds:.2f} s (the kit's solution: {own_seconds:.2f} s)"
-    if run.reason and "time limit" in run.reason:
-        problem = (f"it did not finish the {what} in {limit:.0f} s (the kit's solution takes "
-                   f"{own_seconds:.2f} s): {idea['hint']}")
-    elif run.reason or run.rc != 0:
-        problem = (f"the run on the {what} {run.reason or 'exited ' + str(run.rc)}: "
-                   f"{run.stderr.strip()[-300:]}")
-    elif run.read_output() != expected:
-        problem = f"its output on the {what} differs from the reference's"
-    elif lib is None:
+    problem = g.idea_run_problem(run, what, limit, own_seconds, expected, idea["hint"])
+    if problem is None and lib is None:
         text += ("; NOT MEASURED: the kit was built without its GPU trace (no CUPTI in the CUDA "
                  "toolkit), so the device work is not checked")
-    elif mine is None or own is None:
+    elif problem is None and (mine is None or own is None):
         problem = ("its run left no GPU trace (the kit's trace library records every kernel and "
                    "copy; a program that ends without exit() or hides its CUDA work leaves none)")
-    else:
+    elif problem is None:
         text += f"; its device work: {summary(mine)}; the solution's: {summary(own)}"
         problem = judge(g, st, program, scene, idea, mine, own, limit, expected, lib)
     if "branchless" in idea and not problem:

@@ -34,12 +34,7 @@ class Ideas:
             self.results.add(test, 0, 0, False, f"not run: stage {st.sid} {program.splitlines()[0]}")
             self.idea_failed[st.sid] = f"stage {st.sid} {program.splitlines()[0]}"
             return
-        sc = idea["scene"]
-        scene = folder / "idea.in"
-        speed = ("--speed", sc["speed"]) if "speed" in sc else ()
-        self.kit_programs.gen(scene, "--n", sc["n"], "--l", sc["L"], "--r", sc["r"], "--steps",
-                              sc["steps"], "--mode", "perf", "--seed",
-                              (self.seed * 13 + int(st.sid)) % 2**32, *speed)
+        scene, what = self.idea_scene(st, folder)
         own = self.solution(st.sid)  # the stage's own solution: the same bits, its speed
         start = time.time()
         r = subprocess.run([own, scene, "--quiet", "--threads", str(idea.get("threads", 1)),
@@ -66,16 +61,7 @@ class Ideas:
                                    4 * len(expected)), st, env=env, watch=kind != "scale",
                                ranks=idea.get("ranks", st.ranks),
                                extra_ro=counter.mounts() if counter else None)
-        what = f"hidden scene N = {sc['n']}, L = {sc['L']}, S = {sc['steps']}"
-        problem = None
-        if run.reason and "time limit" in run.reason:
-            problem = (f"it did not finish the {what} in {limit:.0f} s (the kit's solution takes "
-                       f"{own_seconds:.2f} s): {idea['hint']}")
-        elif run.reason or run.rc != 0:
-            problem = f"the run on the {what} {run.reason or 'exited ' + str(run.rc)}: " \
-                      f"{run.stderr.strip()[-300:]}"
-        elif run.read_output() != expected:
-            problem = f"its output on the {what} differs from the reference's"
+        problem = self.idea_run_problem(run, what, limit, own_seconds, expected, idea["hint"])
         text = f"the {what}: {run.seconds:.2f} s (the kit's solution: {own_seconds:.2f} s)"
         if problem is None and kind == "ranks" and "max_bytes_per_particle_step" in idea:
             problem, text = self.bytes_sent(idea, run, text)  # counted, so decided first
@@ -86,6 +72,31 @@ class Ideas:
         if problem:
             self.idea_failed[st.sid] = f"the idea test of stage {st.sid} failed: {problem}"
         self.results.add(test, 0, 0, problem is None, problem or text, False, run.seconds)
+
+    def idea_scene(self, st, folder):
+        """(path, words) of the entry's hidden idea scene, generated from the grading's seed
+        (the same scene for every kind of idea test, CPU and GPU)."""
+        sc = st.idea["scene"]
+        scene = folder / "idea.in"
+        speed = ("--speed", sc["speed"]) if "speed" in sc else ()
+        self.kit_programs.gen(scene, "--n", sc["n"], "--l", sc["L"], "--r", sc["r"], "--steps",
+                              sc["steps"], "--mode", "perf", "--seed",
+                              (self.seed * 13 + int(st.sid)) % 2**32, *speed)
+        return scene, f"hidden scene N = {sc['n']}, L = {sc['L']}, S = {sc['steps']}"
+
+    @staticmethod
+    def idea_run_problem(run, what, limit, own_seconds, expected, hint):
+        """What went wrong with the student's run on the idea scene (too slow, failed, another
+        output), or None: the first check of every idea test."""
+        if run.reason and "time limit" in run.reason:
+            return (f"it did not finish the {what} in {limit:.0f} s (the kit's solution takes "
+                    f"{own_seconds:.2f} s): {hint}")
+        if run.reason or run.rc != 0:
+            return (f"the run on the {what} {run.reason or 'exited ' + str(run.rc)}: "
+                    f"{run.stderr.strip()[-300:]}")
+        if run.read_output() != expected:
+            return f"its output on the {what} differs from the reference's"
+        return None
 
     def bytes_sent(self, idea, run, text):
         """(problem or None, text): the bytes the ranks sent a particle and step, counted by the
