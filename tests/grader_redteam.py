@@ -38,8 +38,9 @@ and, measured by the grader outside the student's code (each must score nothing)
                   scene (no performance points), the untouched starting point of 03 (no race points)
   gpu-ideas       (on a GPU) 04 stepping on the host between whole-state copies, 05 on one
                   stream, 06 whose GPU path tests every pair (stage 04's kernels): traced by the
-                  kit's CUPTI library, each scores nothing; 05 whose branchless wall calls
-                  model::wall_event() (the grader's branch probe) scores nothing; the honest 04,
+                  kit's CUPTI library, each scores nothing; 04 that never frees its device
+                  state (the trace's memory records) and 05 whose branchless wall calls
+                  model::wall_event() (the grader's branch probe) score nothing; the honest 04,
                   05, 06-gpu keep full marks
   links           a stage folder and a step.cpp that are links into the kit's solutions/, an
                   empty zip and a zip of links (the three-line message, no traceback)
@@ -750,26 +751,37 @@ def case_gpu_ideas():
             check("gpu-ideas", idea is not None and idea["status"] == "failed" and got == 0,
                   f"stage {key} without its idea scored {got} on correctness; its idea test: "
                   f"{(idea or {}).get('output', 'none')[:400]!r}")
-    branchy = scratch / "redteam-gpu-branchy"  # 05 with both streams, but a branchy wall
-    shutil.rmtree(branchy, ignore_errors=True)
-    shutil.copytree(kit / "solutions/05-cuda-streams", branchy / "stages/05-cuda-streams")
-    kernels = branchy / "stages/05-cuda-streams/kernels.cuh"
-    text = kernels.read_text()
+    # The exercises' halves that the bits cannot see: 04 that never frees its device state (its
+    # destructor left empty), 05 whose branchless wall calls model::wall_event().
+    slips = scratch / "redteam-gpu-slips"
+    shutil.rmtree(slips, ignore_errors=True)
+    shutil.copytree(kit / "solutions/04-cuda", slips / "stages/04-cuda")
+    shutil.copytree(kit / "solutions/05-cuda-streams", slips / "stages/05-cuda-streams")
+    step = slips / "stages/04-cuda/step.cu"
+    text = step.read_text()
+    frees = [f"    cudaFree(p_.{f});\n" for f in ("x", "y", "vx", "vy", "pc", "wc")]
+    kernels = slips / "stages/05-cuda-streams/kernels.cuh"
+    wall = kernels.read_text()
     first = "    const model::WallTimesOf<Real> w = model::wall_times(x, y, vx, vy, L, r);\n"
-    body = text.find(first, text.index("struct BranchlessWall"))
-    end = text.find("    wc = wc + 1;\n", body)
-    if body < 0 or end < 0:
-        print("SKIP gpu-ideas (branchy wall): stage 05's BranchlessWall changed shape", flush=True)
+    body = wall.find(first, wall.find("struct BranchlessWall"))
+    end = wall.find("    wc = wc + 1;\n", body)
+    if not all(f in text for f in frees) or body < 0 or end < 0:
+        print("SKIP gpu-ideas (slips): stage 04's frees or 05's BranchlessWall changed shape",
+              flush=True)
     else:
-        kernels.write_text(text[:body] + "    model::wall_event(x, y, vx, vy, wc, L, r);\n"
-                           + text[end + len("    wc = wc + 1;\n"):])
-        tests, _, _ = grade("redteam-gpu-branchy", branchy, "05", *extra)
-        idea = next((t for n, t in tests.items() if n.startswith("05: idea")), None)
-        got = sum(t["score"] for n, t in correctness(tests, "05").items() if ": idea" not in n)
-        check("gpu-ideas", idea is not None and idea["status"] == "failed" and got == 0
-              and "conditional branches" in idea.get("output", ""),
-              f"stage 05 with model::wall_event() as its branchless wall scored {got} on "
-              f"correctness; its idea test: {(idea or {}).get('output', 'none')[:400]!r}")
+        for f in frees:
+            text = text.replace(f, "")
+        step.write_text(text)
+        kernels.write_text(wall[:body] + "    model::wall_event(x, y, vx, vy, wc, L, r);\n"
+                           + wall[end + len("    wc = wc + 1;\n"):])
+        tests, _, _ = grade("redteam-gpu-slips", slips, "04,05", *extra)
+        for key, words in (("04", "left allocated at exit"), ("05", "conditional branches")):
+            idea = next((t for n, t in tests.items() if n.startswith(f"{key}: idea")), None)
+            got = sum(t["score"] for n, t in correctness(tests, key).items() if ": idea" not in n)
+            check("gpu-ideas", idea is not None and idea["status"] == "failed" and got == 0
+                  and words in idea.get("output", ""),
+                  f"stage {key} with a slip the bits cannot see ({words}) scored {got} on "
+                  f"correctness; its idea test: {(idea or {}).get('output', 'none')[:400]!r}")
     beside.join()
     tests = honest.get("tests", {})
     check("gpu-ideas", bool(tests), "the honest stages were graded")

@@ -10,13 +10,16 @@
 ///     {"kernels": K, "kernel_ns": T, "by_name": {"name": [count, ns], ...},
 ///      "copies": {"htod": bytes, "dtoh": bytes, "dtod": bytes, "other": bytes, "count": C},
 ///      "memsets": M, "streams": {"id": {"kernels": k, "copies": c, "memsets": m}, ...},
-///      "intervals": [[kind, stream, start_ns, end_ns], ...], "dropped": D}
+///      "intervals": [[kind, stream, start_ns, end_ns], ...], "dropped": D,
+///      "memory": {"allocations": A, "allocated_bytes": B, "frees": F, "live": L,
+///                 "live_bytes": LB, "managed_bytes": MB}}
 ///
 /// kind is 0 for a kernel, 1 a copy, 2 a memset; `intervals` holds the first kMaxIntervals of
 /// them (`dropped` counts the others). The grader (kit/python/plab/grade/gpu_idea.py) reads it: kernels per
 /// step and their device time (stage 04), kernels on two streams at the same time (stage 05),
-/// the device time of a large scene (stage 06's GPU path). A graph's kernels carry the stream the
-/// graph was launched on.
+/// the device time of a large scene (stage 06's GPU path), and the device memory the program
+/// allocated and left allocated at exit, and whether any was managed (stage 04's exercise 1). A
+/// graph's kernels carry the stream the graph was launched on.
 #include <cupti.h>
 
 #include <cstdint>
@@ -54,6 +57,9 @@ struct Trace {
   std::map<std::string, std::pair<long long, std::uint64_t>> by_name;
   std::map<std::uint32_t, PerStream> streams;
   std::vector<Interval> intervals;
+  long long allocations = 0, frees = 0;
+  std::uint64_t allocated_bytes = 0, managed_bytes = 0;
+  std::map<std::uint64_t, std::uint64_t> live;  // address -> bytes, of allocations not freed
   bool written = false;
 };
 
@@ -115,6 +121,19 @@ void CUPTIAPI buffer_completed(CUcontext, std::uint32_t, std::uint8_t* buffer, s
         keep(t, 2, m->streamId, m->start, m->end);
         break;
       }
+      case CUPTI_ACTIVITY_KIND_MEMORY2: {
+        const auto* m = reinterpret_cast<const CUpti_ActivityMemory4*>(record);
+        if (m->memoryOperationType == CUPTI_ACTIVITY_MEMORY_OPERATION_TYPE_ALLOCATION) {
+          ++t.allocations;
+          t.allocated_bytes += m->bytes;
+          if (m->memoryKind == CUPTI_ACTIVITY_MEMORY_KIND_MANAGED) t.managed_bytes += m->bytes;
+          t.live[m->address] = m->bytes;
+        } else if (m->memoryOperationType == CUPTI_ACTIVITY_MEMORY_OPERATION_TYPE_RELEASE) {
+          ++t.frees;
+          t.live.erase(m->address);
+        }
+        break;
+      }
       default:
         break;
     }
@@ -171,7 +190,13 @@ void write_trace() {
                  static_cast<unsigned long long>(i.start), static_cast<unsigned long long>(i.end));
     sep = ",\n  ";
   }
-  std::fprintf(f, "]}\n");
+  std::uint64_t live_bytes = 0;
+  for (const auto& [address, bytes] : t.live) live_bytes += bytes;
+  std::fprintf(f, "],\n \"memory\": {\"allocations\": %lld, \"allocated_bytes\": %llu, "
+               "\"frees\": %lld, \"live\": %zu, \"live_bytes\": %llu, \"managed_bytes\": %llu}}\n",
+               t.allocations, static_cast<unsigned long long>(t.allocated_bytes), t.frees,
+               t.live.size(), static_cast<unsigned long long>(live_bytes),
+               static_cast<unsigned long long>(t.managed_bytes));
   std::fclose(f);
 }
 
@@ -185,6 +210,7 @@ extern "C" __attribute__((visibility("default"))) int InitializeInjection() {
   cuptiActivityEnable(CUPTI_ACTIVITY_KIND_CONCURRENT_KERNEL);
   cuptiActivityEnable(CUPTI_ACTIVITY_KIND_MEMCPY);
   cuptiActivityEnable(CUPTI_ACTIVITY_KIND_MEMSET);
+  cuptiActivityEnable(CUPTI_ACTIVITY_KIND_MEMORY2);  // allocations and frees (stage 04)
   std::atexit(write_trace);
   return 1;
 }

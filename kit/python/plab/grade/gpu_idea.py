@@ -12,6 +12,9 @@ sandbox (traced), and requires the reference's output. Then, by the entry's keys
                                    program that steps on the host copies 48 or more);
   min_kernel_share                 the program's kernel time against the solution's (the
                                    kernels do the step's work, not a token launch);
+  max_live_device_bytes            device memory the program left allocated at exit (stage 04:
+                                   exercise 1's cudaFree of every field), and none managed
+                                   (cudaMallocManaged is not the exercise);
   min_overlap_share                steps in which two kernels or copies ran at the same time on
                                    different streams (stage 05's streams), and none with
                                    `--off` `off_run` (the stepper's switch turns them off);
@@ -83,7 +86,10 @@ def summary(doc):
     copies = doc["copies"]
     return (f"{doc['kernels']} kernels ({doc['kernel_ns'] / 1e6:.1f} ms on the device), copies "
             f"{copies['htod']} B to and {copies['dtoh']} B from the device, "
-            f"{len(doc['streams'])} stream(s)")
+            f"{len(doc['streams'])} stream(s)" + (
+                f", {doc['memory']['allocations']} device allocations, "
+                f"{doc['memory']['live_bytes']} B left allocated at exit"
+                if "memory" in doc else ""))
 
 
 def run_own(g, st, scene, out, trace, lib):
@@ -179,6 +185,19 @@ def judge(g, st, program, scene, idea, mine, own, limit, expected, lib):
                     f"{100 * share:.0f}% of the solution's {own['kernel_ns'] / 1e6:.2f} ms (at "
                     f"least {100 * idea['min_kernel_share']:.0f}%: the kernels do the step's "
                     f"work). {idea['hint']}")
+    if "max_live_device_bytes" in idea:
+        m = mine.get("memory")
+        if m is None:
+            return "its GPU trace has no record of device memory (the kit's trace library is old)"
+        if m["managed_bytes"]:
+            return (f"it allocated {m['managed_bytes']} bytes of managed memory "
+                    f"(cudaMallocManaged): the state lives in device memory (cudaMalloc), copied "
+                    f"with cudaMemcpy. {idea['hint']}")
+        if m["live_bytes"] > idea["max_live_device_bytes"]:
+            return (f"it left {m['live_bytes']} bytes of device memory allocated at exit, in "
+                    f"{m['live']} of its {m['allocations']} allocations: every cudaMalloc needs "
+                    f"its cudaFree (the stepper's destructor frees the state's fields). "
+                    f"{idea['hint']}")
     if "min_overlap_share" in idea:
         _, starts = overlap(mine["intervals"])
         if starts < idea["min_overlap_share"] * steps:
