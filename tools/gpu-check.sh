@@ -7,6 +7,8 @@
 #   tools/gpu-check.sh [RESULTS_DIR]      (default build-gpu/results)
 #   PLAB_CUDA_ARCH=80 tools/gpu-check.sh  (another GPU than an H100)
 #   PLAB_BENCH_N=1000,10000 PLAB_BENCH_RUNS=3 tools/gpu-check.sh   (a shorter benchmark)
+#   PLAB_SKIP_REDTEAM=1 PLAB_SKIP_ABLATION=1 tools/gpu-check.sh   (without the grader's GPU
+#                                          idea tests, or without stage 05's ablation)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 results=${1:-build-gpu/results}
@@ -51,6 +53,17 @@ for impl in solution engine; do
   build-gpu/bin/plab bench --stage 06 --impl "$impl" --fixed-density --steps 100 --runs "${PLAB_BENCH_RUNS:-3}" \
       --n "${PLAB_SCALE_N:-10000,100000,1000000}" --csv "$results/bench-06-scale-$impl.csv"
 done
+
+if [ -z "${PLAB_SKIP_REDTEAM:-}" ]; then
+  log "the grader's GPU idea tests (red team gpu-ideas: each cheat and slip scores nothing, the honest 04, 05, 06-gpu full marks)"
+  # Without bubblewrap, as root: the grader's unprivileged-user sandbox, the kit's answers made private.
+  grade_args=""
+  if ! command -v bwrap >/dev/null && [ "$(id -u)" = 0 ]; then grade_args="--make-private"; fi
+  PYTHONPATH="$PWD/kit/python" PLAB_REDTEAM_GRADE_ARGS="$grade_args" \
+    python3 tests/grader_redteam.py build-gpu/bin/plab "$PWD" "$results/redteam" gpu-ideas \
+    > "$results/redteam-gpu.log" 2>&1 || status=1
+  grep -E '^(ok|FAIL|SKIP)|passed|failed' "$results/redteam-gpu.log" | tail -25
+fi
 
 [ -n "${PLAB_SKIP_ABLATION:-}" ] && { [ "$status" = 0 ] || echo "SOME GPU TESTS FAILED"; exit "$status"; }
 log "stage 05, each change turned off in turn (PLAB_CUDA_OFF), N = 1000 and 10000"
