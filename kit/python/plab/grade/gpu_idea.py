@@ -189,11 +189,13 @@ def judge(g, st, program, scene, idea, mine, own, limit, expected, lib):
         m = mine.get("memory")
         if m is None:
             return "its GPU trace has no record of device memory (the kit's trace library is old)"
-        if m["managed_bytes"]:
+        # No allocation seen at all: CUPTI gave no memory records here (a GPU stage allocates),
+        # so the memory is not measured rather than held against the stage.
+        if m["allocations"] and m["managed_bytes"]:
             return (f"it allocated {m['managed_bytes']} bytes of managed memory "
                     f"(cudaMallocManaged): the state lives in device memory (cudaMalloc), copied "
                     f"with cudaMemcpy. {idea['hint']}")
-        if m["live_bytes"] > idea["max_live_device_bytes"]:
+        if m["allocations"] and m["live_bytes"] > idea["max_live_device_bytes"]:
             return (f"it left {m['live_bytes']} bytes of device memory allocated at exit, in "
                     f"{m['live']} of its {m['allocations']} allocations: every cudaMalloc needs "
                     f"its cudaFree (the stepper's destructor frees the state's fields). "
