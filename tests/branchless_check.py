@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Stage 05's branchless wall, as the grader measures it (kit/python/plab/grade/branches.py), on
-the student's starting point with exercise 2 written five ways: the kit's solution and a
-select-only version must pass; calling model::wall_event() or the kit's BranchyWall, or writing
-the event with if/else, must fail (the same bits, but the warp splits). Compiles with nvcc to PTX
+the student's starting point with exercise 2 written seven ways: the kit's solution and a
+select-only version must pass; calling model::wall_event() or the kit's BranchyWall (also from
+a function kept out of line, or through a function pointer), or writing the event with if/else,
+must fail (the same bits, but the warp splits). Compiles with nvcc to PTX
 only: no GPU needed. Exit 0 when every case is judged as it should be, 1 otherwise, 77 (skipped)
 without nvcc.
 
@@ -34,6 +35,25 @@ CASES = {  # name: (body of BranchlessWall's call operator, passes)
 """, True),
     "wall_event": ("    model::wall_event(x, y, vx, vy, wc, L, r);\n", False),
     "BranchyWall": ("    BranchyWall{}(x, y, vx, vy, wc, L, r);\n", False),
+    # model::wall_event() behind a function the compiler may not inline (its own .func)
+    "noinline": ("""    struct Hidden {
+      static __noinline__ __device__ void wall(Real& x, Real& y, Real& vx, Real& vy,
+                                               long long& wc, Real L, Real r) {
+        model::wall_event(x, y, vx, vy, wc, L, r);
+      }
+    };
+    Hidden::wall(x, y, vx, vy, wc, L, r);
+""", False),
+    # ... or through a function pointer the grader cannot follow
+    "pointer": ("""    struct Hidden {
+      static __device__ void wall(Real& x, Real& y, Real& vx, Real& vy, long long& wc, Real L,
+                                  Real r) {
+        model::wall_event(x, y, vx, vy, wc, L, r);
+      }
+    };
+    void (*volatile f)(Real&, Real&, Real&, Real&, long long&, Real, Real) = &Hidden::wall;
+    f(x, y, vx, vy, wc, L, r);
+""", False),
     "if-else": (FLAGS + """    const bool fx = w.tx == e, fy = w.ty == e;
     Real later;
     if (fx && fy) later = 1; else if (fx) later = w.ty; else later = w.tx;

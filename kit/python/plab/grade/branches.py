@@ -5,7 +5,9 @@ one: so the grader reads the code the compiler made. It compiles a probe of its 
 nvcc to PTX: one kernel calls the student's kernels::BranchlessWall on one particle, another does
 only what the kit gives for it (model::wall_times() and model::wall_time(), whose `v == 0` tests
 are branches of their own). A conditional branch (`@%p bra`) is a place where a warp can split;
-the student's wall event may leave no more of them than the given part alone. Measured with nvcc
+the student's wall event may leave no more of them than the given part alone, counting the
+branches of every function it calls (a `__noinline__` helper is its own `.func` in PTX); a call
+through a pointer, which the grader cannot follow, fails. Measured with nvcc
 13.0 (sm_90, --fmad=false): the given part leaves 4, the solution 4; model::wall_event() (the
 kit's BranchyWall) 6, and the same event written with if/else 6.
 
@@ -38,8 +40,11 @@ extern "C" __global__ void plab_probe_student(double* x, double* y, double* vx, 
 #: Where the probe is written, and its PTX, in the stage's folder of the sandbox's sources.
 SOURCE, OUTPUT = "plab_branch_probe.cu", "plab_branch_probe.ptx"
 
-_ENTRY = re.compile(r"\.entry\s+(\w+)\s*\(")
+_HEAD = re.compile(r"^\s*(?:\.visible\s+|\.weak\s+|\.extern\s+)*\.(entry|func)\s+"
+                   r"(?:\([^)]*\)\s*)?(\w+)")
 _COND_BRANCH = re.compile(r"^\s*@!?%p\d+\s+bra(\.uni)?\b")
+_CALL = re.compile(r"^\s*call(\.uni)?\b")
+_INDIRECT = "(indirect)"
 
 
 def nvcc_command(nvcc, include, stage_dir, arch="90"):
@@ -49,17 +54,54 @@ def nvcc_command(nvcc, include, stage_dir, arch="90"):
             f"{stage_dir}/{OUTPUT}"]
 
 
-def conditional_branches(ptx):
-    """{kernel name: conditional branches in its PTX}."""
-    counts, entry = {}, None
-    for line in ptx.splitlines():
-        m = _ENTRY.search(line)
+def functions(ptx):
+    """{name: (conditional branches in its body, names it calls)} of the PTX's kernels and
+    device functions; a call through a pointer is named "(indirect)"."""
+    found, name, calls_of, pending = {}, None, {}, None
+    lines = ptx.splitlines()
+    names = {m.group(2) for m in map(_HEAD.match, lines) if m}
+    for line in lines:
+        m = _HEAD.match(line)
         if m:
-            entry = m.group(1)
-            counts[entry] = 0
-        elif entry and _COND_BRANCH.match(line):
-            counts[entry] += 1
-    return counts
+            name = m.group(2)
+            found.setdefault(name, 0)
+            calls_of.setdefault(name, set())
+            continue
+        if name is None:
+            continue
+        if _COND_BRANCH.match(line):
+            found[name] += 1
+        if _CALL.match(line):
+            pending = ""
+        if pending is not None:  # a call's text runs to its `;` over several lines
+            pending += " " + line
+            if ";" in line:
+                callees = set(re.findall(r"\w+", pending)) & names
+                calls_of[name] |= callees or {_INDIRECT}
+                pending = None
+    return {n: (found[n], calls_of[n]) for n in found}
+
+
+def conditional_branches(ptx):
+    """{kernel or function name: conditional branches in it and in every function it calls,
+    directly or not}; a call through a pointer counts as unbounded (infinity)."""
+    funcs = functions(ptx)
+    total = {}
+    for root in funcs:
+        seen, todo, count = set(), [root], 0
+        while todo:
+            f = todo.pop()
+            if f in seen:
+                continue
+            seen.add(f)
+            if f == _INDIRECT:
+                count = float("inf")
+                continue
+            branches, calls = funcs.get(f, (0, set()))
+            count += branches
+            todo += calls
+        total[root] = count
+    return total
 
 
 def judge(ptx, hint=""):
@@ -68,8 +110,11 @@ def judge(ptx, hint=""):
     given, mine = counts.get("plab_probe_given"), counts.get("plab_probe_student")
     if given is None or mine is None:
         return "the probe's PTX has not both kernels (the compiler's output was not read)", ""
-    text = (f"its BranchlessWall leaves {mine} conditional branches in the compiled code, the "
-            f"model's wall times alone {given}")
+    if mine == float("inf"):
+        return ("its BranchlessWall calls a function through a pointer: the grader cannot see "
+                f"what it runs. {hint}").strip(), "an indirect call"
+    text = (f"its BranchlessWall leaves {mine} conditional branches in the compiled code (with "
+            f"the functions it calls), the model's wall times alone {given}")
     if mine > given:
         return (f"{text}: the wall event itself branches ({mine - given} more; "
                 f"model::wall_event() leaves 2 more, as does the same event written with "
