@@ -399,6 +399,13 @@ void step(const Box&, Particles&) {
 }
 
 
+def unbuilt(output):
+    """Whether a test's output says that its stage was never built (it did not compile, or the
+    kit's build could not be configured): such a cheat scores 0 without being caught by the idea
+    test, so it proves nothing."""
+    return "does not compile" in output or output.startswith("not run: stage")
+
+
 def check(name, condition, message):
     print(("ok   " if condition else "FAIL ") + f"{name}: {message}", flush=True)
     if not condition:
@@ -642,7 +649,7 @@ void step(const Box& box, const Ranks& r, Local& s) {
         idea = next((t for n, t in tests.items() if n.startswith(f"{sid}: idea")), None)
         mine = correctness(tests, key)
         got = sum(t["score"] for t in mine.values())
-        broken = [t["output"] for t in mine.values() if "does not compile" in t["output"]]
+        broken = [t["output"] for t in mine.values() if unbuilt(t["output"])]
         check("ideas", bool(mine), f"stage {key} was graded ({len(mine)} correctness tests)")
         check("ideas", not broken, f"stage {sid}'s shortcut compiles: {broken[:1]}")
         ok = idea is not None and idea["status"] == "failed" and got == 0
@@ -745,7 +752,7 @@ def case_gpu_ideas():
             idea = next((t for n, t in tests.items() if n.startswith(f"{key}: idea")), None)
             mine = {n: t for n, t in correctness(tests, key).items() if ": idea" not in n}
             got = sum(t["score"] for t in mine.values())
-            broken = [t["output"] for t in mine.values() if "does not compile" in t["output"]]
+            broken = [t["output"] for t in mine.values() if unbuilt(t["output"])]
             check("gpu-ideas", bool(mine) and not broken,
                   f"stage {key}'s cheat was built and graded: {broken[:1]}")
             check("gpu-ideas", idea is not None and idea["status"] == "failed" and got == 0,
@@ -777,7 +784,10 @@ def case_gpu_ideas():
         tests, _, _ = grade("redteam-gpu-slips", slips, "04,05", *extra)
         for key, words in (("04", "left allocated at exit"), ("05", "conditional branches")):
             idea = next((t for n, t in tests.items() if n.startswith(f"{key}: idea")), None)
-            got = sum(t["score"] for n, t in correctness(tests, key).items() if ": idea" not in n)
+            mine = {n: t for n, t in correctness(tests, key).items() if ": idea" not in n}
+            got = sum(t["score"] for t in mine.values())
+            check("gpu-ideas", bool(mine) and not any(unbuilt(t["output"]) for t in mine.values()),
+                  f"stage {key}'s slip was built and graded")
             check("gpu-ideas", idea is not None and idea["status"] == "failed" and got == 0
                   and words in idea.get("output", ""),
                   f"stage {key} with a slip the bits cannot see ({words}) scored {got} on "
@@ -1064,7 +1074,7 @@ def case_rounds():
         mine = correctness(tests, key)
         got = sum(t["score"] for t in mine.values())
         most = sum(t["max_score"] for t in mine.values())
-        broken = [t["output"] for t in mine.values() if "does not compile" in t["output"]]
+        broken = [t["output"] for t in mine.values() if unbuilt(t["output"])]
         said = (idea or {}).get("output", "none")[:400]
         check("rounds", bool(mine) and not broken, f"{name} was graded and compiles: {broken[:1]}")
         if honest:
