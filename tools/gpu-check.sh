@@ -58,10 +58,13 @@ if [ -z "${PLAB_SKIP_REDTEAM:-}" ]; then
   log "the grader's GPU idea tests (red team gpu-ideas: each cheat and slip scores nothing, the honest 04, 05, 06-gpu full marks)"
   # Without bubblewrap, as root: the grader's unprivileged-user sandbox, the kit's answers made private.
   grade_args=""
+  # The gradings' scratch where the sandbox's user can reach it (not inside a private checkout).
+  scratch=$(mktemp -d /tmp/plab-gpu-redteam.XXXXXX)
   if ! command -v bwrap >/dev/null && [ "$(id -u)" = 0 ]; then grade_args="--make-private"; fi
   PYTHONPATH="$PWD/kit/python" PLAB_REDTEAM_GRADE_ARGS="$grade_args" \
-    python3 tests/grader_redteam.py build-gpu/bin/plab "$PWD" "$results/redteam" gpu-ideas \
+    python3 tests/grader_redteam.py build-gpu/bin/plab "$PWD" "$scratch" gpu-ideas \
     > "$results/redteam-gpu.log" 2>&1 || status=1
+  rm -rf "$scratch"
   grep -E '^(ok|FAIL|SKIP)|passed|failed' "$results/redteam-gpu.log" | tail -25
 fi
 
