@@ -782,7 +782,7 @@ def case_gpu_ideas():
         kernels.write_text(wall[:body] + "    model::wall_event(x, y, vx, vy, wc, L, r);\n"
                            + wall[end + len("    wc = wc + 1;\n"):])
         tests, _, _ = grade("redteam-gpu-slips", slips, "04,05", *extra)
-        for key, words in (("04", "left allocated at exit"), ("05", "conditional branches")):
+        for key, words in (("04", "allocated at exit"), ("05", "conditional branches")):
             idea = next((t for n, t in tests.items() if n.startswith(f"{key}: idea")), None)
             mine = {n: t for n, t in correctness(tests, key).items() if ": idea" not in n}
             got = sum(t["score"] for t in mine.values())

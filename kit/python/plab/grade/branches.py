@@ -50,10 +50,11 @@ _INDIRECT = "(indirect)"
 def nvcc_command(nvcc, include, stage_dir, arch="90"):
     """The compiler's command line: the probe, in `stage_dir`, to PTX (the kit's flags)."""
     # The stage build's own definitions and optimisation (cmake/PlabStage.cmake, Release), so
-    # that a header cannot tell the probe from the stage by them.
+    # that a header cannot tell the probe from the stage by them. Every path a whole argument:
+    # the sandbox without namespaces rewrites those to the outside paths.
     return [str(nvcc), "-std=c++17", f"-arch=sm_{arch}", "--fmad=false", "-O3", "-DNDEBUG",
-            '-DPLAB_STAGE_ID="05"', "-DPLAB_STAGE_NUMBER=5", "-ptx", f"-I{include}",
-            f"-I{stage_dir}", f"{stage_dir}/{SOURCE}", "-o", f"{stage_dir}/{OUTPUT}"]
+            '-DPLAB_STAGE_ID="05"', "-DPLAB_STAGE_NUMBER=5", "-ptx", "-I", str(include),
+            "-I", str(stage_dir), f"{stage_dir}/{SOURCE}", "-o", f"{stage_dir}/{OUTPUT}"]
 
 
 def functions(ptx):
