@@ -22,7 +22,8 @@ In a student block the `./plab test` line before `$EDITOR` must fail with "stage
 file it is given (what a student who finished the exercise has); every other line must exit 0.
 The scratch copies are configured with CUDA off, as on the kit's CI (no GPU), before ./plab's
 first run, which then builds there as it would anywhere. The scratch folder is removed whatever
-the outcome.
+the outcome. Instructor lines named in the environment variable PLAB_README_RAN_BY_CI (one a line)
+are not run again: CI sets it for the lines its own steps run literally in its fresh clone.
 
   readme_check.py [--kit DIR] [--part all|instructor|student] [--keep]
 """
@@ -55,6 +56,9 @@ WRITES = {"./plab docs": ["build/docs/html/index.html"],
           "./plab grade": ["alice/results.json"],
           "./plab release": ["../particle-lab-student/README.md",
                              "../particle-lab-student/kit/reference/bin/plab-reference"]}
+# Lines that CI (.ci/run) runs literally, in its own steps, in the same fresh clone: it names them in
+# PLAB_README_RAN_BY_CI (one per line), and this check does not run them a second time.
+RAN_BY_CI = [ln.strip() for ln in os.environ.get("PLAB_README_RAN_BY_CI", "").splitlines() if ln.strip()]
 NOT_DONE = re.compile(r"stage 01: EXERCISE 1 \([^)]+\) is not done yet")
 
 
@@ -120,6 +124,9 @@ def instructor_block(lines, clone, env):
         cmd = command(line)
         if cmd in SKIPPED:
             print(f"  --  skipped     {cmd}   ({SKIPPED[cmd]})", flush=True)
+            continue
+        if cmd in RAN_BY_CI:
+            print(f"  --  ran by CI   {cmd}   (CI's own step ran this line in a fresh clone)", flush=True)
             continue
         done, took = run_line(line, clone, env)
         said = done.stdout + done.stderr

@@ -1,6 +1,7 @@
 """plab accuracy: run time against error, the stepped model against exact hard-disk dynamics.
 
-Started by `./plab accuracy`. For each scene it runs the exact event-driven stage (07) and, against
+Started by `./plab accuracy` (its options are this module's own; the programs come from
+`plab built --json`). For each scene it runs the exact event-driven stage (07) and, against
 it, the fastest stepped stage (06) in variants: K substeps per printed step (K = 1, 2, 4, ..., 64;
 velocities divided by K, K times the steps), in double (model.md's contract) and in float, on the
 CPU and, where there is a GPU, on the GPU (double). Errors, at equal physical time:
@@ -75,21 +76,56 @@ def errors(exact, got, r):
     return row
 
 
+def substeps(text):
+    """--max-k's value: an integer from 1 to 1024."""
+    try:
+        k = int(text)
+    except ValueError:
+        k = 0
+    if not 1 <= k <= 1024:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of substeps from 1 to 1024")
+    return k
+
+
+def programs(plab, stepped):
+    """(kit, stepped program, exact program): the stepped stage from the kit's engine where it has
+    that stage (its float path), else from the solutions; the manifest's exact stage from the
+    solutions. SystemExit with the reason when one cannot run."""
+    try:
+        engine = plab.built("engine")
+        use_engine = any(s["id"] == stepped for s in engine["stages"])
+        kit = plab.built("solution")
+        if not kit["exact_stage"]:
+            sys.exit("plab accuracy: the manifest names no exact stage")
+        return (kit, plab.stage_program(stepped, "engine" if use_engine else "solution"),
+                plab.stage_program(kit["exact_stage"], "solution"))
+    except plabio.ProgramError as e:
+        sys.exit(f"plab accuracy: {e}")
+
+
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--stepped", required=True, help="the fastest stepped stage's program (06)")
-    ap.add_argument("--exact", required=True, help="the exact stage's program (07)")
-    ap.add_argument("--plab", required=True)
-    ap.add_argument("--datasets", required=True)
-    ap.add_argument("--work", required=True)
-    ap.add_argument("--scene", action="append", default=[], help=f"scenes ({', '.join(SCENES)}; default all)")
-    ap.add_argument("--max-k", type=int, default=64)
-    ap.add_argument("--steps", type=int, help="printed steps (default 8; the cradle: its own)")
-    ap.add_argument("--csv", help="write the table here")
-    ap.add_argument("--plot", help="draw time against error (PNG or SVG)")
-    ap.add_argument("--figures", help="the folder of the handouts' figure code (for --plot)")
+    ap = argparse.ArgumentParser(
+        prog="plab accuracy", formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Run time against error: the exact event-driven stage (07) against the fastest "
+                    "stepped stage (06) with K substeps per step (K = 1, 2, 4, ... up to --max-k), "
+                    "in double and float, on the CPU and (with a GPU) the GPU: collisions missed, "
+                    "overlaps, position error after 1, 2 and 4 steps, energy drift; a table, a CSV, "
+                    "a plot.", epilog=__doc__.split("\n\n", 1)[1])
+    ap.add_argument("--scene", action="append", default=[],
+                    help=f"a scene ({', '.join(SCENES)}; default all; repeat or comma-separate)")
+    ap.add_argument("--max-k", type=substeps, default=64, metavar="K",
+                    help="largest number of substeps (powers of two up to it; 1-1024, default 64)")
+    ap.add_argument("--steps", type=int, help="printed steps of the generated scenes (default 8)")
+    ap.add_argument("--csv", help="write the table as CSV here")
+    ap.add_argument("--plot", help="draw time against error here (PNG or SVG)")
+    ap.add_argument("--plab", help=argparse.SUPPRESS)  # the kit's plab program (plab passes it)
     args = ap.parse_args()
     plab = plabio.Plab(args.plab)
+    kit, args.stepped, args.exact = programs(plab, "06")
+    args.datasets = os.path.join(kit["source"], "datasets")
+    args.work = os.path.join(kit["build"], "accuracy")
+    args.figures = os.path.join(kit["source"], "handouts", "figures")
+    args.scene = [n for s in args.scene for n in s.split(",") if n]
     os.makedirs(args.work, exist_ok=True)
     names = args.scene or list(SCENES)
     for n in names:

@@ -8,14 +8,19 @@ Calls go one way, never back up:
 
     ./plab (bash)  ->  plab COMMAND (C++)  ->  TOOL.py (Python)  ->  leaf C++ programs
 
-The leaves, which never start Python (nor any other program):
+The leaves, which never start Python:
     plab read --json FILE   a scene, an output or an events file, or an error (kit/cli/read.cpp)
     plab gen ...            a reproducible random scene (kit/cli/gen.cpp)
     plab diff [--json] A B  where two outputs differ, also step by step (kit/cli/diff.cpp)
+    plab built --json       the stages, their programs and what stops one from running, and the
+                            kit's folders (kit/cli/built.cpp; it asks the build tool, in a dry
+                            run, whether each program is up to date, and starts nothing else)
     plab-run-NN-IMPL        a stage's runner (kit/runner/main.cpp), run by the tools directly or,
                             for student code, in the grader's sandbox (plab.grade.sandbox)
-The `plab` commands that start Python (render, grade, accuracy, stress, release, gradescope;
-test through CTest's Python checks, docs through its figure and offline scripts) are never called
+    plab bench ...          a stage's runs timed, medians into a CSV (kit/cli/bench.cpp; it
+                            starts the stage runners only), for plab.report
+The `plab` commands that start Python (render, report, grade, accuracy, stress, release, similar,
+gradescope; test through CTest's Python checks, docs through its figure and offline scripts) are never called
 from a tool: a tool that needs what one of them does calls the leaves it is made of. (Before this
 module the tools called `plab gen` and `plab diff`, both leaves, and split the texts themselves.)
 The test drivers under tests/ stand where a user stands: they run `plab` commands from the top,
@@ -86,6 +91,28 @@ class Plab:
     def read_events(self, path, steps=None):
         """{kind, file, count, events: [{step, particle, kind: "wall" or "pair"}]}."""
         return self.read(path, "events", steps)
+
+    # -- the kit's stages (plab built --json) ------------------------------------------------------
+    def built(self, impl=None, stages=()):
+        """{impl, source, build, bin, exact_stage, stages: [{id, name, program, exists, problem}]}:
+        every stage of `impl` (default: as for `plab run`), or those named; `problem` is "" when
+        the stage is built from its current code, else the reason it cannot run."""
+        args = ["built", "--json"] + (["--impl", impl] if impl else [])
+        if stages:
+            args += ["--stage", ",".join(stages)]
+        done, argv = self._run(*args)
+        if done.returncode != 0:
+            message = done.stderr.strip()
+            raise ProgramError(message[len("error: "):] if message.startswith("error: ") else message)
+        return json.loads(done.stdout)
+
+    def stage_program(self, stage, impl=None):
+        """A stage's program; ProgramError saying why there is none (no such stage, not built, or
+        not built from its current code)."""
+        found = self.built(impl, [stage])["stages"][0]
+        if found["problem"]:
+            raise ProgramError(found["problem"])
+        return found["program"]
 
     # -- making and comparing ----------------------------------------------------------------------
     def gen(self, out, *args):

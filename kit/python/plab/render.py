@@ -1,10 +1,7 @@
 """Animates particle-lab outputs with matplotlib: the box, the disks at their true radius, one
-frame per step, the step's collisions marked. `plab render` runs a stage and calls this; it can
-also be run on any print-mode output (a golden file, a student's output).
-
-  python3 -m plab.render --output FILE [--events FILE] --box L --radius R [--steps A:B] [--follow I]
-            [--out anim.gif|anim.mp4|frame.svg|frame.png] [--plab PLAB]
-  python3 -m plab.render --output EXPECTED --output ACTUAL --mark STEP:PARTICLE:TEXT ...   (side by side)
+frame per step, the step's collisions marked: `plab render` (its options are this module's own).
+It runs a stage (found with `plab built --json`) on the scene, or draws any print-mode output (a
+golden file, a student's output), or two side by side with their first difference ringed.
 
 Frame k shows the state at the start of step k and marks the particles that collide during that
 step: orange for a wall, red for another particle. Without --events, collisions are read from the
@@ -14,6 +11,7 @@ The files are read by the kit's own reader (`plab read --json`, through plab.pla
 import argparse
 import pathlib
 import sys
+import tempfile
 
 import matplotlib
 
@@ -140,24 +138,95 @@ class Panel:
                                                  linewidth=2))
 
 
+def what_to_draw(plab, a, scratch):
+    """The outputs to draw (paths), their titles, the events file (or None), the steps FIRST:LAST
+    and the difference to ring (STEP, PARTICLE, TEXT or None), from the command's options: two
+    outputs (--diff), one (--from), or a run of the stage (--stage, --impl) on the scene."""
+    try:
+        scene = plab.read_scene(a.scene)
+    except plabio.FormatError as e:
+        fail(str(e))
+    a.box, a.radius = scene["L"], scene["r"]
+    steps = a.steps
+    default_steps = f"0:{min(scene['steps'], 20)}"
+    if a.diff:
+        for path in a.diff:
+            if not pathlib.Path(path).is_file():
+                fail(f"--diff: {path} is not a file")
+        d = plab.diff(*a.diff)
+        mark = None
+        if d["equal"]:
+            print("the two outputs are equal")
+        else:
+            print(d["text"])
+            f = d["first"]
+            step = int(f["step"])
+            if steps is None:  # a few steps before, and the next one (to show its collisions)
+                steps = f"{max(0, step - 8)}:{step + 1 if step < scene['steps'] else step}"
+            if f["particle"] != "":
+                mark = (step, int(f["particle"]),
+                        f"first difference: step {step}, particle {f['particle']}, {f['field']}: "
+                        f"expected {f['expected']}, got {f['actual']}")
+        return (list(a.diff), [f"expected: {a.diff[0]}", f"actual: {a.diff[1]}"], None,
+                steps or default_steps, mark)
+    if a.from_output:
+        if not pathlib.Path(a.from_output).is_file():
+            fail(f"--from: {a.from_output} is not a file")
+        return [a.from_output], [a.from_output], None, steps or default_steps, None
+    steps = steps or default_steps
+    last = steps.split(":")[-1]
+    try:
+        found = plab.built(a.impl, [a.stage])
+    except plabio.ProgramError as e:
+        fail(str(e))
+    stage = found["stages"][0]
+    if stage["problem"]:
+        fail(stage["problem"])
+    output, events = scratch / "render.out", scratch / "render.events"
+    done = plabio.run_stage(stage["program"], a.scene, "--quiet", "--mode", "print", "--steps", last,
+                            "--out", output, "--events", events)
+    if done.returncode != 0:
+        fail(f"stage {stage['id']} failed on {a.scene} (exit {done.returncode}): "
+             f"{done.stderr.strip()[-500:]}")
+    label = f"stage {stage['id']} ({found['impl']}), {pathlib.Path(a.scene).name}"
+    return [str(output)], [label], str(events), steps, None
+
+
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--output", action="append", required=True, help="print-mode output (1 or 2)")
-    ap.add_argument("--label", action="append", default=[], help="title of each output")
-    ap.add_argument("--events", help="the runner's --events file for the (first) output")
-    ap.add_argument("--box", type=float, required=True, help="side L of the box")
-    ap.add_argument("--radius", type=float, required=True, help="radius r of the disks")
-    ap.add_argument("--steps", default="0:20", help="first:last step to draw (inclusive)")
+    ap = argparse.ArgumentParser(
+        prog="plab render", formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Animate a run: the box, the disks at their true radius, one frame per step, "
+                    "collisions marked (orange: wall, red: pair). With --diff, two outputs side by "
+                    "side and their first difference ringed.",
+        epilog=__doc__.split("\n\n", 1)[1])
+    ap.add_argument("scene", help="scene file (with --diff or --from: only its L and r are used)")
+    ap.add_argument("--stage", default="02", help="stage that runs the scene (%(default)s)")
+    ap.add_argument("--impl", help="solution, student or engine (default as for plab run)")
+    ap.add_argument("--steps", help="FIRST:LAST steps to draw (default 0:20; with --diff, around "
+                                    "the first difference)")
     ap.add_argument("--follow", type=int, help="highlight this particle and draw its path")
-    ap.add_argument("--mark", help="STEP:PARTICLE:TEXT, a difference to ring and describe")
+    ap.add_argument("--from", dest="from_output", metavar="OUTPUT",
+                    help="draw this print-mode output (a golden file, yours) instead of running a stage")
+    ap.add_argument("--diff", nargs=2, metavar=("EXPECTED", "ACTUAL"),
+                    help="two print-mode outputs to compare")
+    ap.add_argument("--fps", type=float, default=4, help="frames per second (%(default)s)")
     ap.add_argument("--sample", type=int, default=20000, help="draw at most this many particles")
-    ap.add_argument("--fps", type=float, default=4)
-    ap.add_argument("--out", required=True, help=".gif or .mp4 (animation), .svg or .png (frame)")
-    ap.add_argument("--plab", help="the kit's plab program, whose `plab read` reads the files "
-                                   "(default: build/bin/plab of this kit)")
+    ap.add_argument("--out", help="FILE.gif or FILE.mp4 (animation), FILE.svg or FILE.png (one "
+                                  "frame); default: the scene's name with .gif")
+    ap.add_argument("--plab", help=argparse.SUPPRESS)  # the kit's plab program (plab passes it)
     a = ap.parse_args()
     plab = plabio.Plab(a.plab)
+    if not pathlib.Path(a.scene).is_file():
+        fail(f"{a.scene} is not a file")
+    a.out = a.out or pathlib.Path(a.scene).stem + ".gif"
+    with tempfile.TemporaryDirectory(prefix="plab-render-") as scratch:
+        a.output, a.label, a.events, a.steps, mark = what_to_draw(plab, a, pathlib.Path(scratch))
+        draw(plab, a, mark)
+    print(f"wrote {a.out} (steps {a.steps})")
 
+
+def draw(plab, a, mark):
+    """Draws a.output (one or two outputs) over a.steps into a.out."""
     try:
         first, last = (int(v) for v in a.steps.split(":"))
     except ValueError:
@@ -169,10 +238,6 @@ def main():
         fail(f"--out must end in .gif, .mp4, .svg or .png, not {a.out!r}")
     if kind == "mp4" and not animation.writers.is_available("ffmpeg"):
         fail("writing .mp4 needs ffmpeg (apt-get install ffmpeg); .gif needs nothing more")
-    mark = None
-    if a.mark:
-        step, particle, text = a.mark.split(":", 2)
-        mark = (int(step), int(particle), text)
 
     outputs = [(path, read_frames(plab, path, first, last)) for path in a.output]
     n = len(outputs[0][1][first])

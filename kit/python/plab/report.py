@@ -1,10 +1,7 @@
-"""The student's report skeleton (`plab report`): from the CSV that `plab bench --csv` wrote for
-the student's own stage, a Markdown report with this machine's description, the tables, figures
-of time against N, speedup and efficiency (matplotlib), and the stage handout's questions.
-
-  python3 -m plab.report --csv BENCH.csv --stage NN --impl IMPL --kit KIT --out DIR [--counts threads|ranks]
-
-`plab report --help` is the command to run; this script is its second half.
+"""The student's report skeleton (`plab report`; its options are this module's own): times the
+student's own stage with `plab bench --csv` (the stage found with `plab built --json`), then writes
+a Markdown report with this machine's description, the tables, figures of time against N, speedup
+and efficiency (matplotlib), and the stage handout's questions.
 """
 import argparse
 import csv
@@ -14,6 +11,8 @@ import platform
 import re
 import subprocess
 import sys
+
+from plab import plabio  # the kit's programs
 
 import matplotlib
 
@@ -133,15 +132,94 @@ def table(rows, counts):
     return "\n".join(lines)
 
 
+def default_sizes(stage):
+    """Sizes a stage's report runs by default: a few seconds a run on a laptop at 100 steps,
+    growing by 2 so that the slope of time against N (the stage's complexity) shows."""
+    return {"01": [100, 200, 400], "02": [250, 500, 1000, 2000], "07": [250, 500, 1000, 2000],
+            "03": [500, 1000, 2000, 4000], "04": [1000, 2000, 4000, 8000],
+            "05": [1000, 2000, 4000, 8000], "06": [2000, 8000, 32000, 128000]}.get(stage, [10000, 40000])
+
+
+def up_to_cores():
+    """Thread (or rank) counts 1, 2, 4, ... up to this machine's cores, and the cores themselves."""
+    cores = max(1, os.cpu_count() or 1)
+    counts, t = [], 1
+    while t < cores:
+        counts.append(t)
+        t *= 2
+    return counts + [cores]
+
+
+def numbers(text):
+    """A comma-separated list of positive integers (--n, --threads)."""
+    try:
+        values = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        values = []
+    if not values or min(values) < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a comma-separated list of positive integers")
+    return values
+
+
+def positive(text):
+    """A positive integer (--steps, --runs)."""
+    values = numbers(text)
+    if len(values) != 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not one positive integer")
+    return values[0]
+
+
+def bench(plab, stage, impl, sizes, counts, mpi, steps, runs, csv_path):
+    """Times the stage with `plab bench` (its medians into csv_path); exits with its reason on a
+    failure."""
+    joined = lambda v: ",".join(map(str, v))  # noqa: E731
+    print(f"plab report: timing stage {stage} ({impl}) at N = {joined(sizes)}, "
+          f"{'ranks' if mpi else 'threads'} {joined(counts)}, {steps} steps, {runs} runs each "
+          f"(plab bench)", flush=True)
+    done = subprocess.run([plab.program, "bench", "--stage", stage, "--impl", impl, "--n", joined(sizes),
+                           "--steps", str(steps), "--runs", str(runs), "--csv", csv_path,
+                           "--ranks" if mpi else "--threads", joined(counts)])
+    if done.returncode != 0:
+        sys.exit(f"plab report: the timings failed (plab bench exit {done.returncode})")
+
+
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--csv", required=True)
-    ap.add_argument("--stage", required=True)
-    ap.add_argument("--impl", required=True)
-    ap.add_argument("--kit", required=True)
-    ap.add_argument("--out", required=True)
-    ap.add_argument("--counts", choices=["threads", "ranks"], default="threads")
+    ap = argparse.ArgumentParser(
+        prog="plab report",
+        description="Write your report's skeleton for a stage: runs the stage (yours by default in "
+                    "a student copy) on this machine over sizes and thread or rank counts, and "
+                    "writes OUT/report.md with this machine's description, the tables, figures of "
+                    "time against N, speedup and efficiency (matplotlib), and the handout's "
+                    "questions to answer.")
+    ap.add_argument("--stage", required=True, help="the stage, e.g. 03")
+    ap.add_argument("--impl", help="student or solution (default as for plab run)")
+    ap.add_argument("--n", type=numbers, help="particle counts, comma-separated (default: the "
+                                              "stage's, growing by 2)")
+    ap.add_argument("--threads", "--ranks", dest="threads", type=numbers,
+                    help="thread counts (OpenMP stages) or rank counts (stage 08); default 1, 2, "
+                         "4, ... up to this machine's cores")
+    ap.add_argument("--steps", type=positive, default=100, help="steps of each scene (%(default)s)")
+    ap.add_argument("--runs", type=positive, default=3,
+                    help="timed runs of each configuration, the median reported (%(default)s)")
+    ap.add_argument("--out", help="the report's folder (default: report-NN)")
+    ap.add_argument("--plab", help=argparse.SUPPRESS)  # the kit's plab program (plab passes it)
     a = ap.parse_args()
+    plab = plabio.Plab(a.plab)
+    try:
+        kit = plab.built(a.impl, [a.stage])
+    except plabio.ProgramError as e:
+        sys.exit(f"plab report: {e}")
+    stage = kit["stages"][0]
+    if stage["problem"]:  # a clear error when it is not built from its current code
+        sys.exit(f"plab report: {stage['problem']}")
+    a.stage, a.impl, a.kit = stage["id"], kit["impl"], kit["source"]
+    mpi = stage["needs_mpi"]
+    a.counts = "ranks" if mpi else "threads"
+    a.out = a.out or f"report-{a.stage}"
+    os.makedirs(a.out, exist_ok=True)
+    counts = a.threads or (up_to_cores() if stage["needs_openmp"] or mpi else [1])
+    a.csv = os.path.join(a.out, "bench.csv")
+    bench(plab, a.stage, a.impl, a.n or default_sizes(a.stage), counts, mpi, a.steps, a.runs, a.csv)
     out = pathlib.Path(a.out)
     rows = read_rows(a.csv)
     if not rows:

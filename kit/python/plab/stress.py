@@ -1,6 +1,7 @@
 """plab stress: hostile scenes on every stage, invariants at every step, all stages bit-identical.
 
-Started by `./plab stress` (which passes the stage programs). For each scene it runs each stage with
+Started by `./plab stress` (its options are this module's own; the stage programs come from
+`plab built --json`). For each scene it runs each stage with
 `--audit` (full-precision checks of every state and step, see kit/include/plab/audit.hpp) and
 `--digest` (a hash of every state), then checks:
   - no NaN or infinity;
@@ -115,25 +116,57 @@ def scenes(rng, long_steps):
     return s
 
 
+def stage_programs(plab, impl, named):
+    """[(id, program)]: the stages named, or every stepped stage of `impl` that is built; a clear
+    error (SystemExit) for the exact stage or one that cannot run."""
+    kit = plab.built(impl, named)
+    if named:
+        for s in kit["stages"]:
+            if s["id"] == kit["exact_stage"]:
+                sys.exit(f"plab stress: stage {s['id']} is the exact event-driven stage: its tests "
+                         f"check it (./plab test --stage {s['id']}), not the stepped model's invariants")
+            if s["problem"]:
+                sys.exit(f"plab stress: {s['problem']}")
+        return kit, [(s["id"], s["program"]) for s in kit["stages"]]
+    chosen = [s for s in kit["stages"] if s["id"] != kit["exact_stage"] and s["exists"]]
+    for s in chosen:
+        if s["problem"]:
+            sys.exit(f"plab stress: {s['problem']}")
+    return kit, [(s["id"], s["program"]) for s in chosen]
+
+
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--stage", action="append", default=[], metavar="ID=PROGRAM", required=True,
-                    help="a stage and its program (plab passes them)")
-    ap.add_argument("--plab", required=True, help="the plab program (for plab gen)")
-    ap.add_argument("--ulps-program", required=True, help="plab-pairtime-ulps")
-    ap.add_argument("--work", required=True, help="scratch folder")
-    ap.add_argument("--only", default="", help="comma-separated scene names")
-    ap.add_argument("--long-steps", type=int, default=100000)
-    ap.add_argument("--pairs", type=int, default=200000, help="pairs of each kind for the pair-time check")
-    ap.add_argument("--csv", help="write the scene table here")
-    ap.add_argument("--ulps-csv", help="write the pair-time histograms here")
-    ap.add_argument("--plot", help="draw the pair-time error distribution (PNG or SVG)")
-    ap.add_argument("--figures", help="the folder of the handouts' figure code (for --plot)")
+    ap = argparse.ArgumentParser(
+        prog="plab stress", formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Numerical stress suite: hostile scenes (corner hits, grazing, speeds 1e9 and "
+                    "1e-9, tiny and huge radii, disks resting on walls, equal velocities, coincident "
+                    "centres, overlapping starts, a line of touching disks, near jamming, a long run) "
+                    "on every stage, invariants checked at every step, all stages bit-identical; then "
+                    "the pair-time formula's error in ulps. Exits 1 on any violation.",
+        epilog=__doc__.split("\n\n", 1)[1])
+    ap.add_argument("--stages", default="", metavar="NN,NN",
+                    help="stages (default: every stepped stage built; a CUDA stage is skipped "
+                         "without a GPU)")
+    ap.add_argument("--impl", help="solution, student or engine (default as for plab run)")
+    ap.add_argument("--only", default="", help="only these scenes (comma-separated names)")
+    ap.add_argument("--long-steps", type=int, default=100000, help="steps of the long run (%(default)s)")
+    ap.add_argument("--pairs", type=int, default=200000,
+                    help="pairs of each kind for the pair-time check (%(default)s)")
+    ap.add_argument("--csv", help="write the scene table as CSV here")
+    ap.add_argument("--ulps-csv", help="write the pair-time error histograms as CSV here")
+    ap.add_argument("--plot", help="draw the pair-time error distribution here (PNG or SVG)")
+    ap.add_argument("--plab", help=argparse.SUPPRESS)  # the kit's plab program (plab passes it)
     args = ap.parse_args()
     plab = plabio.Plab(args.plab)
+    try:
+        kit, stages = stage_programs(plab, args.impl, [s for s in args.stages.split(",") if s])
+    except plabio.ProgramError as e:
+        sys.exit(f"plab stress: {e}")
+    args.ulps_program = os.path.join(kit["bin"], "plab-pairtime-ulps")
+    args.work = os.path.join(kit["build"], "stress")
+    args.figures = os.path.join(kit["source"], "handouts", "figures")
 
     os.makedirs(args.work, exist_ok=True)
-    stages = [tuple(s.split("=", 1)) for s in args.stage]
     rng = random.Random(2019)
     only = set(filter(None, args.only.split(",")))
     rows, violations = [], 0
