@@ -61,4 +61,19 @@ void write_text(const std::string& path, const std::string& text) {
   f.commit();
 }
 
+CLI::App* add_python_command(CLI::App& app, const std::string& name, const std::string& about,
+                             const std::string& module,
+                             std::function<std::vector<std::string>()> fixed) {
+  CLI::App* c = app.add_subcommand(name, about);
+  c->prefix_command();  // everything after NAME goes to the module as it was typed
+  c->set_help_flag();
+  c->callback([c, module, fixed] {
+    std::vector<std::string> args{"python3", "-m", module};
+    for (std::string& s : fixed()) args.push_back(std::move(s));
+    for (const std::string& s : c->remaining()) args.push_back(s);
+    g_status = run_program(args);
+  });
+  return c;
+}
+
 }  // namespace plab::cli

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <nlohmann/json.hpp>
@@ -47,5 +48,13 @@ std::string fmt_double(double v);
 std::string temp_path(const std::string& stem);
 /// Writes `text` to `path` whole or not at all (plab::OutputFile).
 void write_text(const std::string& path, const std::string& text);
+
+/// Registers a command whose options are a Python module's own (`plab NAME ARGS...` runs
+/// `python3 -m MODULE FIXED... ARGS...`, ARGS untouched, so `plab NAME --help` prints the module's
+/// help): the options are declared once, in the module. `fixed` gives, when the command runs, the
+/// arguments that only the C++ side knows (the kit's folders and programs); it may throw to refuse.
+CLI::App* add_python_command(CLI::App& app, const std::string& name, const std::string& about,
+                             const std::string& module,
+                             std::function<std::vector<std::string>()> fixed);
 
 }  // namespace plab::cli
