@@ -12,7 +12,9 @@ void add_accuracy(CLI::App& app) {
                      "fastest stepped stage (06) with K substeps per step, in double and float, on "
                      "the CPU and (with a GPU) the GPU; a table, a CSV, a plot. --help for the "
                      "options.",
-                     "plab.accuracy", [] { return std::vector<std::string>{"--plab", bin_dir() + "/plab"}; });
+                     "plab.accuracy", [] {
+                       return std::vector<std::string>{"--plab", bin_dir() + "/plab"};
+                     });
 }
 
 }  // namespace plab::cli

@@ -12,7 +12,9 @@ void add_render(CLI::App& app) {
                      "collisions marked (orange: wall, red: pair). With --diff, two outputs side by "
                      "side and their first difference ringed. `plab render SCENE [--stage NN]`; "
                      "--help for more.",
-                     "plab.render", [] { return std::vector<std::string>{"--plab", bin_dir() + "/plab"}; });
+                     "plab.render", [] {
+                       return std::vector<std::string>{"--plab", bin_dir() + "/plab"};
+                     });
 }
 
 }  // namespace plab::cli

@@ -14,7 +14,9 @@ void add_report(CLI::App& app) {
                      "writes OUT/report.md with the machine's description, tables, figures (time "
                      "against N, speedup, efficiency) and the handout's questions. `plab report "
                      "--stage NN`; --help for more.",
-                     "plab.report", [] { return std::vector<std::string>{"--plab", bin_dir() + "/plab"}; });
+                     "plab.report", [] {
+                       return std::vector<std::string>{"--plab", bin_dir() + "/plab"};
+                     });
 }
 
 }  // namespace plab::cli

@@ -12,7 +12,9 @@ void add_similar(CLI::App& app) {
                      "(copydetect: names normalised, the starting point ignored) and write an "
                      "offline HTML page with each pair side by side. `plab similar DIR --stage NN`; "
                      "--help for more.",
-                     "plab.similar", [] { return std::vector<std::string>{"--kit", source_dir()}; });
+                     "plab.similar", [] {
+                       return std::vector<std::string>{"--kit", source_dir()};
+                     });
 }
 
 }  // namespace plab::cli

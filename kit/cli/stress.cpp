@@ -13,7 +13,9 @@ void add_stress(CLI::App& app) {
                      "stage, invariants checked at every step, all stages bit-identical; then the "
                      "pair-time formula's error in ulps. Exits 1 on any violation. --help for the "
                      "options.",
-                     "plab.stress", [] { return std::vector<std::string>{"--plab", bin_dir() + "/plab"}; });
+                     "plab.stress", [] {
+                       return std::vector<std::string>{"--plab", bin_dir() + "/plab"};
+                     });
 }
 
 }  // namespace plab::cli
