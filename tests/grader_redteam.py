@@ -47,6 +47,9 @@ and, measured by the grader outside the student's code (each must score nothing)
   leaderboard     a stage 02 solution that prints a fake time (1e-6 s) on stdout and stderr: the
                   leaderboard of its results.json holds the grader's measured median, the one its
                   performance test states, never the printed number
+  bypass          code that goes around what the kit measures through, read from the compiled
+                  objects: 08 with a collective through PMPI_ (behind a macro), 03 defining an
+                  OpenMP library function: both refused before they run
 and, as a control, read-golden, run-solution, include-path and before-main again with
 --no-sandbox (and without the idea tests), where they must win. (call-oracle no longer wins
 there either: since the oracle moved to kit/instructor/, its header is on no graded build's
@@ -1128,10 +1131,35 @@ def case_leaderboard():
           f"leaderboard {doc.get('leaderboard')}, performance test {perf.get('output', '')[:120]!r}")
 
 
+def case_bypass():
+    """Code that goes around what the kit measures through, read from the compiled objects: stage
+    08 with one collective through the MPI profiling interface (PMPI_Allreduce, which kit/mpi's
+    byte count does not see), hidden behind a macro; stage 03 defining an OpenMP library function
+    itself. Both are refused before they run: correctness 0, the reason in the output."""
+    name = "redteam-bypass"
+    shutil.rmtree(scratch / name, ignore_errors=True)
+    r08 = patched(name, "08", "solutions/08-mpi", [
+        ("double fastest_anywhere(", "#define PLAB_VIA(call) P##call\ndouble fastest_anywhere("),
+        ("  MPI_Allreduce(&mine, &all,", "  PLAB_VIA(MPI_Allreduce)(&mine, &all,")],
+        "stage 08's solution changed shape")
+    r03 = patched(name, "03", "solutions/03-openmp", [
+        ("#include <omp.h>", "#include <omp.h>\nextern \"C\" int omp_get_max_threads() { return 2; }")],
+        "stage 03's solution changed shape")
+    if r08 is None or r03 is None:
+        return
+    tests, doc, _ = grade(name, scratch / name, "03,08", "--no-races")
+    for sid, symbol in (("08", "PMPI_Allreduce"), ("03", "omp_get_max_threads")):
+        got = sum(t["score"] for t in correctness(tests, sid).values())
+        said = next((t["output"] for t in correctness(tests, sid).values()), "")
+        check("bypass", got == 0 and symbol in said and "goes around what the kit measures" in said,
+              f"stage {sid} with {symbol} scored {got} on correctness; its output: {said[:300]!r}")
+
+
 CASES = {"copy": case_copy, "escape": case_escape, "processes": case_processes,
          "oracle": case_oracle, "mpi": case_mpi, "control": case_control, "ideas": case_ideas,
          "shortcuts": case_shortcuts, "links": case_links, "gpu-ideas": case_gpu_ideas,
-         "rounds": case_rounds, "ties": case_ties, "leaderboard": case_leaderboard}
+         "rounds": case_rounds, "ties": case_ties, "leaderboard": case_leaderboard,
+         "bypass": case_bypass}
 scratch.mkdir(parents=True, exist_ok=True)
 try:
     for name, case in CASES.items():

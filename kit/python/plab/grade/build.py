@@ -3,7 +3,7 @@ import os
 import pathlib
 import shutil
 
-from plab.grade import upload
+from plab.grade import symbols, upload
 
 
 def readable_by_all(folder):
@@ -95,7 +95,15 @@ class Build:
                                   os.environ.get("PLAB_BUILD_JOBS") or str(os.cpu_count() or 2)], *mounts, "/plab/build", 900, 2**30,
                                  memory=False)
             program = build / "bin" / target
-            if b.rc == 0 and not b.reason and program.is_file() and not program.is_symlink():
+            # What the stage's objects call and define, read before anything of it runs: code
+            # that goes around the libraries the kit measures through is refused (symbols.py).
+            refused = (symbols.check(build / "stages" / folders[sid] / f"libplab_stage_{sid}_student.a")
+                       if b.rc == 0 and not b.reason else [])
+            if refused:
+                built[sid] = ("it is refused, its compiled code goes around what the kit measures "
+                              "(handouts/working.md, How a stage is graded): "
+                              + "\n".join(refused[:10]))
+            elif b.rc == 0 and not b.reason and program.is_file() and not program.is_symlink():
                 mine = bin_dir / f"stage{sid}"  # a copy student code cannot change
                 shutil.copyfile(program, mine)
                 os.chmod(mine, 0o755)

@@ -119,7 +119,8 @@ def stage_points(data):
 
 
 def flags(data):
-    """Short words a TA scans for: not built, idea missed, race, limit hit, not graded."""
+    """Short words a TA scans for: not built, refused (goes around the kit's measurements), idea
+    missed, race, limit hit, not graded."""
     words = set()
     for t in data.get("tests", []):
         n, o = t.get("name", ""), t.get("output", "")
@@ -127,6 +128,8 @@ def flags(data):
             continue
         if "does not compile" in o or "did not compile" in o:
             words.add("build")
+        if "goes around what the kit measures" in o:
+            words.add("refused")
         if "idea" in n.lower():
             words.add("idea")
         if "race" in n.lower():

@@ -1,0 +1,81 @@
+#!/usr/bin/env python3
+"""The grader's reading of a stage's compiled objects (plab.grade.symbols; CTest test
+grader.symbols, label kit): small objects compiled here with g++, each put in a stage library
+as the kit's build names it, are refused or let through as a student's would be.
+
+  symbols_check.py [KIT_BUILD_DIR]   (with it, the kit's own stage libraries too: none refused)
+"""
+import pathlib
+import shutil
+import subprocess
+import sys
+import tempfile
+
+from plab.grade import symbols
+
+MPI = 'extern "C" int MPI_Allreduce(const void*, void*, int, int, int, int);\n' \
+      'extern "C" int PMPI_Allreduce(const void*, void*, int, int, int, int);\n'
+# (name, object name, source, expected: None to pass, or a text the reason must hold)
+CASES = [
+    ("honest MPI call", "step.cpp.o", MPI + "int f(double* a, double* b) { return MPI_Allreduce(a, b, 1, 0, 0, 0); }", None),
+    ("PMPI call", "step.cpp.o", MPI + "int f(double* a, double* b) { return PMPI_Allreduce(a, b, 1, 0, 0, 0); }",
+     "step.cpp calls PMPI_Allreduce, the MPI profiling interface"),
+    ("PMPI behind a macro", "step.cpp.o", MPI + "#define VIA(c) P##c\nint f(double* a, double* b) { return VIA(MPI_Allreduce)(a, b, 1, 0, 0, 0); }",
+     "call MPI_Allreduce"),
+    ("MPI function defined", "step.cpp.o", 'extern "C" int MPI_Send(const void*, int, int, int, int, int) { return 0; }',
+     "defines MPI_Send"),
+    ("OpenMP function defined", "helpers.cpp.o", 'extern "C" int omp_get_num_threads() { return 2; }',
+     "helpers.cpp defines omp_get_num_threads"),
+    ("libgomp entry defined", "step.cpp.o", 'extern "C" void GOMP_barrier() {}', "defines GOMP_barrier"),
+    ("CUDA runtime function defined", "step.cpp.o", 'extern "C" int cudaMalloc(void**, unsigned long) { return 0; }',
+     "defines cudaMalloc"),
+    ("a static C function of that name replaces nothing", "step.cpp.o",
+     'extern "C" { static int omp_helper() { return 1; } }\nint g() { return omp_helper(); }', None),
+    ("a C++ function named like a library's", "step.cpp.o", "int cudaHelper(int x) { return x + 1; }\nint MPI_thing(int x) { return x; }", None),
+    ("CUPTI call", "step.cpp.o", 'extern "C" int cuptiActivityFlushAll(unsigned);\nint f() { return cuptiActivityFlushAll(0); }',
+     "calls cuptiActivityFlushAll"),
+    ("dlsym from C++", "step.cpp.o", '#include <dlfcn.h>\nvoid* f() { return dlsym(RTLD_NEXT, "MPI_Send"); }', "calls dlsym"),
+    ("dlsym in a CUDA object (the runtime's start-up code)", "step.cu.o",
+     '#include <dlfcn.h>\nvoid* f() { return dlsym(RTLD_NEXT, "x"); }', None),
+]
+
+
+def library(work, member, source):
+    """A stage library holding one object named `member`, compiled from `source`."""
+    cpp = work / "unit.cpp"
+    cpp.write_text(source + "\n")
+    obj = work / member
+    subprocess.run(["g++", "-O0", "-c", str(cpp), "-o", str(obj)], check=True)
+    lib = work / "libplab_stage_99_student.a"
+    lib.unlink(missing_ok=True)
+    subprocess.run(["ar", "rcs", str(lib), str(obj)], check=True)
+    obj.unlink()
+    return lib
+
+
+failures = []
+work = pathlib.Path(tempfile.mkdtemp(prefix="plab-symbols-"))
+try:
+    for name, member, source, expected in CASES:
+        said = symbols.check(library(work, member, source))
+        ok = not said if expected is None else any(expected in s for s in said)
+        print(f"{'ok  ' if ok else 'FAIL'} {name}: {said or 'let through'}")
+        if not ok:
+            failures.append(name)
+    missing = symbols.check(work / "libplab_stage_98_student.a")
+    if not (missing and "was not built" in missing[0]):
+        failures.append(f"a missing library: {missing}")
+    if len(sys.argv) > 1:  # the kit's own stage libraries (solutions, starting points, engine)
+        libs = sorted(pathlib.Path(sys.argv[1]).glob("*/*/libplab_stage_*.a"))
+        for lib in libs:
+            said = symbols.check(lib)
+            if said:
+                failures.append(f"{lib}: {said}")
+        print(f"{'ok  ' if libs else 'FAIL'} the kit's {len(libs)} stage libraries: none refused")
+        if not libs:
+            failures.append("no stage library found in the kit's build")
+finally:
+    shutil.rmtree(work, ignore_errors=True)
+if failures:
+    sys.exit("symbols check FAILED: " + "; ".join(failures))
+print(f"{len(CASES)} objects judged as expected")
