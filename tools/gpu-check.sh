@@ -60,6 +60,7 @@ if [ -z "${PLAB_SKIP_REDTEAM:-}" ]; then
   grade_args=""
   # The gradings' scratch where the sandbox's user can reach it (not inside a private checkout).
   scratch=$(mktemp -d /tmp/plab-gpu-redteam.XXXXXX)
+  chmod 755 "$scratch"  # mktemp makes it 0700: the sandbox's uid must pass through it
   if ! command -v bwrap >/dev/null && [ "$(id -u)" = 0 ]; then grade_args="--make-private"; fi
   PYTHONPATH="$PWD/kit/python" PLAB_REDTEAM_GRADE_ARGS="$grade_args" \
     python3 tests/grader_redteam.py build-gpu/bin/plab "$PWD" "$scratch" gpu-ideas \
