@@ -28,7 +28,9 @@ and, measured by the grader outside the student's code (each must score nothing)
   ideas           02 with stage 01's O(N^3) selection, 03 serial (no OpenMP pragma), 06 with
                   stage 03's O(N^2) rounds, 08 whose rank 0 steps every particle (a patch of the
                   solution's step.cpp; skipped with a message when its shape changed)
-  rounds          03 that selects its events sequentially after a parallel phase, 03 serial with a
+  rounds          03 that selects its events sequentially after a parallel phase, the same with
+                  its parallel phase split into 64 loops a step (a count padded past the rounds,
+                  which does not fall on a calmer scene), 03 serial with a
                   thread burning CPU beside it (OpenMP synchronisations counted against the
                   scene's rounds), 07 with a linear scan for the next event, 08 whose rank 0 steps
                   everything through gathers and scatters (bytes counted in every MPI call); and
@@ -1024,10 +1026,76 @@ def stage_folder(root, sid, source):
     return dest / "step.cpp"
 
 
+# Stage 03 without its rounds, its count padded: the event times in parallel, split into 64
+# work-sharing loops a step (each a real share of the work: the loop ends outnumber the rounds),
+# then stage 02's heap selects the events on one thread. It passes as many synchronisations on a
+# calm scene as on a busy one: the count does not follow the rounds.
+PADDED_03 = r"""/// Stage 03 without its rounds (red team, padded): The event times are computed in parallel (split into
+/// many work-sharing loops, each a real share of the pair times, so that the loop ends outnumber
+/// the rounds the grader counts), then stage 02's SEQUENTIAL heap selects the events.
+#include <omp.h>
+
+#include <queue>
+#include <vector>
+
+#include "plab/candidates.hpp"
+#include "plab/stage.hpp"
+
+namespace plab {
+
+namespace {
+struct Later {
+  bool operator()(const model::Event& a, const model::Event& b) const { return model::key_less(b, a); }
+};
+constexpr int kSlices = 64;  // work-sharing loops a step: each ends at a barrier the counter sees
+}  // namespace
+
+void step(const Box& box, Particles& p) {
+  const int n = static_cast<int>(p.size());
+  std::vector<std::vector<model::Event>> found(omp_get_max_threads());
+#pragma omp parallel
+  {
+    std::vector<model::Event>& mine = found[omp_get_thread_num()];
+    for (int s = 0; s < kSlices; ++s) {
+#pragma omp for schedule(dynamic, 4)
+      for (int i = s; i < n; i += kSlices) {
+        const model::Event w = wall_candidate(box, p, i);
+        if (model::in_step(w.t)) mine.push_back(w);
+        for (int j = i + 1; j < n; ++j) {
+          const model::Event e = pair_candidate(box, p, i, j);
+          if (model::in_step(e.t)) mine.push_back(e);
+        }
+      }
+    }
+  }
+  // stage 02's selection, on one thread
+  std::priority_queue<model::Event, std::vector<model::Event>, Later> heap;
+  for (auto& v : found)
+    for (const auto& e : v) heap.push(e);
+  Plan plan;
+  plan.reset(n);
+  while (!heap.empty()) {
+    const model::Event e = heap.top();
+    heap.pop();
+    if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
+  }
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);
+}
+
+std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions& options) {
+  return cpu_stage(box, p, options, {step});
+}
+
+}  // namespace plab
+"""
+
+
 def case_rounds():
     """The idea tests that count (stage 03's OpenMP synchronisations against the rounds its scene
     needs, stage 08's bytes in any MPI call) and stage 07's event queue, each graded alone: 03
-    that selects its events sequentially after a parallel phase, 03 that keeps a thread burning
+    that selects its events sequentially after a parallel phase, 03 that does so with its parallel
+    phase split into 64 loops a step (a count that does not follow the rounds), 03 that keeps a thread burning
     CPU beside a serial step, 07 with a linear scan for the next event, 08 whose rank 0 steps
     everything through gathers and scatters must score nothing on correctness; 03 written as one
     parallel region with dynamic and guided `omp for` loops keeps every correctness point."""
@@ -1044,6 +1112,10 @@ def case_rounds():
             continue
         step.write_text(text.replace("#include <omp.h>", "#include <omp.h>\n\n#include <algorithm>"))
         gradings.append((name, "03", honest))
+    name = "redteam-rounds-padded"
+    shutil.rmtree(scratch / name, ignore_errors=True)
+    stage_folder(scratch / name, "03", "solutions/03-openmp").write_text(PADDED_03)
+    gradings.append((name, "03", False))
     name = "redteam-rounds-burner"
     shutil.rmtree(scratch / name, ignore_errors=True)
     step = stage_folder(scratch / name, "03", "solutions/03-openmp")

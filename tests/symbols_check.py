@@ -40,6 +40,22 @@ CASES = [
 ]
 
 
+# Stage 08's calls, against a stand-in for kit/mpi that defines MPI_Send and MPI_Alltoallv.
+MPI_KIT = 'extern "C" int MPI_Send(const void*, int, int, int, int, int) { return 0; }\n' \
+          'extern "C" int MPI_Alltoallv(const void*, const int*, const int*, int, void*, const int*, const int*, int, int) { return 0; }'
+MPI_CASES = [
+    ("a call kit/mpi counts", 'extern "C" int MPI_Send(const void*, int, int, int, int, int);\nint f() { return MPI_Send(0, 0, 0, 0, 0, 0); }', None),
+    ("a receive, a wait, a datatype", 'extern "C" { int MPI_Irecv(void*, int, int, int, int, int, void*); int MPI_Waitall(int, void*, void*); int MPI_Type_contiguous(int, int, int*); }\n'
+     'int f(int* t) { MPI_Type_contiguous(4, 0, t); MPI_Waitall(0, 0, 0); return MPI_Irecv(0, 0, 0, 0, 0, 0, 0); }', None),
+    ("a collective kit/mpi does not count", 'extern "C" int MPI_Ialltoallw(const void*, const int*, const int*, const int*, void*, const int*, const int*, const int*, int, void*);\n'
+     'int f() { return MPI_Ialltoallw(0, 0, 0, 0, 0, 0, 0, 0, 0, 0); }', "calls MPI_Ialltoallw, which the kit does not count"),
+    ("a neighbourhood collective", 'extern "C" int MPI_Neighbor_allgatherv(const void*, int, int, void*, const int*, const int*, int, int);\n'
+     'int f() { return MPI_Neighbor_allgatherv(0, 0, 0, 0, 0, 0, 0, 0); }', "calls MPI_Neighbor_allgatherv"),
+    ("new processes", 'extern "C" int MPI_Comm_spawn(const char*, char**, int, int, int, int, int*, int*);\n'
+     'int f() { return MPI_Comm_spawn(0, 0, 1, 0, 0, 0, 0, 0); }', "calls MPI_Comm_spawn"),
+]
+
+
 def library(work, member, source):
     """A stage library holding one object named `member`, compiled from `source`."""
     cpp = work / "unit.cpp"
@@ -62,13 +78,21 @@ try:
         print(f"{'ok  ' if ok else 'FAIL'} {name}: {said or 'let through'}")
         if not ok:
             failures.append(name)
+    kit_mpi = library(work, "ranks.cpp.o", MPI_KIT).rename(work / "libplab_mpi.a")
+    for name, source, expected in MPI_CASES:
+        said = symbols.check(library(work, "step.cpp.o", source), kit_mpi)
+        ok = not said if expected is None else any(expected in s for s in said)
+        print(f"{'ok  ' if ok else 'FAIL'} MPI: {name}: {said or 'let through'}")
+        if not ok:
+            failures.append(f"MPI: {name}")
     missing = symbols.check(work / "libplab_stage_98_student.a")
     if not (missing and "was not built" in missing[0]):
         failures.append(f"a missing library: {missing}")
     if len(sys.argv) > 1:  # the kit's own stage libraries (solutions, starting points, engine)
         libs = sorted(pathlib.Path(sys.argv[1]).glob("*/*/libplab_stage_*.a"))
+        mpi = pathlib.Path(sys.argv[1]) / "kit" / "libplab_mpi.a"
         for lib in libs:
-            said = symbols.check(lib)
+            said = symbols.check(lib, mpi if "_08_" in lib.name and mpi.is_file() else None)
             if said:
                 failures.append(f"{lib}: {said}")
         print(f"{'ok  ' if libs else 'FAIL'} the kit's {len(libs)} stage libraries: none refused")
@@ -78,4 +102,4 @@ finally:
     shutil.rmtree(work, ignore_errors=True)
 if failures:
     sys.exit("symbols check FAILED: " + "; ".join(failures))
-print(f"{len(CASES)} objects judged as expected")
+print(f"{len(CASES) + len(MPI_CASES)} objects judged as expected")

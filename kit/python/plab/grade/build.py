@@ -1,4 +1,5 @@
 """Building a submission's stages with the kit's own CMake, kit and runner, in the sandbox."""
+import json
 import os
 import pathlib
 import shutil
@@ -18,6 +19,14 @@ def readable_by_all(folder):
 
 class Build:
     """Building: a mixin of Grader (plab.grade.grader)."""
+
+    def stage_uses_mpi(self, sid):
+        """Whether the kit's stage.json of stage `sid` declares needs_mpi (stage 08)."""
+        declared = self.kit / "stages" / self.kit_folders[sid] / "stage.json"
+        try:
+            return bool(json.loads(declared.read_text()).get("needs_mpi"))
+        except (OSError, ValueError):
+            return False
 
     # -- building --------------------------------------------------------------------------------
     def build(self, stages, found):
@@ -97,7 +106,9 @@ class Build:
             program = build / "bin" / target
             # What the stage's objects call and define, read before anything of it runs: code
             # that goes around the libraries the kit measures through is refused (symbols.py).
-            refused = (symbols.check(build / "stages" / folders[sid] / f"libplab_stage_{sid}_student.a")
+            mpi = build / "kit" / "libplab_mpi.a"  # built from the kit's sources for stage 08
+            refused = (symbols.check(build / "stages" / folders[sid] / f"libplab_stage_{sid}_student.a",
+                                     mpi if self.stage_uses_mpi(sid) else None)
                        if b.rc == 0 and not b.reason else [])
             if refused:
                 built[sid] = ("it is refused, its compiled code goes around what the kit measures "

@@ -67,11 +67,45 @@ class Ideas:
             problem, text = self.bytes_sent(idea, run, text)  # counted, so decided first
         if problem is None and counter:
             problem, text = counter.check(idea, run, text)  # counted, so decided first
+        if problem is None and counter and "calm_speed" in idea:
+            problem, text = self.rounds_follow(st, program, folder, counter, limit, text)
         if problem is None and kind != "scale":
             problem, text = self.work_shared(idea, run, text)
         if problem:
             self.idea_failed[st.sid] = f"the idea test of stage {st.sid} failed: {problem}"
         self.results.add(test, 0, 0, problem is None, problem or text, False, run.seconds)
+
+    def rounds_follow(self, st, program, folder, counter, limit, text):
+        """Stage 03's second measure of the rounds: the stage again on a calmer hidden scene (the
+        idea scene's N, box and steps at the slow speeds `calm_speed`: fewer rounds), its output
+        checked, its synchronisations counted: they must fall with the rounds
+        (RoundsCount.follows)."""
+        idea, sc = st.idea, st.idea["scene"]
+        scene = folder / "idea-calm.in"
+        self.kit_programs.gen(scene, "--n", sc["n"], "--l", sc["L"], "--r", sc["r"], "--steps",
+                              sc["steps"], "--mode", "perf", "--speed", idea["calm_speed"],
+                              "--seed", (self.seed * 17 + int(st.sid)) % 2**32)
+        what = f"calmer hidden scene N = {sc['n']}, L = {sc['L']}, S = {sc['steps']}"
+        threads = str(idea.get("threads", st.threads))
+        start = time.time()
+        r = subprocess.run([self.solution(st.sid), scene, "--quiet", "--threads", threads, "--out",
+                            folder / "idea-calm.out"], capture_output=True, text=True,
+                           env=dict(os.environ, **st.env))
+        own_seconds = time.time() - start
+        if r.returncode != 0:
+            raise RuntimeError(f"the kit's solution of stage {st.sid} failed on {scene}: {r.stderr}")
+        expected = (folder / "idea-calm.out").read_text()
+        calm = RoundsCount(self.kit_build, self.sandbox, scene)
+        run = self.run_program(program, scene, ["--quiet", "--threads", threads, "--out",
+                                                "/plab/out/out.txt"], limit,
+                               max(self.rubric["limits"]["output_min_mb"] * 2**20,
+                                   4 * len(expected)), st,
+                               env=dict(st.env, OMP_WAIT_POLICY="passive", **calm.env(program)),
+                               watch=True, ranks=st.ranks, extra_ro=calm.mounts())
+        problem = self.idea_run_problem(run, what, limit, own_seconds, expected, idea["hint"])
+        if problem:
+            return problem, text
+        return counter.follows(idea, calm, run, text)
 
     def idea_scene(self, st, folder):
         """(path, words) of the entry's hidden idea scene, generated from the grading's seed

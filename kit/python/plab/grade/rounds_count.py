@@ -6,7 +6,9 @@ started, barriers and ends of work-sharing loops passed by thread 0 of a team: t
 is not asked), and the kit's plab-rounds says how many mutual-earliest rounds the scene's steps
 need (JSON, from the same C++ as the kit's oracle). A stage that selects its events in rounds of
 parallel loops passes at least two synchronisations a round; one that runs a parallel phase and
-then selects sequentially, or keeps a thread busy beside a sequential program, a few a step.
+then selects sequentially, or keeps a thread busy beside a sequential program, a few a step;
+and (the idea's "calm_speed") the count must grow with the rounds: a second run on a calmer scene
+(slow speeds, fewer rounds) must pass fewer synchronisations, at least one fewer a round.
 """
 import json
 import os
@@ -46,16 +48,25 @@ class RoundsCount:
         return {"LD_PRELOAD": INSIDE if bwrap else str(self.lib), "PLAB_OMP_COUNT": self.secret,
                 "PLAB_OMP_COUNT_PROGRAM": "/plab/stage" if bwrap else str(program)}
 
-    def check(self, idea, run, text):
-        """(problem or None, text): at least min_syncs_per_round synchronisations a round."""
+    NO_COUNT = ("its run left no count of its OpenMP synchronisations (the kit's counter reads "
+                "libgomp's entry points: the stage must use OpenMP, built by the kit's CMake)")
+
+    def counted(self, run):
+        """The run's counts {regions, syncs} as the library signed them, or None."""
         try:
             counts = json.loads(run.read_output("omp-count.json") or "")
             assert counts["secret"] == self.secret
-            seen = int(counts["regions"]) + int(counts["syncs"])
+            return {"regions": int(counts["regions"]), "syncs": int(counts["syncs"])}
         except (ValueError, KeyError, TypeError, AssertionError):
-            return ("its run left no count of its OpenMP synchronisations (the kit's counter "
-                    "reads libgomp's entry points: the stage must use OpenMP, built by the "
-                    "kit's CMake)"), text
+            return None
+
+    def check(self, idea, run, text):
+        """(problem or None, text): at least min_syncs_per_round synchronisations a round.
+        Remembers the count (self.seen) for follows()."""
+        counts = self.counted(run)
+        if counts is None:
+            return self.NO_COUNT, text
+        seen = self.seen = counts["regions"] + counts["syncs"]
         rounds, steps = self.rounds["total"], self.rounds["steps"]
         need = idea["min_syncs_per_round"] * rounds
         text += (f"; {seen} OpenMP synchronisations ({counts['regions']} parallel regions, "
@@ -66,5 +77,28 @@ class RoundsCount:
                     f"work-sharing loops) in {steps} steps whose event selection takes {rounds} "
                     f"mutual-earliest rounds ({self.rounds['rounds']}); a round of parallel loops "
                     f"passes at least one, so at least {need:g} were expected. "
+                    f"{idea['hint']}"), text
+        return None, text
+
+    def follows(self, idea, calm, calm_run, text):
+        """(problem or None, text): the synchronisations grow with the rounds. `calm` counted a
+        run of the same stage on a calmer scene (the same N, box and steps, slow speeds: fewer
+        rounds); a stage whose rounds are parallel loops passes at least min_syncs_per_round more
+        for each extra round, whatever it does once a step. A stage that pads its step with a
+        fixed number of loops (its selection sequential) passes as many on both."""
+        counts = calm.counted(calm_run)
+        if counts is None:
+            return self.NO_COUNT + " (on the calmer scene)", text
+        seen = counts["regions"] + counts["syncs"]
+        extra_rounds = self.rounds["total"] - calm.rounds["total"]
+        need = idea["min_syncs_per_round"] * extra_rounds
+        text += (f"; on a calmer scene (slow speeds) of {calm.rounds['total']} rounds: {seen} "
+                 f"synchronisations ({self.seen - seen} fewer for {extra_rounds} fewer rounds)")
+        if extra_rounds > 0 and self.seen - seen < need:
+            return (f"its OpenMP synchronisations do not follow the rounds: {self.seen} on the "
+                    f"hidden scene of {self.rounds['total']} rounds, {seen} on a calmer one (the "
+                    f"same N, box and steps, slow speeds) of {calm.rounds['total']} rounds; a "
+                    f"stage whose rounds are parallel loops passes at least {idea['min_syncs_per_round']:g} "
+                    f"more for each extra round, so at least {need:g} more were expected. "
                     f"{idea['hint']}"), text
         return None, text

@@ -15,7 +15,14 @@ counts as not compiling, with the reason):
   - calls CUPTI (cupti*), the interface the kit's GPU trace is written with;
   - looks a symbol up by name (dlopen, dlsym, dlvsym) from C++ code: the only way left to reach a
     library's function without naming it. CUDA objects (*.cu.o) are left out of this rule: the
-    CUDA runtime's own start-up code, compiled into every one, calls them.
+    CUDA runtime's own start-up code, compiled into every one, calls them;
+  - on MPI (stage 08), calls an MPI function that kit/mpi neither counts nor refuses (it defines
+    its own MPI_Send, MPI_Alltoallv, ... which count the bytes, and MPI_Win_create, ... which
+    stop the run) and that is not in NO_DATA, the calls that move no data of the stage between
+    ranks (ranks and sizes, waits and tests, receives, barriers, datatypes, communicators):
+    MPI_Ialltoallw, MPI_Neighbor_allgatherv or MPI_Comm_spawn, say, are refused. Stage 08 is
+    compiled against the MPI C API only (OMPI_SKIP_MPICXX), so its objects name exactly the calls
+    it makes.
 
 The names are read from the symbol tables the compiler wrote, so a macro or a wrapper in the
 source does not hide them. What stays open is said in handouts/instructors.md.
@@ -40,10 +47,29 @@ RULES = [
 ]
 GLOBAL = set("TWDBRVGSiu")  # nm -P types of a global symbol the object defines
 
+# MPI calls that move no data of the stage from one rank to another (or only receive what another
+# rank's counted call sent): a stage may call them though kit/mpi does not count them.
+NO_DATA = set("""
+MPI_Init MPI_Init_thread MPI_Initialized MPI_Finalize MPI_Finalized MPI_Abort MPI_Query_thread
+MPI_Is_thread_main MPI_Get_processor_name MPI_Get_version MPI_Get_library_version MPI_Wtime
+MPI_Wtick MPI_Error_string MPI_Error_class MPI_Comm_rank MPI_Comm_size MPI_Comm_dup MPI_Comm_split
+MPI_Comm_split_type MPI_Comm_create MPI_Comm_free MPI_Comm_group MPI_Comm_compare MPI_Comm_set_name
+MPI_Comm_get_name MPI_Comm_set_errhandler MPI_Comm_get_errhandler MPI_Comm_test_inter
+MPI_Recv MPI_Irecv MPI_Mrecv MPI_Imrecv MPI_Probe MPI_Iprobe MPI_Mprobe MPI_Improbe MPI_Get_count
+MPI_Get_elements MPI_Get_elements_x MPI_Wait MPI_Waitall MPI_Waitany MPI_Waitsome MPI_Test
+MPI_Testall MPI_Testany MPI_Testsome MPI_Test_cancelled MPI_Request_free MPI_Request_get_status
+MPI_Cancel MPI_Barrier MPI_Ibarrier MPI_Op_create MPI_Op_free MPI_Op_commutative MPI_Get_address
+MPI_Pack MPI_Unpack MPI_Pack_size MPI_Alloc_mem MPI_Free_mem MPI_Dims_create MPI_Cart_create
+MPI_Cart_coords MPI_Cart_rank MPI_Cart_shift MPI_Cart_get MPI_Cartdim_get MPI_Cart_sub
+MPI_Topo_test MPI_Status_set_elements MPI_Status_set_cancelled
+""".split())
+NO_DATA_PREFIXES = ("MPI_Type_", "MPI_Group_", "MPI_Info_", "MPI_Errhandler_")
 
-def problems(nm_lines):
+
+def problems(nm_lines, mpi_kit=None):
     """The reasons to refuse, from `nm -A -P` lines ('ARCHIVE[MEMBER]: NAME TYPE ...'), one per
-    (object, symbol), in order."""
+    (object, symbol), in order. `mpi_kit`: the MPI functions kit/mpi defines (counted or refused),
+    for a stage on MPI; None for the others."""
     found = []
     for line in nm_lines:
         head, _, rest = line.partition(": ")
@@ -63,21 +89,45 @@ def problems(nm_lines):
             source = member[:-2] if member.endswith(".o") else member  # step.cpp.o: step.cpp
             found.append(f"{source} " + reason.format(name=name, plain=plain))
             break
+        else:
+            if (mpi_kit is not None and kind == "U" and name.startswith("MPI_")
+                    and name not in mpi_kit and name not in NO_DATA
+                    and not name.startswith(NO_DATA_PREFIXES)):
+                source = member[:-2] if member.endswith(".o") else member
+                found.append(f"{source} calls {name}, which the kit does not count: it could move "
+                             f"data between ranks past the count of the bytes they send. Use the "
+                             f"point-to-point messages or the collectives the kit counts "
+                             f"(handouts/08-mpi.md)")
     return list(dict.fromkeys(found))
 
 
-def check(archive, seconds=60):
-    """The reasons to refuse the stage whose library is `archive` (its objects only: the kit's
-    libraries are linked later), or [] when there is none; a list of one line when the archive
-    cannot be read."""
+def symbol_lines(archive, seconds=60):
+    """`nm -A -P` of `archive` as lines, or a str saying why it cannot be read."""
     if not archive.is_file() or archive.is_symlink():
-        return [f"its library {archive.name} was not built"]
+        return f"its library {archive.name} was not built"
     try:
         done = subprocess.run(["nm", "-A", "-P", str(archive)], capture_output=True, text=True,
                               errors="replace", timeout=seconds)
     except (OSError, subprocess.TimeoutExpired) as e:
-        return [f"its objects could not be read (nm: {e})"]
+        return f"its objects could not be read (nm: {e})"
     if done.returncode != 0:
-        return [f"its objects could not be read (nm exited {done.returncode}: "
-                f"{done.stderr.strip()[:300]})"]
-    return problems(done.stdout.splitlines())
+        return f"its objects could not be read (nm exited {done.returncode}: {done.stderr.strip()[:300]})"
+    return done.stdout.splitlines()
+
+
+def check(archive, mpi_library=None):
+    """The reasons to refuse the stage whose library is `archive` (its objects only: the kit's
+    libraries are linked later), or [] when there is none; a list of one line when the archive
+    cannot be read. `mpi_library`: kit/mpi's library, for a stage on MPI (the MPI functions it
+    defines are the ones counted or refused)."""
+    lines = symbol_lines(archive)
+    if isinstance(lines, str):
+        return [lines]
+    mpi_kit = None
+    if mpi_library is not None:
+        kit_lines = symbol_lines(mpi_library)
+        if isinstance(kit_lines, str):
+            return [f"the kit's MPI layer could not be read: {kit_lines}"]
+        mpi_kit = {f[0] for f in (ln.partition(": ")[2].split() for ln in kit_lines)
+                   if len(f) >= 2 and f[0].startswith("MPI_") and f[1] in GLOBAL}
+    return problems(lines, mpi_kit)
