@@ -3,6 +3,7 @@ shared by the threads or ranks, the bytes sent, the time against a scene only th
 fast."""
 import json
 import os
+import pathlib
 import subprocess
 import time
 
@@ -35,15 +36,7 @@ class Ideas:
             self.idea_failed[st.sid] = f"stage {st.sid} {program.splitlines()[0]}"
             return
         scene, what = self.idea_scene(st, folder)
-        own = self.solution(st.sid)  # the stage's own solution: the same bits, its speed
-        start = time.time()
-        r = subprocess.run([own, scene, "--quiet", "--threads", str(idea.get("threads", 1)),
-                            "--out", folder / "idea.out"], capture_output=True, text=True,
-                           env=dict(os.environ, **st.env))
-        own_seconds = time.time() - start
-        if r.returncode != 0:
-            raise RuntimeError(f"the kit's solution of stage {st.sid} failed on {scene}: {r.stderr}")
-        expected = (folder / "idea.out").read_text()
+        expected, own_seconds = self.own_run(st, scene, idea.get("threads", 1), folder / "idea.out")
         kind = idea["kind"]
         limit = max(idea.get("seconds", 0), idea.get("multiple", 0) * own_seconds)
         threads = str(idea.get("threads", st.threads))
@@ -75,6 +68,18 @@ class Ideas:
             self.idea_failed[st.sid] = f"the idea test of stage {st.sid} failed: {problem}"
         self.results.add(test, 0, 0, problem is None, problem or text, False, run.seconds)
 
+    def own_run(self, st, scene, threads, out):
+        """(output, seconds) of the stage's own solution on `scene` (the same bits as the
+        reference, and the speed a limit is set from), written to `out`."""
+        start = time.time()
+        r = subprocess.run([self.solution(st.sid), scene, "--quiet", "--threads", str(threads),
+                            "--out", out], capture_output=True, text=True,
+                           env=dict(os.environ, **st.env))
+        seconds = time.time() - start
+        if r.returncode != 0:
+            raise RuntimeError(f"the kit's solution of stage {st.sid} failed on {scene}: {r.stderr}")
+        return pathlib.Path(out).read_text(), seconds
+
     def rounds_follow(self, st, program, folder, counter, limit, text):
         """Stage 03's second measure of the rounds: the stage again on a calmer hidden scene (the
         idea scene's N, box and steps at the slow speeds `calm_speed`: fewer rounds), its output
@@ -87,14 +92,7 @@ class Ideas:
                               "--seed", (self.seed * 17 + int(st.sid)) % 2**32)
         what = f"calmer hidden scene N = {sc['n']}, L = {sc['L']}, S = {sc['steps']}"
         threads = str(idea.get("threads", st.threads))
-        start = time.time()
-        r = subprocess.run([self.solution(st.sid), scene, "--quiet", "--threads", threads, "--out",
-                            folder / "idea-calm.out"], capture_output=True, text=True,
-                           env=dict(os.environ, **st.env))
-        own_seconds = time.time() - start
-        if r.returncode != 0:
-            raise RuntimeError(f"the kit's solution of stage {st.sid} failed on {scene}: {r.stderr}")
-        expected = (folder / "idea-calm.out").read_text()
+        expected, own_seconds = self.own_run(st, scene, threads, folder / "idea-calm.out")
         calm = RoundsCount(self.kit_build, self.sandbox, scene)
         run = self.run_program(program, scene, ["--quiet", "--threads", threads, "--out",
                                                 "/plab/out/out.txt"], limit,
