@@ -181,6 +181,12 @@ void add_bench(CLI::App& app) {
                           2 * kStateBytes, 1e3 * floor_s, bandwidth / 1e9, per_step / floor_s,
                           per_step * bandwidth / static_cast<double>(n));
             }
+            // What a GPU stage held on the device (particles and working arrays, not the CUDA
+            // context): how large a scene one GPU can take.
+            if (const auto held = last.value("device_bytes", std::size_t{0}); held > 0 && n > 0)
+              std::printf("      device memory: %.1f MB held by the stage, %.1f B a particle\n",
+                          static_cast<double>(held) / 1e6,
+                          static_cast<double>(held) / static_cast<double>(n));
             const double bytes = last.value("bytes_sent", 0.0);
             const double comm = last.value("comm_seconds", 0.0);
             const double steps = a->steps ? static_cast<double>(a->steps) : 1.0;

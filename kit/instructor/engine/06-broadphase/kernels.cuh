@@ -70,12 +70,12 @@ struct StepArrays {
   int* contested;    //!< the particles with at least one pair event
   int* partner;      //!< the plan: Plan::kFree, Plan::kWall, or the other particle of its pair
   double* ptime;     //!< the plan's pair time
-  int* filled;       //!< a pass's slabs * cells + 1: entries counted into each bucket
-  int* start;        //!< the same: bucket b holds entries [start[b], start[b + 1])
+  int* start;        //!< a pass's slabs * cells + 1: entries counted into each bucket, then (an
+                     //!< exclusive scan in place) bucket b holds entries [start[b], start[b + 1])
   int* rank;         //!< per (slab of the pass, particle) at [(k - first) * n + i]: its place in
                      //!< its bucket
-  int* entry_id;     //!< per entry (at most slabs of a pass * N): the particle
-  int* entry_k;      //!< ... its slab
+  int* entry_at;     //!< per entry (at most slabs of a pass * N): (k - first) * n + i, its slab k
+                     //!< and particle i in one int (particle_of(), slab_of())
   Entry* entry;      //!< ... its midpoint position and velocity
   Flags* flags;      //!< see Flags
 };
@@ -85,7 +85,7 @@ struct StepArrays {
 /// the pass would otherwise clear with two memsets of its own.
 __global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d, int buckets) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  for (int b = i; b < buckets; b += gridDim.x * blockDim.x) a.filled[b] = 0;
+  for (int b = i; b < buckets; b += gridDim.x * blockDim.x) a.start[b] = 0;
   if (i == 0 && buckets > 0) a.flags->fast = 0;
   if (i >= p.n) return;
   a.wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
@@ -122,11 +122,11 @@ __global__ void bin_count(ParticlesView p, StepArrays a, DeviceGrid d) {
   if (i >= p.n || a.last[i] < k) return;
   double mx, my;
   const int b = bucket_of(p, i, k, d, mx, my);
-  a.rank[static_cast<long long>(blockIdx.y) * p.n + i] = atomicAdd(&a.filled[b], 1);
+  a.rank[static_cast<long long>(blockIdx.y) * p.n + i] = atomicAdd(&a.start[b], 1);
 }
 
-/// Counting sort, pass 2 (after the exclusive scan of `filled` into `start`): each entry to its
-/// place (its bucket found again, the same arithmetic), with what the search reads.
+/// Counting sort, pass 2 (after the exclusive scan of `start`'s counts, in place): each entry to
+/// its place (its bucket found again, the same arithmetic), with what the search reads.
 __global__ void bin_scatter(ParticlesView p, StepArrays a, DeviceGrid d) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   const int k = d.first + blockIdx.y;
@@ -134,9 +134,16 @@ __global__ void bin_scatter(ParticlesView p, StepArrays a, DeviceGrid d) {
   double mx, my;
   const int b = bucket_of(p, i, k, d, mx, my);
   const int e = a.start[b] + a.rank[static_cast<long long>(blockIdx.y) * p.n + i];
-  a.entry_id[e] = i;
-  a.entry_k[e] = k;
+  a.entry_at[e] = static_cast<int>(blockIdx.y) * p.n + i;  // below max(N, 2^20) + N: an int
   a.entry[e] = Entry{mx, my, p.vx[i], p.vy[i]};
+}
+
+/// The particle of entry `e` (bin_scatter() packs it with its slab: StepArrays::entry_at).
+__device__ inline int particle_of(const StepArrays& a, int n, int e) { return a.entry_at[e] % n; }
+
+/// The slab of entry `e` (StepArrays::entry_at).
+__device__ inline int slab_of(const StepArrays& a, const DeviceGrid& d, int n, int e) {
+  return d.first + a.entry_at[e] / n;
 }
 
 /// Whether particles i and j pass the slab test in slab k (then slab k's search finds them).
@@ -156,13 +163,13 @@ __device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, in
 __device__ inline void test_entries(const ParticlesView& p, const Box& box, const StepArrays& a,
                                     const DeviceGrid& d, int e, int from, int to, int lane = 0,
                                     int lanes = 1) {
-  const int i = a.entry_id[e], k = a.entry_k[e];
+  const int i = particle_of(a, p.n, e), k = slab_of(a, d, p.n, e);
   const Entry me = a.entry[e];
   for (int f = from + lane; f < to; f += lanes) {
     const Entry o = a.entry[f];
     if (f == e || !sweep::close_in_slab(me.x - o.x, me.y - o.y, me.vx - o.vx, me.vy - o.vy, d.g))
       continue;
-    const int j = a.entry_id[f];
+    const int j = particle_of(a, p.n, f);
     if (k > 0 && close_in_slab_at(p, i, j, k - 1, d)) continue;  // found in slab k - 1
     const int lo = i < j ? i : j, hi = i < j ? j : i;
     const double t = model::pair_time(p.x[lo], p.y[lo], p.vx[lo], p.vy[lo], p.x[hi], p.y[hi],
@@ -196,7 +203,7 @@ __global__ void __launch_bounds__(kSearchThreads, 4)
     return;
   }
   const int columns = d.g.columns;
-  const int* row = a.start + (a.entry_k[e] - d.first) * d.cells;  // this slab's cells
+  const int* row = a.start + (slab_of(a, d, p.n, e) - d.first) * d.cells;  // this slab's cells
   int x0, x1;
   sweep::columns_within(me.x, q.d, d.g, x0, x1);
   const int y = sweep::row_of(me.y, d.g);
@@ -216,7 +223,7 @@ __global__ void __launch_bounds__(kSearchThreads, 4)
   const int m = a.flags->fast, columns = d.g.columns;
   for (int q = t / kFastTeam; q < m; q += teams) {
     const int e = a.rank[q];
-    const int* row = a.start + (a.entry_k[e] - d.first) * d.cells;
+    const int* row = a.start + (slab_of(a, d, p.n, e) - d.first) * d.cells;
     const Entry me = a.entry[e];
     const double reach = sweep::search_of(me.vx, me.vy, d.g).d;
     int x0, x1, y0, y1;

@@ -84,8 +84,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
  public:
   CudaStepper(const Box& box, const Particles& p, std::string device, double alpha)
       : DeviceStepper(std::move(device), box, p, cuda::Queue::kOwnStream), alpha_(alpha),
-        wall_(n_), last_(n_), slots_(n_, n_ / 4 + 1024), best_(n_), resolved_(n_),  // grown as needed
-        contested_(n_), partner_(n_), ptime_(n_) {
+        wall_(n_), last_(n_), slots_(n_, n_ / 4 + 1024) {  // the list grown as needed
     bandwidth_ = measure_bandwidth(main_);
     set_grid(p);
     if (n_ >= kGridResolveFrom)
@@ -128,9 +127,9 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
       pass.slabs = std::min(per_pass_, grid_.g.slabs - first);
       const int buckets = pass.slabs * grid_.cells + 1;
       if (!one_pass)
-        PLAB_CUDA_CHECK(cudaMemsetAsync(filled_.get(), 0, buckets * sizeof(int), main_));
+        PLAB_CUDA_CHECK(cudaMemsetAsync(a.start, 0, buckets * sizeof(int), main_));
       launch::bin_count(p_.view(), a, pass, main_);
-      cuda::exclusive_scan(filled_.get(), start_.get(), buckets, temp_.get(), temp_.size(), main_);
+      cuda::exclusive_scan(a.start, a.start, buckets, temp_.get(), temp_.size(), main_);
       launch::bin_scatter(p_.view(), a, pass, main_);
       launch::find_pairs(p_.view(), box_, a, pass, one_pass, main_);
     }
@@ -154,6 +153,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
       const kernels::Flags f = flags_.read(main_);
       if (f.steps_done == asked_ || f.overflow == 0) return;
       slots_.grow(2 * f.overflow, main_);
+      lay_out();  // the rows are as long as the list
       stale_ = true;  // the recorded graph holds the old list's addresses
       flags_.clear(&kernels::Flags::overflow, main_);  // the stop
       for (long long s = f.steps_done; s < asked_; ++s) queue_step();
@@ -174,26 +174,76 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     const long long most = std::max<long long>(1, kEntriesPerPass / std::max(n_, 1));
     const int passes = static_cast<int>((grid_.g.slabs + most - 1) / most);
     per_pass_ = (grid_.g.slabs + passes - 1) / passes;
-    const std::size_t entries = static_cast<std::size_t>(n_) * per_pass_;
     const int size = per_pass_ * grid_.cells + 1;
-    filled_.resize(size);
-    start_.resize(size);
-    for (auto* v : {&rank_, &entry_id_, &entry_k_}) v->resize(entries);
-    entry_.resize(entries);
     temp_.resize(std::max(cuda::exclusive_scan_bytes(size), cuda::exclusive_scan_bytes(n_)));
+    lay_out();
     stale_ = true;
   }
 
+  /// Lays the two phases' arrays over one allocation (see `phases_`): the passes' (bucket
+  /// starts, ranks, entries) and the rounds' (the candidates' rows, each particle's choice, the
+  /// plan), each array on a 256-byte boundary.
+  void lay_out() {
+    const std::size_t n = static_cast<std::size_t>(n_);
+    const std::size_t entries = n * per_pass_;
+    const std::size_t buckets = static_cast<std::size_t>(per_pass_) * grid_.cells + 1;
+    Carve pass, rounds;
+    const std::size_t start = pass.take<int>(buckets), rank = pass.take<int>(entries),
+                      entry_at = pass.take<int>(entries),
+                      entry = pass.take<kernels::Entry>(entries);
+    const std::size_t rows = rounds.take<int>(slots_.rows()), best = rounds.take<model::Event>(n),
+                      resolved = rounds.take<char>(n), contested = rounds.take<int>(n),
+                      partner = rounds.take<int>(n), ptime = rounds.take<double>(n);
+    phases_.resize(std::max(pass.at, rounds.at));
+    unsigned char* base = phases_.get();
+    on_.start = reinterpret_cast<int*>(base + start);
+    on_.rank = reinterpret_cast<int*>(base + rank);
+    on_.entry_at = reinterpret_cast<int*>(base + entry_at);
+    on_.entry = reinterpret_cast<kernels::Entry*>(base + entry);
+    on_.rows = reinterpret_cast<int*>(base + rows);
+    on_.best = reinterpret_cast<model::Event*>(base + best);
+    on_.resolved = reinterpret_cast<char*>(base + resolved);
+    on_.contested = reinterpret_cast<int*>(base + contested);
+    on_.partner = reinterpret_cast<int*>(base + partner);
+    on_.ptime = reinterpret_cast<double*>(base + ptime);
+  }
+
   [[nodiscard]] std::size_t arrays_bytes() const override {
-    return cuda::bytes_of(wall_, last_, slots_, best_, resolved_, contested_, partner_, ptime_,
-                          filled_, start_, rank_, entry_id_, entry_k_, entry_, temp_);
+    return cuda::bytes_of(wall_, last_, slots_, phases_, temp_);
   }
 
   [[nodiscard]] kernels::StepArrays arrays() const {
-    return {wall_.get(),     last_.get(),     slots_.view(),   best_.get(),     resolved_.get(),
-            contested_.get(), partner_.get(), ptime_.get(),    filled_.get(),   start_.get(),
-            rank_.get(),     entry_id_.get(), entry_k_.get(),  entry_.get(),    flags_.get()};
+    return {wall_.get(),  last_.get(),      slots_.view(on_.rows), on_.best,
+            on_.resolved, on_.contested,    on_.partner,           on_.ptime,
+            on_.start,    on_.rank,         on_.entry_at,          on_.entry,
+            flags_.get()};
   }
+
+  /// Byte offsets of arrays laid one after the other, each on a 256-byte boundary.
+  struct Carve {
+    std::size_t at = 0;  //!< bytes laid so far
+    /// The offset of an array of `count` T's, laid next.
+    template <class T>
+    std::size_t take(std::size_t count) {
+      const std::size_t here = at;
+      at = (at + count * sizeof(T) + 255) / 256 * 256;
+      return here;
+    }
+  };
+
+  /// Where the arrays of the two phases lie in `phases_`.
+  struct Phases {
+    int* start = nullptr;           //!< passes: kernels::StepArrays::start
+    int* rank = nullptr;            //!< passes: kernels::StepArrays::rank
+    int* entry_at = nullptr;        //!< passes: kernels::StepArrays::entry_at
+    kernels::Entry* entry = nullptr;  //!< passes: kernels::StepArrays::entry
+    int* rows = nullptr;            //!< rounds: the candidates' rows (cuda::CompactView::row)
+    model::Event* best = nullptr;   //!< rounds: kernels::StepArrays::best
+    char* resolved = nullptr;       //!< rounds: kernels::StepArrays::resolved
+    int* contested = nullptr;       //!< rounds: kernels::StepArrays::contested
+    int* partner = nullptr;         //!< rounds (and apply): the plan's partner
+    double* ptime = nullptr;        //!< rounds (and apply): the plan's pair time
+  };
 
   static constexpr long long kCheckEvery = 32;  //!< steps between two looks at the flags
   static constexpr int kGridResolveFrom = 50000;  //!< from this N the rounds use the whole GPU
@@ -209,12 +259,11 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   cuda::DeviceArray<double> wall_;
   cuda::DeviceArray<int> last_;
   cuda::DeviceCandidates slots_;
-  cuda::DeviceArray<model::Event> best_;
-  cuda::DeviceArray<char> resolved_;
-  cuda::DeviceArray<int> contested_, partner_;
-  cuda::DeviceArray<double> ptime_;
-  cuda::DeviceArray<int> filled_, start_, rank_, entry_id_, entry_k_;
-  cuda::DeviceArray<kernels::Entry> entry_;
+  /// The arrays of the slab passes (read by the search, dead once it ends) and those of the
+  /// rounds and apply (written only after the search) in one allocation, as large as the larger
+  /// phase: a step never needs both at once (handouts/engine-gpu.md measures what this saves).
+  cuda::DeviceArray<unsigned char> phases_;
+  Phases on_;
   cuda::DeviceArray<unsigned char> temp_;
   cuda::Graph graph_;
   bool stale_ = true;

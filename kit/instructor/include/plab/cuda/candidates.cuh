@@ -13,9 +13,9 @@
 /// 2. the search calls CompactView::file() for each pair it keeps: the pair goes to the list
 ///    (when there is room) and both counts go up;
 /// 3. `end` = the exclusive scan of `count` (where each particle's events start);
-/// 4. CompactView::place() for every pair of the list: each moves `end[lo]` and `end[hi]` on by
-///    one, so that afterwards `end[i]` is one past particle `i`'s last event, which starts at
-///    `end[i] - count[i]`.
+/// 4. CompactView::place() for every pair of the list: each writes its index in the list at
+///    `end[lo]` and `end[hi]` and moves both on by one, so that afterwards `end[i]` is one past
+///    particle `i`'s last event, which starts at `end[i] - count[i]`.
 ///
 /// When the list had no room for every pair, the host grows it (DeviceCandidates::grow()) and
 /// the step is done again. Events land in any order; the rounds do not depend on it (the event
@@ -40,19 +40,24 @@ struct Pair {
 /// What the kernels receive (inside the stage's arrays): the list, the counts, and the compressed
 /// rows. It reads like cuda::SlotsView for the rounds (cuda/rounds.cuh): `count[i]`,
 /// other_at(), time_at() and `cap` (no particle ever runs out: the list does, as a whole).
+/// A row holds the list's index of each of the particle's pairs (4 bytes an event, not the 12 of
+/// a copy of the other particle and the time): the pair is read from the list.
 struct CompactView {
   int* count;      //!< pair events of each particle
-  int* end;        //!< after place(): one past particle `i`'s last event in `other` and `time`
+  int* end;        //!< after place(): one past particle `i`'s last event in `row`
   Pair* list;      //!< the pairs filed this step, in any order
-  int capacity;    //!< room in `list` (and for twice as many events in `other` and `time`)
-  int* other;      //!< the other particle of each event, particle by particle
-  double* time;    //!< the pair time of each event
+  int capacity;    //!< room in `list` (and for twice as many events in `row`)
+  int* row;        //!< the list's index of each event, particle by particle
   static constexpr int cap = INT_MAX;  //!< no per-particle limit (rounds.cuh reads it)
 
-  /// The other particle of particle `i`'s event `s` (after place()).
-  __device__ int other_at(int i, int s) const { return other[end[i] - count[i] + s]; }
+  /// The other particle of particle `i`'s event `s` (after place()): of the pair (lo, hi) that
+  /// holds `i`, the one that is not `i`.
+  __device__ int other_at(int i, int s) const {
+    const Pair& e = list[row[end[i] - count[i] + s]];
+    return e.lo ^ e.hi ^ i;
+  }
   /// The pair time of particle `i`'s event `s` (after place()).
-  __device__ double time_at(int i, int s) const { return time[end[i] - count[i] + s]; }
+  __device__ double time_at(int i, int s) const { return list[row[end[i] - count[i] + s]].t; }
 
   /// Files the pair event (lo, hi, t): counts it under both particles and puts it in the list
   /// at the place `*length` gives (atomically: any thread may file), when there is room.
@@ -65,17 +70,16 @@ struct CompactView {
   /// Lays pair `q` of the list into both particles' rows (after `end` became the exclusive scan
   /// of `count`).
   __device__ void place(int q) const {
-    const Pair e = list[q];
-    const int a = atomicAdd(&end[e.lo], 1), b = atomicAdd(&end[e.hi], 1);
-    other[a] = e.hi;
-    time[a] = e.t;
-    other[b] = e.lo;
-    time[b] = e.t;
+    const Pair& e = list[q];
+    row[atomicAdd(&end[e.lo], 1)] = q;
+    row[atomicAdd(&end[e.hi], 1)] = q;
   }
 };
 
 /// The compact candidates in device memory: the counts and row ends for `n` particles, and a
-/// list with room for `capacity` pairs (and twice as many events in rows).
+/// list with room for `capacity` pairs. The rows (rows() ints) are the owner's to place: they
+/// are written and read only after the search, so a stage may lay them over memory the search
+/// used (stage 06's engine does: over the slab passes' entries).
 class DeviceCandidates {
  public:
   /// Room for `n` particles and at least `capacity` pairs a step (contents uninitialised).
@@ -84,38 +88,36 @@ class DeviceCandidates {
     allocate(capacity);
   }
   /// Room for at least `needed` pairs a step, once the work queued on `stream` (which may use
-  /// the arrays) is done. The list and the rows are allocated again: their addresses change (a
-  /// recorded graph that holds them must be recorded again).
+  /// the arrays) is done. The list is allocated again: its address changes (a recorded graph
+  /// that holds it must be recorded again), and the rows must be as long as rows() again.
   void grow(int needed, cudaStream_t stream) {
     PLAB_CUDA_CHECK(cudaStreamSynchronize(stream));
     allocate(needed);
   }
-  /// The view kernels take.
-  [[nodiscard]] CompactView view() const {
-    return {count_.get(), end_.get(), list_.get(), capacity_, other_.get(), time_.get()};
+  /// The view kernels take, with the rows at `rows` (at least rows() ints).
+  [[nodiscard]] CompactView view(int* rows) const {
+    return {count_.get(), end_.get(), list_.get(), capacity_, rows};
   }
   /// Room in the list, in pairs.
   [[nodiscard]] int capacity() const { return capacity_; }
-  /// Bytes held on the device.
+  /// Length of the rows the view needs: two events a pair.
+  [[nodiscard]] std::size_t rows() const { return 2 * static_cast<std::size_t>(capacity_); }
+  /// Bytes held on the device (the rows are the owner's).
   [[nodiscard]] std::size_t bytes() const {
-    return count_.bytes() + end_.bytes() + list_.bytes() + other_.bytes() + time_.bytes();
+    return count_.bytes() + end_.bytes() + list_.bytes();
   }
 
  private:
-  /// Allocates the list and the rows for `capacity` pairs (at least one).
+  /// Allocates the list for `capacity` pairs (at least one).
   void allocate(int capacity) {
     capacity_ = capacity > 0 ? capacity : 1;
     list_.resize(static_cast<std::size_t>(capacity_));
-    other_.resize(2 * static_cast<std::size_t>(capacity_));
-    time_.resize(2 * static_cast<std::size_t>(capacity_));
   }
 
   int capacity_ = 0;             //!< CompactView::capacity
   DeviceArray<int> count_;       //!< CompactView::count
   DeviceArray<int> end_;         //!< CompactView::end
   DeviceArray<Pair> list_;       //!< CompactView::list
-  DeviceArray<int> other_;       //!< CompactView::other, twice the capacity
-  DeviceArray<double> time_;     //!< CompactView::time, twice the capacity
 };
 
 }  // namespace plab::cuda
