@@ -155,40 +155,76 @@ __device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, in
   return sweep::close_in_slab(xi - xj, yi - yj, p.vx[i] - p.vx[j], p.vy[i] - p.vy[j], d.g);
 }
 
-/// Entry e against entries [from, to) of its slab: the pairs that pass sweep::close_in_slab() get
+/// The pair of entries e and f that passed sweep::close_in_slab() in slab k (e's particle i):
 /// model.md's pair time, unless slab k - 1 found them already (a pair filed twice is harmless to
-/// the rounds, but it takes room), and are filed when the pair comes before both particles'
-/// walls. A team of `lanes` threads can share the run: this one takes every lanes-th entry from
-/// from + lane.
+/// the rounds, but it takes room), filed when the pair comes before both particles' walls.
+__device__ inline void file_pair(const ParticlesView& p, const Box& box, const StepArrays& a,
+                                 const DeviceGrid& d, int i, int k, int f) {
+  const int j = particle_of(a, p.n, f);
+  if (k > 0 && close_in_slab_at(p, i, j, k - 1, d)) return;  // found in slab k - 1
+  const int lo = i < j ? i : j, hi = i < j ? j : i;
+  const double t = model::pair_time(p.x[lo], p.y[lo], p.vx[lo], p.vy[lo], p.x[hi], p.y[hi],
+                                    p.vx[hi], p.vy[hi], box.r);
+  if (model::in_step(t) && model::before_walls(t, a.wall[lo], a.wall[hi]))
+    a.slots.file(lo, hi, t, &a.flags->pairs);
+}
+
+/// Entry e against entries [from, to) of its slab: the pairs that pass sweep::close_in_slab() go
+/// to file_pair(). `kBatch` entries are loaded (their loads in flight together), then tested,
+/// then the ones that passed filed. A team of `lanes` threads can share the run: this one takes
+/// every lanes-th entry from from + lane.
+template <int kBatch>
 __device__ inline void test_entries(const ParticlesView& p, const Box& box, const StepArrays& a,
                                     const DeviceGrid& d, int e, int from, int to, int lane = 0,
                                     int lanes = 1) {
   const int i = particle_of(a, p.n, e), k = slab_of(a, d, p.n, e);
   const Entry me = a.entry[e];
-  for (int f = from + lane; f < to; f += lanes) {
-    const Entry o = a.entry[f];
-    if (f == e || !sweep::close_in_slab(me.x - o.x, me.y - o.y, me.vx - o.vx, me.vy - o.vy, d.g))
-      continue;
-    const int j = particle_of(a, p.n, f);
-    if (k > 0 && close_in_slab_at(p, i, j, k - 1, d)) continue;  // found in slab k - 1
-    const int lo = i < j ? i : j, hi = i < j ? j : i;
-    const double t = model::pair_time(p.x[lo], p.y[lo], p.vx[lo], p.vy[lo], p.x[hi], p.y[hi],
-                                      p.vx[hi], p.vy[hi], box.r);
-    if (model::in_step(t) && model::before_walls(t, a.wall[lo], a.wall[hi]))
-      a.slots.file(lo, hi, t, &a.flags->pairs);
+  for (int f0 = from + lane; f0 < to; f0 += kBatch * lanes) {
+    Entry o[kBatch];
+#pragma unroll
+    for (int u = 0; u < kBatch; ++u) {
+      const int f = f0 + u * lanes;
+      if (f < to) o[u] = a.entry[f];
+    }
+    unsigned passed = 0;
+#pragma unroll
+    for (int u = 0; u < kBatch; ++u) {
+      const int f = f0 + u * lanes;
+      if (f < to && f != e &&
+          sweep::close_in_slab(me.x - o[u].x, me.y - o[u].y, me.vx - o[u].vx, me.vy - o[u].vy,
+                               d.g))
+        passed |= 1u << u;
+    }
+    for (; passed != 0; passed &= passed - 1)
+      file_pair(p, box, a, d, i, k, f0 + (__ffs(passed) - 1) * lanes);
   }
 }
 
 constexpr int kSearchThreads = 256;  //!< threads per block of find_pairs and find_fast_pairs
 constexpr int kFastTeam = 8;         //!< threads that search together for one fast entry
 
+/// How the pair search runs (measured on an H100, 2026-11-27, handouts/engine-gpu.md): a small
+/// scene's search is short of threads, and each thread's loads in flight at once decide its
+/// time; a large scene has threads enough, and more of them resident decide it.
+enum class Search {
+  kBatched,  //!< four entries loaded at a time, up to 128 registers a thread (two blocks an SM)
+  kLean,     //!< one entry at a time, at most 64 registers a thread (four blocks an SM)
+};
+/// Entries test_entries() loads at a time with search shape `S`.
+template <Search S>
+constexpr int kBatchOf = S == Search::kBatched ? 4 : 1;
+/// Blocks of kSearchThreads an SM holds at least (the register bound) with search shape `S`.
+template <Search S>
+constexpr int kBlocksOf = S == Search::kBatched ? 2 : 4;
+
 /// The pair search, one thread per entry (as step.cpp, but for the fast entries): a slow entry
 /// against the later entries of its row up to the last column within its reach, then the
 /// columns within reach of the row above (two runs of entries of its slab). A fast entry
 /// searches about twice as many entries (every row within its reach): it is listed in `a.rank`
 /// (free once bin_scatter ran) for find_fast_pairs, so that the threads of a warp run loops of
-/// like length. At most 64 registers a thread (four blocks an SM).
-__global__ void __launch_bounds__(kSearchThreads, 4)
+/// like length. Search shape `S` (Search).
+template <Search S>
+__global__ void __launch_bounds__(kSearchThreads, kBlocksOf<S>)
     find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
   namespace cg = cooperative_groups;
   const int e = blockIdx.x * blockDim.x + threadIdx.x;
@@ -207,15 +243,18 @@ __global__ void __launch_bounds__(kSearchThreads, 4)
   int x0, x1;
   sweep::columns_within(me.x, q.d, d.g, x0, x1);
   const int y = sweep::row_of(me.y, d.g);
-  test_entries(p, box, a, d, e, e + 1, row[y * columns + x1 + 1]);
+  test_entries<kBatchOf<S>>(p, box, a, d, e, e + 1, row[y * columns + x1 + 1]);
   if (y + 1 < d.g.rows)
-    test_entries(p, box, a, d, e, row[(y + 1) * columns + x0], row[(y + 1) * columns + x1 + 1]);
+    test_entries<kBatchOf<S>>(p, box, a, d, e, row[(y + 1) * columns + x0],
+                              row[(y + 1) * columns + x1 + 1]);
 }
 
 /// The search of the fast entries find_pairs listed (`flags->fast` of them in `a.rank`): a team
 /// of kFastTeam threads for each, sharing every run of entries within its reach, one run per
-/// row (a pair found twice is harmless); any grid, the teams stride over the list.
-__global__ void __launch_bounds__(kSearchThreads, 4)
+/// row (a pair found twice is harmless); any grid, the teams stride over the list. Search shape
+/// `S` (Search).
+template <Search S>
+__global__ void __launch_bounds__(kSearchThreads, kBlocksOf<S>)
     find_fast_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
   const int t = blockIdx.x * blockDim.x + threadIdx.x;
   const int lane = t % kFastTeam, teams = gridDim.x * blockDim.x / kFastTeam;
@@ -230,8 +269,8 @@ __global__ void __launch_bounds__(kSearchThreads, 4)
     sweep::columns_within(me.x, reach, d.g, x0, x1);
     sweep::rows_within(me.y, reach, d.g, y0, y1);
     for (int y = y0; y <= y1; ++y)
-      test_entries(p, box, a, d, e, row[y * columns + x0], row[y * columns + x1 + 1], lane,
-                   kFastTeam);
+      test_entries<kBatchOf<S>>(p, box, a, d, e, row[y * columns + x0],
+                                row[y * columns + x1 + 1], lane, kFastTeam);
   }
 }
 

@@ -39,17 +39,30 @@ inline void bin_scatter(const cuda::ParticlesView& p, const kernels::StepArrays&
 
 /// The pair search of a pass: find_pairs over every entry (the slow ones), then find_fast_pairs
 /// over the fast ones it listed (a team of kernels::kFastTeam threads each, on a grid for a
-/// tenth of the entries: the fastest tenth of the particles are the fast ones, sweep::choose()).
+/// tenth of the entries: the fastest tenth of the particles are the fast ones, sweep::choose()),
+/// in search shape `S` (kernels::Search).
 /// `cleared`: start_step() cleared the fast entries' counter already (a step of one pass).
-inline void find_pairs(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
-                       const kernels::DeviceGrid& d, bool cleared, cudaStream_t s) {
+template <kernels::Search S>
+inline void find_pairs_as(const cuda::ParticlesView& p, const Box& box,
+                          const kernels::StepArrays& a, const kernels::DeviceGrid& d, bool cleared,
+                          cudaStream_t s) {
   const long long most = static_cast<long long>(p.n) * d.slabs;  // entries this pass, at most
   if (!cleared) PLAB_CUDA_CHECK(cudaMemsetAsync(&a.flags->fast, 0, sizeof(int), s));
-  kernels::find_pairs<<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d);
+  kernels::find_pairs<S><<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d);
   PLAB_CUDA_CHECK_LAUNCH("find_pairs");
-  kernels::find_fast_pairs<<<blocks((most / 10 + 1) * kernels::kFastTeam),
-                             kernels::kSearchThreads, 0, s>>>(p, box, a, d);
+  kernels::find_fast_pairs<S><<<blocks((most / 10 + 1) * kernels::kFastTeam),
+                                kernels::kSearchThreads, 0, s>>>(p, box, a, d);
   PLAB_CUDA_CHECK_LAUNCH("find_fast_pairs");
+}
+
+/// find_pairs_as() in the shape `shape` names.
+inline void find_pairs(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
+                       const kernels::DeviceGrid& d, bool cleared, kernels::Search shape,
+                       cudaStream_t s) {
+  if (shape == kernels::Search::kBatched)
+    find_pairs_as<kernels::Search::kBatched>(p, box, a, d, cleared, s);
+  else
+    find_pairs_as<kernels::Search::kLean>(p, box, a, d, cleared, s);
 }
 
 /// One thread per pair the list can hold.

@@ -45,6 +45,15 @@ bool separate_asked() {
   return v && std::string(v) == "separate";
 }
 
+/// The pair search's shape for `n` particles: PLAB_ENGINE_SEARCH=batched or lean when it asks (to
+/// measure the difference), otherwise batched below `lean_from` particles and lean from there.
+kernels::Search search_shape(int n, int lean_from) {
+  const char* v = std::getenv("PLAB_ENGINE_SEARCH");
+  if (v && std::string(v) == "batched") return kernels::Search::kBatched;
+  if (v && std::string(v) == "lean") return kernels::Search::kLean;
+  return n < lean_from ? kernels::Search::kBatched : kernels::Search::kLean;
+}
+
 /// The device's memory bandwidth in bytes a second: the best of three device-to-device copies
 /// of 256 MiB (each byte read once and written once), timed by CUDA events on `stream`; 0 when
 /// the memory for it cannot be had. What plab bench sets a step's time against.
@@ -131,7 +140,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
       launch::bin_count(p_.view(), a, pass, main_);
       cuda::exclusive_scan(a.start, a.start, buckets, temp_.get(), temp_.size(), main_);
       launch::bin_scatter(p_.view(), a, pass, main_);
-      launch::find_pairs(p_.view(), box_, a, pass, one_pass, main_);
+      launch::find_pairs(p_.view(), box_, a, pass, one_pass, search_, main_);
     }
     if (finish_small_) {  // the scan, place_pairs, start_rounds, the rounds and apply in one
       launch::finish_small(p_.view(), box_, a, main_);
@@ -252,6 +261,10 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   /// N = 1000, 2000 and 4000, 10% faster at 10^4 and 45% at 4 x 10^4; the crossing, about 5000,
   /// is interpolated.
   static constexpr int kFinishSmallFrom = 5000;
+  /// From this N the pair search is lean rather than batched (kernels::Search). Measured on an
+  /// H100 (2026-11-27, ms a step, batched / lean): N = 10^4 0.090 / 0.103, 4 x 10^4 0.362 / 0.314,
+  /// 10^6 5.91 / 5.09; the crossing is measured in handouts/engine-gpu.md.
+  static constexpr int kLeanSearchFrom = 20000;
   double bandwidth_ = 0;  //!< measure_bandwidth(), once, before the steps
   double alpha_;  //!< slabs per sqrt(N) v_cut / L (StageOptions::sweep_alpha, or kAlpha)
   kernels::DeviceGrid grid_{};
@@ -271,6 +284,8 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   /// Small scenes: finish_small() after the passes, unless PLAB_ENGINE_KERNELS=separate asks
   /// for the separate kernels (to compare) or the GPU cannot hold its blocks at once.
   bool finish_small_ = false;
+  /// The pair search's shape (search_shape()).
+  kernels::Search search_ = search_shape(n_, kLeanSearchFrom);
 };
 
 }  // namespace
