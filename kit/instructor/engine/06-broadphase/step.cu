@@ -162,8 +162,8 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
       const kernels::Flags f = flags_.read(main_);
       if (f.steps_done == asked_ || f.overflow == 0) return;
       slots_.grow(2 * f.overflow, main_);
-      lay_out();  // the rows are as long as the list
-      stale_ = true;  // the recorded graph holds the old list's addresses
+      lay_out();  // the rows are as long as the list (phases_ is allocated again)
+      stale_ = true;  // the recorded graph holds the old list's and phases' addresses
       flags_.clear(&kernels::Flags::overflow, main_);  // the stop
       for (long long s = f.steps_done; s < asked_; ++s) queue_step();
       timer_.stop(main_);
@@ -171,7 +171,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   }
 
   /// The grid for the state `p` (sweep::choose(), the fastest 10% search wider), the slabs a
-  /// pass takes (kEntriesPerPass), and the arrays a pass needs.
+  /// pass takes (kEntriesPerPass), and the arrays of both phases (lay_out()).
   void set_grid(const Particles& p) {
     sync();
     std::vector<double> end(p.size()), scratch;
@@ -210,6 +210,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     on_.entry_at = reinterpret_cast<int*>(base + entry_at);
     on_.entry = reinterpret_cast<kernels::Entry*>(base + entry);
     on_.rows = reinterpret_cast<int*>(base + rows);
+    on_.rows_length = slots_.rows();
     on_.best = reinterpret_cast<model::Event*>(base + best);
     on_.resolved = reinterpret_cast<char*>(base + resolved);
     on_.contested = reinterpret_cast<int*>(base + contested);
@@ -222,9 +223,18 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   }
 
   [[nodiscard]] kernels::StepArrays arrays() const {
-    return {wall_.get(),  last_.get(),      slots_.view(on_.rows), on_.best,
-            on_.resolved, on_.contested,    on_.partner,           on_.ptime,
-            on_.start,    on_.rank,         on_.entry_at,          on_.entry,
+    return {wall_.get(),
+            last_.get(),
+            slots_.view(on_.rows, on_.rows_length),
+            on_.best,
+            on_.resolved,
+            on_.contested,
+            on_.partner,
+            on_.ptime,
+            on_.start,
+            on_.rank,
+            on_.entry_at,
+            on_.entry,
             flags_.get()};
   }
 
@@ -247,6 +257,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     int* entry_at = nullptr;        //!< passes: kernels::StepArrays::entry_at
     kernels::Entry* entry = nullptr;  //!< passes: kernels::StepArrays::entry
     int* rows = nullptr;            //!< rounds: the candidates' rows (cuda::CompactView::row)
+    std::size_t rows_length = 0;    //!< ... and their length in ints
     model::Event* best = nullptr;   //!< rounds: kernels::StepArrays::best
     char* resolved = nullptr;       //!< rounds: kernels::StepArrays::resolved
     int* contested = nullptr;       //!< rounds: kernels::StepArrays::contested

@@ -24,6 +24,8 @@
 
 #include <climits>
 #include <cstddef>
+#include <stdexcept>
+#include <string>
 
 #include "plab/cuda/check.hpp"
 #include "plab/model.hpp"  // PLAB_HD
@@ -79,7 +81,7 @@ struct CompactView {
 /// The compact candidates in device memory: the counts and row ends for `n` particles, and a
 /// list with room for `capacity` pairs. The rows (rows() ints) are the owner's to place: they
 /// are written and read only after the search, so a stage may lay them over memory the search
-/// used (stage 06's engine does: over the slab passes' entries).
+/// used (stage 06's engine lays them over the slab passes' arrays).
 class DeviceCandidates {
  public:
   /// Room for `n` particles and at least `capacity` pairs a step (contents uninitialised).
@@ -94,8 +96,14 @@ class DeviceCandidates {
     PLAB_CUDA_CHECK(cudaStreamSynchronize(stream));
     allocate(needed);
   }
-  /// The view kernels take, with the rows at `rows` (at least rows() ints).
-  [[nodiscard]] CompactView view(int* rows) const {
+  /// The view kernels take, with the rows at `rows`, `length` ints long: at least rows() (the
+  /// list may have grown since the owner laid them).
+  /// \throws std::logic_error when the rows are shorter than the list needs.
+  [[nodiscard]] CompactView view(int* rows, std::size_t length) const {
+    if (length < this->rows())
+      throw std::logic_error("DeviceCandidates::view(): rows of " + std::to_string(length) +
+                             " ints for a list of " + std::to_string(capacity_) +
+                             " pairs (lay the rows out again after grow())");
     return {count_.get(), end_.get(), list_.get(), capacity_, rows};
   }
   /// Room in the list, in pairs.

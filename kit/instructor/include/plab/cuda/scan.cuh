@@ -13,7 +13,8 @@
 namespace plab::cuda {
 
 /// out[i] becomes in[0] + ... + in[i - 1] for i < `size` (out[0] = 0), on stream `s`; `temp` of
-/// `temp_bytes` bytes, at least exclusive_scan_bytes(size).
+/// `temp_bytes` bytes, at least exclusive_scan_bytes(size). `in` and `out` may be the same array
+/// (a scan in place: CUB guarantees it from CUB 2.0, CUDA 12; the kit needs CUDA 13).
 inline void exclusive_scan(const int* in, int* out, int size, void* temp, std::size_t temp_bytes,
                            cudaStream_t s) {
   PLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(temp, temp_bytes, in, out, size, s));
