@@ -17,9 +17,13 @@
 ///  5. migration: particles now in another rank's slab move there (any rank, any distance).
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
 #include <vector>
 
 #include "plab/candidates.hpp"
+#include "plab/close_lanes.hpp"
 #include "plab/mpi/ranks.hpp"
 #include "plab/sweep.hpp"
 #include "exchange.hpp"
@@ -166,7 +170,8 @@ struct Entries {
   std::vector<int> owned_end;        //!< cell c's owned entries are [start[c], owned_end[c])
   std::vector<int> cell;             //!< per particle: its cell in this slab
   std::vector<int> id;               //!< per entry: the particle (local index)
-  std::vector<double> x, y, vx, vy;  //!< per entry: shifted midpoint position, velocity
+  std::vector<double> x, y, vx, vy;  //!< per entry: shifted midpoint position, velocity (padded
+                                     //!< by lanes::kLanes for the pair test's loads)
   std::vector<sweep::Search> reach;  //!< per entry: what it searches (sweep::search_of())
   int owned_from = 0;                //!< the first column that holds an owned entry
   int owned_to = -1;                 //!< the last one (owned_to < owned_from: none)
@@ -191,7 +196,7 @@ void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& firs
     ++m;
   }
   for (int c = 0; c < g.cells(); ++c) e.start[c + 1] += e.start[c];
-  for (auto* v : {&e.x, &e.y, &e.vx, &e.vy}) v->resize(m);
+  for (auto* v : {&e.x, &e.y, &e.vx, &e.vy}) v->resize(m + lanes::kLanes);
   e.id.resize(m);
   e.reach.resize(m);
   e.owned_from = g.columns;
@@ -218,23 +223,23 @@ void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& firs
 }
 
 /// Files owned entry `a` with every entry of [from, to) but itself that passes
-/// sweep::close_in_slab().
+/// sweep::close_in_slab() (lanes::for_each_close(), with kIsa's vectors).
+template <lanes::Isa kIsa>
 void test_range(const Entries& e, int a, int from, int to, const sweep::Grid& g,
                 std::vector<std::pair<int, int>>& hits) {
-  const double xa = e.x[a], ya = e.y[a], vxa = e.vx[a], vya = e.vy[a];
-  for (int b = from; b < to; ++b)
-    if (sweep::close_in_slab(xa - e.x[b], ya - e.y[b], vxa - e.vx[b], vya - e.vy[b], g) && b != a)
-      hits.emplace_back(e.id[a], e.id[b]);
+  lanes::for_each_close<kIsa>({e.x.data(), e.y.data(), e.vx.data(), e.vy.data()}, a, from, to, g,
+                              [&](int b) {
+                                if (b != a) hits.emplace_back(e.id[a], e.id[b]);
+                              });
 }
 
 /// Files ghost entry `a` with every owned entry of [from, to) that passes
 /// sweep::close_in_slab().
+template <lanes::Isa kIsa>
 void test_owned(const Entries& e, int a, int from, int to, const sweep::Grid& g,
                 std::vector<std::pair<int, int>>& hits) {
-  for (int b = from; b < to; ++b)
-    if (sweep::close_in_slab(e.x[a] - e.x[b], e.y[a] - e.y[b], e.vx[a] - e.vx[b],
-                             e.vy[a] - e.vy[b], g))
-      hits.emplace_back(e.id[a], e.id[b]);
+  lanes::for_each_close<kIsa>({e.x.data(), e.y.data(), e.vx.data(), e.vy.data()}, a, from, to, g,
+                              [&](int b) { hits.emplace_back(e.id[a], e.id[b]); });
 }
 
 /// Slab k's search (stage 06's, sweep::search_of()): a slow entry against the later entries of
@@ -242,8 +247,9 @@ void test_owned(const Entries& e, int a, int from, int to, const sweep::Grid& g,
 /// a fast entry against every entry within its reach, one run per row. A ghost tests only the
 /// owned entries of those cells (first in each cell), in the columns that hold any: pairs of two
 /// ghosts no rank needs, and an owned entry before a ghost in its cell finds it itself.
-void search(const Entries& e, int owned, const sweep::Grid& g,
-            std::vector<std::pair<int, int>>& hits) {
+template <lanes::Isa kIsa>
+void search_cells(const Entries& e, int owned, const sweep::Grid& g,
+                  std::vector<std::pair<int, int>>& hits) {
   const int columns = g.columns;
   for (int row = 0, a = 0; row < g.rows; ++row) {
     for (const int end = e.start[(row + 1) * columns]; a < end; ++a) {
@@ -258,22 +264,50 @@ void search(const Entries& e, int owned, const sweep::Grid& g,
         const int own = e.cell[e.id[a]] % columns;
         for (int y = y0; y <= y1; ++y)
           for (int c = (!q.fast && y == row) ? std::max(x0, own + 1) : x0; c <= x1; ++c)
-            test_owned(e, a, e.start[y * columns + c], e.owned_end[y * columns + c], g, hits);
+            test_owned<kIsa>(e, a, e.start[y * columns + c], e.owned_end[y * columns + c], g, hits);
         continue;
       }
       if (!q.fast) {
-        test_range(e, a, a + 1, e.start[row * columns + x1 + 1], g, hits);
+        test_range<kIsa>(e, a, a + 1, e.start[row * columns + x1 + 1], g, hits);
         if (row + 1 < g.rows)
-          test_range(e, a, e.start[(row + 1) * columns + x0], e.start[(row + 1) * columns + x1 + 1],
+          test_range<kIsa>(e, a, e.start[(row + 1) * columns + x0], e.start[(row + 1) * columns + x1 + 1],
                      g, hits);
       } else {  // a pair found twice is harmless
         int y0, y1;
         sweep::rows_within(e.y[a], q.d, g, y0, y1);
         for (int y = y0; y <= y1; ++y)
-          test_range(e, a, e.start[y * columns + x0], e.start[y * columns + x1 + 1], g, hits);
+          test_range<kIsa>(e, a, e.start[y * columns + x0], e.start[y * columns + x1 + 1], g, hits);
       }
     }
   }
+}
+
+#if PLAB_AVX2
+/// search_cells() with AVX-512.
+__attribute__((target("avx512f"), flatten)) void search_avx512(
+    const Entries& e, int owned, const sweep::Grid& g, std::vector<std::pair<int, int>>& hits) {
+  search_cells<lanes::Isa::kAvx512>(e, owned, g, hits);
+}
+
+/// search_cells() with AVX2.
+__attribute__((target("avx2"), flatten)) void search_avx2(
+    const Entries& e, int owned, const sweep::Grid& g, std::vector<std::pair<int, int>>& hits) {
+  search_cells<lanes::Isa::kAvx2>(e, owned, g, hits);
+}
+#endif
+
+/// The vectors of the pair test on this rank: the widest the CPU has, or narrower ones when the
+/// run asks (StageOptions::simd, PLAB_SIMD on the other ranks). Set before the first step.
+lanes::Isa isa_in_use = lanes::Isa::kPortable;
+
+/// Slab k's search with the chosen vectors (search_cells()).
+void search(const Entries& e, int owned, const sweep::Grid& g,
+            std::vector<std::pair<int, int>>& hits) {
+#if PLAB_AVX2
+  if (isa_in_use == lanes::Isa::kAvx512) return search_avx512(e, owned, g, hits);
+  if (isa_in_use == lanes::Isa::kAvx2) return search_avx2(e, owned, g, hits);
+#endif
+  search_cells<lanes::Isa::kPortable>(e, owned, g, hits);
 }
 
 /// The first time slab in which a ghost at `x` moving at `vx` can meet a particle of rank q:
@@ -449,17 +483,63 @@ void migrate(const Ranks& r, Local& s) {
 
 }  // namespace
 
+/// Where a rank's time goes, part by part (PLAB_ENGINE_PHASES=1 asks for it): MPI_Wtime() laps
+/// of step()'s parts, summed over the steps, and the particles it held. Each rank writes one line
+/// to stderr when its process ends (handouts/engine-08.md reads them). An exchange's time
+/// includes the wait for the slowest rank: `shared` is the first exchange after the search, so
+/// it holds most of the search's imbalance.
+struct PhaseClock {
+  static constexpr int kParts = 7;
+  static constexpr const char* kNames[kParts] = {"scene",  "halo",  "search", "shared",
+                                                 "rounds", "apply", "migrate"};
+  double seconds[kParts] = {};
+  double owned = 0, ghosts = 0;  //!< summed over the steps
+  long long steps = 0;
+  int rank = -1;
+  bool on = std::getenv("PLAB_ENGINE_PHASES") != nullptr;
+  ~PhaseClock() {
+    if (!on || steps == 0) return;
+    std::string line = "stage 08 (engine) rank " + std::to_string(rank) + ", ms a step:";
+    char part[64];
+    for (int k = 0; k < kParts; ++k) {
+      std::snprintf(part, sizeof part, " %s %.1f", kNames[k], 1e3 * seconds[k] / steps);
+      line += part;
+    }
+    std::snprintf(part, sizeof part, "; %.0f owned, %.0f ghosts\n", owned / steps, ghosts / steps);
+    std::fputs((line + part).c_str(), stderr);
+  }
+};
+PhaseClock phases;
+
 /// One step on this rank: the five parts above, in order.
 void step(const Box& box, const Ranks& r, Local& s) {
+  double t0 = phases.on ? MPI_Wtime() : 0;
+  const auto lap = [&](int part) {
+    if (!phases.on) return;
+    const double t1 = MPI_Wtime();
+    phases.seconds[part] += t1 - t0;
+    t0 = t1;
+  };
   const Scene sc = scene_of(r, box, s);
+  lap(0);
   share_halo(r, box, sc, s);
+  lap(1);
   std::vector<double> wall;
   CandidateLists cand;
   find_candidates(box, r, sc, s, wall, cand);
+  lap(2);
   const Shared sh = shared_of(r, s, cand);
+  lap(3);
   const std::vector<model::Event> chosen = choose_events(r, s, sh, wall, cand);
+  lap(4);
   apply_events(box, chosen, cand, s);
+  lap(5);
+  phases.owned += s.owned;
+  phases.ghosts += s.size() - s.owned;
+  phases.rank = r.rank;
+  ++phases.steps;
   migrate(r, s);
+  lap(6);
 }
 
 }  // namespace plab::dist
@@ -475,6 +555,7 @@ int stage_worker() {
   StageOptions cpu;
   cpu.device = Device::kCpu;
   make_gpu_stepper(Box{}, none, cpu);
+  dist::isa_in_use = lanes::choose_isa(StageOptions::from_environment().simd);
   return dist::serve(dist::step);
 }
 
@@ -483,6 +564,7 @@ int stage_worker() {
 /// where there is none). `--device auto` is the CPU here: the GPU is asked for, not taken, since
 /// several ranks of one machine would share its GPUs.
 std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions& options) {
+  dist::isa_in_use = lanes::choose_isa(options.simd);
   if (auto gpu = make_gpu_stepper(box, p, options)) return gpu;
   return dist::mpi_stage(box, p, dist::step);
 }
