@@ -245,7 +245,7 @@ inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, i
 template <Isa kIsa>
 inline void test_range(const View& s, std::vector<std::pair<int, int>>& hits, int a, int from,
                        int to, const sweep::Grid& g) {
-  lanes::for_each_close<kIsa>({s.x, s.y, s.vx, s.vy}, a, from, to, g, [&](int b) {
+  lanes::for_each_close<kIsa>({s.x, s.y, s.vx, s.vy}, a, from, to, g, [&hits, a](int b) {
     if (b != a) hits.emplace_back(a, b);
   });
 }
