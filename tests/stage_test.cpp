@@ -331,7 +331,8 @@ constexpr int kRanksSeconds = 240;
 /// Runs this stage's program on `ranks` ranks on `scene_file`; returns its output ("" and a
 /// failure when it fails).
 std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::test::ScratchDir& dir,
-                         const std::string& what, const std::string& options = "") {
+                         const std::string& what, const std::string& options = "",
+                         const std::string& stderr_file = "") {
   if (geteuid() == 0) {  // OpenMPI refuses root unless told twice (containers, CI)
     setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
     setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
@@ -342,7 +343,8 @@ std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::t
   const std::string command = "env TMPDIR=" + dir.file("mpi") + " timeout --kill-after=5 " +
                               std::to_string(kRanksSeconds) + " mpirun --oversubscribe -np " +
                               std::to_string(ranks) + " " + plab::test::kThisProgram + " " +
-                              options + " --quiet --out " + out + " " + scene_file;
+                              options + " --quiet --out " + out + " " + scene_file +
+                              (stderr_file.empty() ? "" : " 2> " + stderr_file);
   std::filesystem::create_directories(dir.file("mpi"));
   plab::test::unwatch();
   const int status = plab::test::run_watched(command);
@@ -393,6 +395,31 @@ INSTANTIATE_TEST_SUITE_P(Datasets, Ranks,
                                           testing::Values(2, 3, 4)),
                          dataset_ranks_name);
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(Ranks);
+
+/// The engine's PLAB_ENGINE_PHASES=1 (handouts/engine-08.md): on 3 ranks, one line of phases from
+/// each rank on stderr, and the golden output all the same.
+TEST(RanksPhases, OneLineEachRank) {
+  if (!plab::stage_info().mpi || plab::stage_info().impl != "engine")
+    GTEST_SKIP() << "PLAB_ENGINE_PHASES is the MPI engine's";
+  const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
+  const std::vector<plab::Dataset> all = rank_datasets();
+  ASSERT_FALSE(all.empty());
+  const plab::Dataset& d = all.front();
+  const plab::test::ScratchDir scratch;
+  const std::string err = scratch.file("stderr.txt");
+  setenv("PLAB_ENGINE_PHASES", "1", 1);
+  const std::string output = run_on_ranks(m.scene_path(d), 3, scratch, "PLAB_ENGINE_PHASES=1", "", err);
+  unsetenv("PLAB_ENGINE_PHASES");
+  expect_same(plab::read_file(m.golden_path(d)), output, m.golden_path(d) + " (phases on 3 ranks)");
+  const std::string text = plab::read_file(err);
+  for (int rank = 0; rank < 3; ++rank) {
+    const std::string head = "stage 08 (engine) rank " + std::to_string(rank) + ", ms a step: scene ";
+    const auto at = text.find(head);
+    ASSERT_NE(at, std::string::npos) << "no phases from rank " << rank << " in:\n" << text;
+    EXPECT_NE(text.find(" ghosts\n", at), std::string::npos) << text;
+    EXPECT_EQ(text.find(head, at + 1), std::string::npos) << "two lines from rank " << rank;
+  }
+}
 
 /// A scene that stresses the cut, on 1 to `most` ranks (with the runner's `options`): the other
 /// stage's solution's text.
