@@ -45,6 +45,32 @@ std::vector<T> all_to_all(const Ranks& r, const std::vector<std::vector<T>>& out
   return in;
 }
 
+/// all_to_all() when this rank knows already how many T's each rank sends it (`recv_count[q]`
+/// from rank q, as that rank's out[this rank] holds): one MPI_Alltoallv, without the exchange of
+/// counts. Every rank must call it with counts that agree, or MPI's data go wrong.
+template <class T>
+std::vector<T> all_to_all_known(const Ranks& r, const std::vector<std::vector<T>>& out,
+                                const std::vector<int>& recv_count) {
+  static_assert(std::is_trivially_copyable_v<T>);
+  const int n = r.ranks;
+  std::vector<int> send_bytes(n), recv_bytes(n), send_at(n), recv_at(n);
+  std::vector<char> send;
+  int total = 0;
+  for (int q = 0; q < n; ++q) {
+    send_at[q] = static_cast<int>(send.size());
+    send_bytes[q] = static_cast<int>(out[q].size() * sizeof(T));
+    const char* data = reinterpret_cast<const char*>(out[q].data());
+    send.insert(send.end(), data, data + send_bytes[q]);
+    recv_at[q] = total;
+    recv_bytes[q] = static_cast<int>(recv_count[q] * sizeof(T));
+    total += recv_bytes[q];
+  }
+  std::vector<T> in(total / sizeof(T));
+  MPI_Alltoallv(send.data(), send_bytes.data(), send_at.data(), MPI_BYTE, in.data(),
+                recv_bytes.data(), recv_at.data(), MPI_BYTE, r.comm);
+  return in;
+}
+
 /// The largest of `v` over every rank.
 inline double max_over_ranks(const Ranks& r, double v) {
   double m = v;

@@ -36,10 +36,12 @@ PairSearch gpu_search = nullptr;
 namespace {
 
 /// What the rounds exchange (shared_of()): only the ghosts that are a candidate partner of an
-/// owned particle are ever read, so only their values travel.
+/// owned particle are ever read, so only their values travel. The counts are the same in every
+/// round of a step, so each exchange is one MPI_Alltoallv, with no exchange of counts first.
 struct Shared {
   std::vector<std::vector<int>> send;  //!< per rank q: the owned particles whose values q reads
   std::vector<int> recv;               //!< the ghosts read here, in the order their values come
+  std::vector<int> recv_count;         //!< per rank q: how many of `recv` come from q
 };
 
 /// Sends, for every rank q, value[k] of each owned particle k in sh.send[q], and writes what
@@ -49,9 +51,17 @@ void share_with_ghosts(const Ranks& r, const Shared& sh, std::vector<T>& value) 
   std::vector<std::vector<T>> out(r.ranks);
   for (int q = 0; q < r.ranks; ++q)
     for (int k : sh.send[q]) out[q].push_back(value[k]);
-  const std::vector<T> in = all_to_all(r, out);
+  const std::vector<T> in = all_to_all_known(r, out, sh.recv_count);
   for (std::size_t j = 0; j < in.size(); ++j) value[sh.recv[j]] = in[j];
 }
+
+/// What a ghost needs of its particle: its state and scene index, not its collision counts (a
+/// pair with a ghost changes the ghost's copy, which the step drops): 40 bytes, not a Record's 56.
+struct Ghost {
+  double x, y, vx, vy;  //!< centre and velocity
+  int id;               //!< its index in the scene
+  int pad = 0;          //!< (keeps the struct a multiple of 8 bytes)
+};
 
 /// What every rank knows of the whole scene at the start of the step (the same on every rank).
 struct Scene {
@@ -99,7 +109,7 @@ double end_of(const Box& box, const Local& s, int k) {
 /// not-a-number sends it everywhere).
 void share_halo(const Ranks& r, const Box& box, const Scene& sc, Local& s) {
   s.sent_to.assign(r.ranks, {});
-  std::vector<std::vector<Record>> out(r.ranks);
+  std::vector<std::vector<Ghost>> out(r.ranks);
   for (int k = 0; k < s.owned; ++k) {
     const double T = end_of(box, s, k);
     if (!(T > 0)) continue;  // its wall comes first: it takes part in no pair
@@ -114,10 +124,11 @@ void share_halo(const Ranks& r, const Box& box, const Scene& sc, Local& s) {
     for (int q = q0; q <= q1; ++q)
       if (q != r.rank && !(hi < sc.lo[q]) && !(lo > sc.hi[q])) {
         s.sent_to[q].push_back(k);
-        out[q].push_back(s.record(k));
+        out[q].push_back(Ghost{s.p.x[k], s.p.y[k], s.p.vx[k], s.p.vy[k], s.id[k]});
       }
   }
-  for (const Record& rec : all_to_all(r, out, &s.ghosts_from)) s.push(rec);
+  for (const Ghost& g : all_to_all(r, out, &s.ghosts_from))
+    s.push(Record{g.x, g.y, g.vx, g.vy, 0, 0, g.id});
   for (int& start : s.ghosts_from) start += s.owned;
 }
 
@@ -382,12 +393,14 @@ Shared shared_of(const Ranks& r, const Local& s, const CandidateLists& cand) {
   for (int i = 0; i < s.owned; ++i)
     for (int k = cand.start[i]; k < cand.start[i + 1]; ++k) read[cand.other[k]] = 1;
   Shared sh;
+  sh.recv_count.assign(r.ranks, 0);
   std::vector<std::vector<int>> ask(r.ranks);  // positions in the owner's list s.sent_to[q]
   for (int q = 0; q < r.ranks; ++q)
     for (int g = s.ghosts_from[q]; g < s.ghosts_from[q + 1]; ++g)
       if (read[g]) {
         ask[q].push_back(g - s.ghosts_from[q]);
         sh.recv.push_back(g);
+        ++sh.recv_count[q];
       }
   std::vector<int> from;
   const std::vector<int> asked = all_to_all(r, ask, &from);
