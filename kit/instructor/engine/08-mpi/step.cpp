@@ -63,33 +63,68 @@ struct Ghost {
   int pad = 0;          //!< (keeps the struct a multiple of 8 bytes)
 };
 
-/// What every rank knows of the whole scene at the start of the step (the same on every rank).
-struct Scene {
-  double vx = 0;                   //!< the largest |vx| of any particle (length per step)
-  double margin = 0;               //!< the rounding margin m (sweep.hpp's, for the fastest speed)
-  std::vector<double> lo;          //!< per rank: the least x of its owned particles (+inf: none)
-  std::vector<double> hi;          //!< per rank: the greatest x of its owned particles
-  double n = 0;                    //!< particles in the scene
+/// The engine's cut of the box: R ranks as a grid of px x py blocks, as square as R allows (py
+/// the largest divisor of R up to sqrt(R): 4 x 4 at 16 ranks, 4 x 2 at 8, 3 x 1 at 3). A block's
+/// border is shorter than a slab's (at 16 ranks, 4 sides of L/4 against 2 of L), and so is its
+/// halo. Not the kit's cut (Ranks::owner_of(), slabs), which the scatter uses: the first step's
+/// migration moves the particles to their blocks, and nothing before it needs them there (the
+/// halo follows where each rank's particles are, not where its block is).
+struct Blocks {
+  int px = 1, py = 1;  //!< blocks across x and across y
+  double L = 1;        //!< the box side
+
+  Blocks(const Ranks& r, const Box& box) : L(box.L) {
+    for (int d = 1; d * d <= r.ranks; ++d)
+      if (r.ranks % d == 0) py = d;
+    px = r.ranks / py;
+  }
+  /// The block of `v` among `parts` equal parts of [0, L) (outside: the first or last one; a
+  /// not-a-number: the first), as Ranks::owner_of() cuts x.
+  [[nodiscard]] int part(double v, int parts) const {
+    const double k = v / (L / parts);
+    return k >= parts ? parts - 1 : (k >= 1 ? static_cast<int>(k) : 0);
+  }
+  /// The rank that owns a particle whose centre is at (x, y): block row by y, column by x.
+  [[nodiscard]] int owner_of(double x, double y) const { return part(y, py) * px + part(x, px); }
 };
 
-/// The Scene, from every rank's owned particles (two reductions and one exchange).
+/// What every rank knows of the whole scene at the start of the step (the same on every rank).
+struct Scene {
+  double vx = 0;           //!< the largest |vx| of any particle (length per step)
+  double vy = 0;           //!< the largest |vy| of any particle
+  double margin = 0;       //!< the rounding margin m (sweep.hpp's, for the fastest speed)
+  std::vector<double> lo;  //!< per rank: the least x of its owned particles (+inf: none)
+  std::vector<double> hi;  //!< per rank: the greatest x of its owned particles
+  std::vector<double> ylo;  //!< per rank: the least y of its owned particles (+inf: none)
+  std::vector<double> yhi;  //!< per rank: the greatest y of its owned particles
+  double n = 0;            //!< particles in the scene
+};
+
+/// The Scene, from every rank's owned particles (three reductions and one exchange).
 Scene scene_of(const Ranks& r, const Box& box, const Local& s) {
   Scene sc;
-  double v2 = 0, lo = HUGE_VAL, hi = -HUGE_VAL;
+  double v2 = 0, lo = HUGE_VAL, hi = -HUGE_VAL, ylo = HUGE_VAL, yhi = -HUGE_VAL;
   for (int k = 0; k < s.owned; ++k) {
     sc.vx = std::fmax(sc.vx, std::fabs(s.p.vx[k]));
+    sc.vy = std::fmax(sc.vy, std::fabs(s.p.vy[k]));
     v2 = std::fmax(v2, s.p.vx[k] * s.p.vx[k] + s.p.vy[k] * s.p.vy[k]);
     lo = std::fmin(lo, s.p.x[k]);
     hi = std::fmax(hi, s.p.x[k]);
+    ylo = std::fmin(ylo, s.p.y[k]);
+    yhi = std::fmax(yhi, s.p.y[k]);
   }
   sc.vx = max_over_ranks(r, sc.vx);
+  sc.vy = max_over_ranks(r, sc.vy);
   sc.margin = 1e-6 * (box.L + std::sqrt(max_over_ranks(r, v2)) + box.r);
-  const std::vector<std::vector<double>> mine(r.ranks, std::vector<double>{lo, hi, 1.0 * s.owned});
+  const std::vector<std::vector<double>> mine(
+      r.ranks, std::vector<double>{lo, hi, ylo, yhi, 1.0 * s.owned});
   const std::vector<double> all = all_to_all(r, mine);
   for (int q = 0; q < r.ranks; ++q) {
-    sc.lo.push_back(all[3 * q]);
-    sc.hi.push_back(all[3 * q + 1]);
-    sc.n += all[3 * q + 2];
+    sc.lo.push_back(all[5 * q]);
+    sc.hi.push_back(all[5 * q + 1]);
+    sc.ylo.push_back(all[5 * q + 2]);
+    sc.yhi.push_back(all[5 * q + 3]);
+    sc.n += all[5 * q + 4];
   }
   return sc;
 }
@@ -104,25 +139,23 @@ double end_of(const Box& box, const Local& s, int k) {
 /// walls in this step. Owned particle k whose path ends at T = end_of(k) (T <= 0: it meets
 /// nobody) is at x_k + t vx_k at time t <= T; a partner of rank q is then within sc.vx t of
 /// [sc.lo[q], sc.hi[q]]. That range grows at least as fast as k moves (sc.vx >= |vx_k|), so if
-/// they can meet at some t <= T, k is also within reach of it at T: k goes to q when
-/// [x_k + T vx_k -+ (T sc.vx + 2r + 2m)] meets [sc.lo[q], sc.hi[q]] (handout 08 proves it; a
-/// not-a-number sends it everywhere).
+/// they can meet at some t <= T, k is also within reach of it at T: k can meet one of q's only
+/// if [x_k + T vx_k -+ (T sc.vx + 2r + 2m)] meets [sc.lo[q], sc.hi[q]] (handout 08 proves it),
+/// and, by the same argument in y, [y_k + T vy_k -+ (T sc.vy + 2r + 2m)] meets
+/// [sc.ylo[q], sc.yhi[q]]: k goes to q when both do (a not-a-number sends it everywhere).
 void share_halo(const Ranks& r, const Box& box, const Scene& sc, Local& s) {
   s.sent_to.assign(r.ranks, {});
   std::vector<std::vector<Ghost>> out(r.ranks);
   for (int k = 0; k < s.owned; ++k) {
     const double T = end_of(box, s, k);
     if (!(T > 0)) continue;  // its wall comes first: it takes part in no pair
-    const double at = s.p.x[k] + T * s.p.vx[k];
+    const double at = s.p.x[k] + T * s.p.vx[k], yat = s.p.y[k] + T * s.p.vy[k];
     const double cover = (T * sc.vx + 2 * box.r + 2 * sc.margin) * (1 + 1e-9);
-    const double lo = at - cover, hi = at + cover;
-    int q0 = 0, q1 = r.ranks - 1;  // owner_of() is monotone: only these ranks' x can be in reach
-    if (lo == lo && hi == hi) {
-      q0 = r.owner_of(std::clamp(lo, 0.0, box.L));
-      q1 = r.owner_of(std::clamp(hi, 0.0, box.L));
-    }
-    for (int q = q0; q <= q1; ++q)
-      if (q != r.rank && !(hi < sc.lo[q]) && !(lo > sc.hi[q])) {
+    const double ycover = (T * sc.vy + 2 * box.r + 2 * sc.margin) * (1 + 1e-9);
+    const double lo = at - cover, hi = at + cover, ylo = yat - ycover, yhi = yat + ycover;
+    for (int q = 0; q < r.ranks; ++q)
+      if (q != r.rank && !(hi < sc.lo[q]) && !(lo > sc.hi[q]) && !(yhi < sc.ylo[q]) &&
+          !(ylo > sc.yhi[q])) {
         s.sent_to[q].push_back(k);
         out[q].push_back(Ghost{s.p.x[k], s.p.y[k], s.p.vx[k], s.p.vy[k], s.id[k]});
       }
@@ -321,18 +354,29 @@ void search(const Entries& e, int owned, const sweep::Grid& g,
   search_cells<lanes::Isa::kPortable>(e, owned, g, hits);
 }
 
-/// The first time slab in which a ghost at `x` moving at `vx` can meet a particle of rank q:
-/// q's particles are within sc.vx t of [sc.lo[q], sc.hi[q]] at time t, and the gap between the
-/// ghost and that range, less 2r + 2m, closes at vx + sc.vx from the left (sc.vx - vx from the
-/// right). Slabs before the time it closes need not hold the ghost. (0 when unsure.)
-int first_slab(const Box& box, const Scene& sc, int q, double x, double vx, const sweep::Grid& g) {
+/// When the gap between a ghost at `x` moving at `v` and the range [lo, hi] that grows at `speed`
+/// on each side, less `c` = 2r + 2m, can have closed, along one axis: it closes at v + speed
+/// from the left (speed - v from the right); 0 when the ghost is within reach already (or
+/// unsure).
+double gap_closes(double x, double v, double lo, double hi, double speed, double c) {
+  const double left = (lo - c) - x, right = x - (hi + c);
+  if (left > 0) return left / (v + speed);
+  if (right > 0) return right / (speed - v);
+  return 0;
+}
+
+/// The first time slab in which a ghost at (x, y) moving at (vx, vy) can meet a particle of rank
+/// q: q's particles are within sc.vx t of [sc.lo[q], sc.hi[q]] in x and within sc.vy t of
+/// [sc.ylo[q], sc.yhi[q]] in y at time t, and the ghost can meet one only once both gaps have
+/// closed (gap_closes()). Slabs before that time need not hold the ghost. (0 when unsure.)
+int first_slab(const Box& box, const Scene& sc, int q, double x, double y, double vx, double vy,
+               const sweep::Grid& g) {
   const double c = 2 * box.r + 2 * sc.margin;
-  const double left = (sc.lo[q] - c) - x, right = x - (sc.hi[q] + c);
-  double t = 0;
-  if (left > 0) t = left / (vx + sc.vx);
-  else if (right > 0) t = right / (sc.vx - vx);
-  t *= 1 - 1e-9;
-  if (!(t > 0)) return 0;  // also not-a-number
+  const double tx = gap_closes(x, vx, sc.lo[q], sc.hi[q], sc.vx, c);
+  const double ty = gap_closes(y, vy, sc.ylo[q], sc.yhi[q], sc.vy, c);
+  if (tx != tx || ty != ty) return 0;  // a not-a-number: unsure
+  const double t = (tx > ty ? tx : ty) * (1 - 1e-9);
+  if (!(t > 0)) return 0;
   return t >= 1 ? g.slabs : static_cast<int>(std::fmin(std::floor(t * g.slabs), g.slabs));
 }
 
@@ -356,7 +400,8 @@ void find_candidates(const Box& box, const Ranks& r, const Scene& sc, const Loca
   for (int i = 0; i < n; ++i) {
     last[i] = sweep::last_slab(end[i], lg.g);
     reach[i] = sweep::search_of(p.vx[i], p.vy[i], lg.g);
-    if (i >= s.owned) first[i] = first_slab(box, sc, r.rank, p.x[i], p.vx[i], lg.g);
+    if (i >= s.owned)
+      first[i] = first_slab(box, sc, r.rank, p.x[i], p.y[i], p.vx[i], p.vy[i], lg.g);
   }
   std::vector<std::vector<FoundPair>> found(1);
   if (r.gpu) {  // the same search and narrow phase on this rank's GPU (step.cu)
@@ -480,12 +525,14 @@ void apply_events(const Box& box, const std::vector<model::Event>& chosen,
   }
 }
 
-/// 5. Migration: every owned particle now in another rank's slab goes there; ghosts are dropped.
-void migrate(const Ranks& r, Local& s) {
+/// 5. Migration: every owned particle now in another rank's block goes there (Blocks); ghosts
+/// are dropped.
+void migrate(const Ranks& r, const Box& box, Local& s) {
+  const Blocks blocks(r, box);
   std::vector<std::vector<Record>> out(r.ranks);
   Local kept;
   for (int k = 0; k < s.owned; ++k) {
-    const int q = r.owner_of(s.p.x[k]);
+    const int q = blocks.owner_of(s.p.x[k], s.p.y[k]);
     if (q == r.rank) kept.push(s.record(k));
     else out[q].push_back(s.record(k));
   }
@@ -551,7 +598,7 @@ void step(const Box& box, const Ranks& r, Local& s) {
   phases.ghosts += s.size() - s.owned;
   phases.rank = r.rank;
   ++phases.steps;
-  migrate(r, s);
+  migrate(r, box, s);
   lap(6);
 }
 
