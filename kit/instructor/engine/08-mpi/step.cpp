@@ -1,11 +1,11 @@
 /// \file kit/instructor/engine/08-mpi/step.cpp
 /// \brief Stage 08's engine (instructor-only: the kit's fast version of the stage, whose code
-/// holds the answers of stage 08's exercises and of earlier stages'): the box cut into slabs, one
-/// per rank; each rank steps the particles whose centre lies in its slab, with copies of the other
+/// holds the answers of stage 08's exercises and of earlier stages'): the box cut into blocks, one
+/// per rank (Blocks); each rank steps the particles whose centre lies in its block, with copies of the other
 /// ranks' particles that can meet them before their walls (the halo), finds its candidates with
 /// stage 06's space-time grid (on the CPU, or on one GPU per rank: step.cu), chooses the events by
 /// stage 03's mutual-earliest rounds across ranks, sharing only the values of the ghosts that are
-/// some owned particle's candidate partner, and hands the particles that left its slab to their
+/// some owned particle's candidate partner, and hands the particles that left its block to their
 /// new owners. Same bits as stages 01-06 at any rank count. handouts/engine-08.md measures it.
 ///
 /// One step, on each rank:
@@ -14,7 +14,7 @@
 ///  2. candidates: walls of the owned particles, pairs with an owned one (stage 06's grid);
 ///  3. the rounds of stage 03 across ranks (share_with_ghosts(), any_rank());
 ///  4. apply (a pair with a ghost: both owners compute it, each keeps its own particle);
-///  5. migration: particles now in another rank's slab move there (any rank, any distance).
+///  5. migration: particles now in another rank's block move there (any rank, any distance).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
