@@ -63,30 +63,121 @@ struct Ghost {
   int pad = 0;          //!< (keeps the struct a multiple of 8 bytes)
 };
 
-/// The engine's cut of the box: R ranks as a grid of px x py blocks, as square as R allows (py
-/// the largest divisor of R up to sqrt(R): 4 x 4 at 16 ranks, 4 x 2 at 8, 3 x 1 at 3). A block's
-/// border is shorter than a slab's (at 16 ranks, 4 sides of L/4 against 2 of L), and so is its
-/// halo. Not the kit's cut (Ranks::owner_of(), slabs), which the scatter uses: the first step's
-/// migration moves the particles to their blocks, and nothing before it needs them there (the
-/// halo follows where each rank's particles are, not where its block is).
+/// The engine's cut of the box: R ranks as a grid of px x py blocks (py the largest divisor of
+/// R up to sqrt(R): 4 x 4 at 16 ranks, 4 x 2 at 8, 3 x 1 at 3), rank row * px + column. A
+/// block's border is shorter than a slab's (at 16 ranks, 4 sides of L/4 against 2 of L), and so
+/// is its halo. The cuts start even and move with the load (rebalance()): a column's cuts in x,
+/// then each column's cuts in y. Not the kit's cut (Ranks::owner_of(), slabs), which the scatter
+/// uses: the first step's migration moves the particles to their blocks, and nothing needs them
+/// there at any time (the halo follows where each rank's particles are, not where its block is),
+/// so any cuts give the same bits; every rank computes the same cuts from the same numbers.
 struct Blocks {
   int px = 1, py = 1;  //!< blocks across x and across y
-  double L = 1;        //!< the box side
+  double L = 0;        //!< the box side
+  int ranks = 0;       //!< R
+  std::vector<double> xcut;               //!< px + 1 column cuts, 0 .. L
+  std::vector<std::vector<double>> ycut;  //!< per column: py + 1 row cuts, 0 .. L
 
-  Blocks(const Ranks& r, const Box& box) : L(box.L) {
-    for (int d = 1; d * d <= r.ranks; ++d)
-      if (r.ranks % d == 0) py = d;
-    px = r.ranks / py;
+  /// Even cuts for `r` ranks in `box`, unless they are set for them already.
+  void fit(const Ranks& r, const Box& box) {
+    if (ranks == r.ranks && L == box.L) return;
+    ranks = r.ranks;
+    L = box.L;
+    py = 1;
+    for (int d = 1; d * d <= ranks; ++d)
+      if (ranks % d == 0) py = d;
+    px = ranks / py;
+    xcut = even(px);
+    ycut.assign(px, even(py));
   }
-  /// The block of `v` among `parts` equal parts of [0, L) (outside: the first or last one; a
-  /// not-a-number: the first), as Ranks::owner_of() cuts x.
-  [[nodiscard]] int part(double v, int parts) const {
-    const double k = v / (L / parts);
-    return k >= parts ? parts - 1 : (k >= 1 ? static_cast<int>(k) : 0);
+  /// `parts` + 1 even cuts of [0, L].
+  [[nodiscard]] std::vector<double> even(int parts) const {
+    std::vector<double> cut(parts + 1);
+    for (int k = 0; k <= parts; ++k) cut[k] = L * k / parts;
+    return cut;
   }
-  /// The rank that owns a particle whose centre is at (x, y): block row by y, column by x.
-  [[nodiscard]] int owner_of(double x, double y) const { return part(y, py) * px + part(x, px); }
+  /// The part k of `cut` with cut[k] <= v < cut[k + 1] (below the first: 0; from the last: the
+  /// last part; a not-a-number: 0).
+  static int part(const std::vector<double>& cut, double v) {
+    int k = 0;
+    const int parts = static_cast<int>(cut.size()) - 1;
+    while (k + 1 < parts && v >= cut[k + 1]) ++k;
+    return k;
+  }
+  /// The rank that owns a particle whose centre is at (x, y).
+  [[nodiscard]] int owner_of(double x, double y) const {
+    const int column = part(xcut, x);
+    return part(ycut[column], y) * px + column;
+  }
+  /// Moves the cuts halfway towards a share of the particles for each rank in proportion to its
+  /// speed (`done[k]` particles searched in `seconds[k]` on rank k, the last step; a rank with
+  /// neither counts at the mean speed). `owned[k]`: the particles rank k owns now, taken as spread
+  /// evenly over its block (what the new cuts need of the particles' positions).
+  void rebalance(const std::vector<double>& owned, const std::vector<double>& done,
+                 const std::vector<double>& seconds);
 };
+
+/// The cut of [lo, hi] parts `cut` that leaves `share[0..k)` of `count`'s total below cut k,
+/// `count[j]` spread evenly over part j; each cut moved halfway from where it is.
+void move_cuts(std::vector<double>& cut, const std::vector<double>& count,
+               const std::vector<double>& share) {
+  const int parts = static_cast<int>(count.size());
+  double total = 0, total_share = 0;
+  for (int j = 0; j < parts; ++j) total += count[j], total_share += share[j];
+  if (!(total > 0) || !(total_share > 0)) return;
+  std::vector<double> next = cut;
+  double want = 0, below = 0;
+  int j = 0;
+  for (int k = 1; k < parts; ++k) {
+    want += total * share[k - 1] / total_share;
+    while (j < parts - 1 && below + count[j] < want) below += count[j++];
+    const double f = count[j] > 0 ? std::clamp((want - below) / count[j], 0.0, 1.0) : 0.0;
+    const double target = cut[j] + f * (cut[j + 1] - cut[j]);
+    next[k] = std::max(next[k - 1], cut[k] + 0.5 * (target - cut[k]));
+  }
+  cut = next;
+}
+
+void Blocks::rebalance(const std::vector<double>& owned, const std::vector<double>& done,
+                       const std::vector<double>& seconds) {
+  std::vector<double> speed(ranks, 0);
+  double sum = 0;
+  int known = 0;
+  for (int k = 0; k < ranks; ++k)
+    if (done[k] > 0 && seconds[k] > 0 && std::isfinite(done[k] / seconds[k])) {
+      speed[k] = done[k] / seconds[k];
+      sum += speed[k];
+      ++known;
+    }
+  if (known == 0) return;
+  for (int k = 0; k < ranks; ++k)
+    if (speed[k] == 0) speed[k] = sum / known;
+  std::vector<double> column_count(px, 0), column_speed(px, 0);
+  for (int k = 0; k < ranks; ++k) {
+    column_count[k % px] += owned[k];
+    column_speed[k % px] += speed[k];
+  }
+  move_cuts(xcut, column_count, column_speed);
+  for (int c = 0; c < px; ++c) {
+    std::vector<double> count(py), share(py);
+    for (int row = 0; row < py; ++row) {
+      count[row] = owned[row * px + c];
+      share[row] = speed[row * px + c];
+    }
+    move_cuts(ycut[c], count, share);
+  }
+}
+
+/// The cuts of this process's run, kept from step to step (fit() sets them even for a new box or
+/// rank count), and what this rank measured of its last step for rebalance().
+struct Balance {
+  Blocks blocks;
+  double done = 0;     //!< particles this rank owned in its last step's search
+  double seconds = 0;  //!< that search's time (find_candidates())
+  bool on = !(std::getenv("PLAB_ENGINE_BALANCE") &&
+              std::string(std::getenv("PLAB_ENGINE_BALANCE")) == "off");
+};
+Balance balance;
 
 /// What every rank knows of the whole scene at the start of the step (the same on every rank).
 struct Scene {
@@ -97,6 +188,9 @@ struct Scene {
   std::vector<double> hi;  //!< per rank: the greatest x of its owned particles
   std::vector<double> ylo;  //!< per rank: the least y of its owned particles (+inf: none)
   std::vector<double> yhi;  //!< per rank: the greatest y of its owned particles
+  std::vector<double> owned;    //!< per rank: the particles it owns
+  std::vector<double> done;     //!< per rank: the particles it owned in its last step's search
+  std::vector<double> seconds;  //!< per rank: that search's time (Balance)
   double n = 0;            //!< particles in the scene
 };
 
@@ -117,14 +211,19 @@ Scene scene_of(const Ranks& r, const Box& box, const Local& s) {
   sc.vy = max_over_ranks(r, sc.vy);
   sc.margin = 1e-6 * (box.L + std::sqrt(max_over_ranks(r, v2)) + box.r);
   const std::vector<std::vector<double>> mine(
-      r.ranks, std::vector<double>{lo, hi, ylo, yhi, 1.0 * s.owned});
+      r.ranks,
+      std::vector<double>{lo, hi, ylo, yhi, 1.0 * s.owned, balance.done, balance.seconds});
   const std::vector<double> all = all_to_all(r, mine);
   for (int q = 0; q < r.ranks; ++q) {
-    sc.lo.push_back(all[5 * q]);
-    sc.hi.push_back(all[5 * q + 1]);
-    sc.ylo.push_back(all[5 * q + 2]);
-    sc.yhi.push_back(all[5 * q + 3]);
-    sc.n += all[5 * q + 4];
+    const double* at = &all[7 * q];
+    sc.lo.push_back(at[0]);
+    sc.hi.push_back(at[1]);
+    sc.ylo.push_back(at[2]);
+    sc.yhi.push_back(at[3]);
+    sc.owned.push_back(at[4]);
+    sc.done.push_back(at[5]);
+    sc.seconds.push_back(at[6]);
+    sc.n += at[4];
   }
   return sc;
 }
@@ -525,10 +624,9 @@ void apply_events(const Box& box, const std::vector<model::Event>& chosen,
   }
 }
 
-/// 5. Migration: every owned particle now in another rank's block goes there (Blocks); ghosts
+/// 5. Migration: every owned particle now in another rank's block goes there (`blocks`); ghosts
 /// are dropped.
-void migrate(const Ranks& r, const Box& box, Local& s) {
-  const Blocks blocks(r, box);
+void migrate(const Ranks& r, const Blocks& blocks, Local& s) {
   std::vector<std::vector<Record>> out(r.ranks);
   Local kept;
   for (int k = 0; k < s.owned; ++k) {
@@ -581,12 +679,17 @@ void step(const Box& box, const Ranks& r, Local& s) {
     t0 = t1;
   };
   const Scene sc = scene_of(r, box, s);
+  balance.blocks.fit(r, box);
+  if (balance.on) balance.blocks.rebalance(sc.owned, sc.done, sc.seconds);
   lap(0);
   share_halo(r, box, sc, s);
   lap(1);
   std::vector<double> wall;
   CandidateLists cand;
+  const double search_from = MPI_Wtime();
   find_candidates(box, r, sc, s, wall, cand);
+  balance.done = s.owned;
+  balance.seconds = MPI_Wtime() - search_from;
   lap(2);
   const Shared sh = shared_of(r, s, cand);
   lap(3);
@@ -598,7 +701,7 @@ void step(const Box& box, const Ranks& r, Local& s) {
   phases.ghosts += s.size() - s.owned;
   phases.rank = r.rank;
   ++phases.steps;
-  migrate(r, box, s);
+  migrate(r, balance.blocks, s);
   lap(6);
 }
 
