@@ -9,12 +9,15 @@
 /// new owners. Same bits as stages 01-06 at any rank count. handouts/engine-08.md measures it.
 ///
 /// One step, on each rank:
+///  0. the scene's extent and speeds, and the blocks' cuts moved towards each rank's measured
+///     speed (Blocks::rebalance());
 ///  1. the halo: copies of its particles that could meet one of another rank's before their walls
 ///     (where a particle is when its path ends, widened by what any partner covers by then);
 ///  2. candidates: walls of the owned particles, pairs with an owned one (stage 06's grid);
 ///  3. the rounds of stage 03 across ranks (share_with_ghosts(), any_rank());
 ///  4. apply (a pair with a ghost: both owners compute it, each keeps its own particle);
-///  5. migration: particles now in another rank's block move there (any rank, any distance).
+///  5. migration: particles now in another rank's block move there (any rank, any distance), and
+///     each rank keeps its own in the order of place (order_by_place()).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
