@@ -14,40 +14,10 @@
 namespace plab::dist {
 
 /// Sends out[q] to rank q, for every q, and returns what every rank sent to this one,
-/// concatenated in rank order; `from` (R + 1 entries) gets where each rank's part starts.
-/// `T` must be trivially copyable.
-template <class T>
-std::vector<T> all_to_all(const Ranks& r, const std::vector<std::vector<T>>& out,
-                          std::vector<int>* from = nullptr) {
-  static_assert(std::is_trivially_copyable_v<T>);
-  const int n = r.ranks;
-  std::vector<int> send_bytes(n), recv_bytes(n), send_at(n), recv_at(n);
-  std::vector<char> send;
-  for (int q = 0; q < n; ++q) {
-    send_at[q] = static_cast<int>(send.size());
-    send_bytes[q] = static_cast<int>(out[q].size() * sizeof(T));
-    const char* data = reinterpret_cast<const char*>(out[q].data());
-    send.insert(send.end(), data, data + send_bytes[q]);
-  }
-  MPI_Alltoall(send_bytes.data(), 1, MPI_INT, recv_bytes.data(), 1, MPI_INT, r.comm);
-  int total = 0;
-  for (int q = 0; q < n; ++q) {
-    recv_at[q] = total;
-    total += recv_bytes[q];
-  }
-  std::vector<T> in(total / sizeof(T));
-  MPI_Alltoallv(send.data(), send_bytes.data(), send_at.data(), MPI_BYTE, in.data(),
-                recv_bytes.data(), recv_at.data(), MPI_BYTE, r.comm);
-  if (from) {
-    from->assign(n + 1, 0);
-    for (int q = 0; q < n; ++q) (*from)[q + 1] = (*from)[q] + recv_bytes[q] / sizeof(T);
-  }
-  return in;
-}
-
-/// all_to_all() when this rank knows already how many T's each rank sends it (`recv_count[q]`
-/// from rank q, as that rank's out[this rank] holds): one MPI_Alltoallv, without the exchange of
-/// counts. Every rank must call it with counts that agree, or MPI's data go wrong.
+/// concatenated in rank order, when this rank knows already how many T's each rank sends it
+/// (`recv_count[q]` from rank q, as that rank's out[this rank] holds): one MPI_Alltoallv. Every
+/// rank must call it with counts that agree, or MPI's data go wrong. `T` must be trivially
+/// copyable.
 template <class T>
 std::vector<T> all_to_all_known(const Ranks& r, const std::vector<std::vector<T>>& out,
                                 const std::vector<int>& recv_count) {
@@ -69,6 +39,22 @@ std::vector<T> all_to_all_known(const Ranks& r, const std::vector<std::vector<T>
   MPI_Alltoallv(send.data(), send_bytes.data(), send_at.data(), MPI_BYTE, in.data(),
                 recv_bytes.data(), recv_at.data(), MPI_BYTE, r.comm);
   return in;
+}
+
+/// all_to_all_known() when the counts are not known: every rank first tells every rank how many
+/// T's it sends it (MPI_Alltoall). `from` (R + 1 entries) gets where each rank's part starts.
+template <class T>
+std::vector<T> all_to_all(const Ranks& r, const std::vector<std::vector<T>>& out,
+                          std::vector<int>* from = nullptr) {
+  const int n = r.ranks;
+  std::vector<int> send_count(n), recv_count(n);
+  for (int q = 0; q < n; ++q) send_count[q] = static_cast<int>(out[q].size());
+  MPI_Alltoall(send_count.data(), 1, MPI_INT, recv_count.data(), 1, MPI_INT, r.comm);
+  if (from) {
+    from->assign(n + 1, 0);
+    for (int q = 0; q < n; ++q) (*from)[q + 1] = (*from)[q] + recv_count[q];
+  }
+  return all_to_all_known(r, out, recv_count);
 }
 
 /// The largest of `v` over every rank.
