@@ -65,11 +65,13 @@ plab::MakeStepper this_stage() {
   };
 }
 
-/// Why this stage cannot run here ("" when it can): a stage that needs a GPU is started once on
-/// one particle, and its NoDevice says why not.
+/// Why this stage cannot run here ("" when it can): a stage that needs a GPU, or a run that asks
+/// for the GPU path (PLAB_DEVICE=gpu), is started once on one particle, and its NoDevice says why
+/// not.
 std::string missing_device() {
   static const std::string why = [] {
-    if (!plab::stage_info().needs_gpu) return std::string();
+    if (!plab::stage_info().needs_gpu && stage_options.device != plab::Device::kGpu)
+      return std::string();
     plab::Particles p;
     p.resize(1);
     p.x[0] = p.y[0] = 5;

@@ -209,6 +209,8 @@ constexpr int kFastTeam = 8;         //!< threads that search together for one f
 enum class Search {
   kBatched,  //!< four entries loaded at a time, up to 128 registers a thread (two blocks an SM)
   kLean,     //!< one entry at a time, at most 64 registers a thread (four blocks an SM)
+  kBalanced, //!< the slow entries: a warp's tests shared evenly by its lanes
+             //!< (find_pairs_balanced()); the fast ones: lean
 };
 /// Entries test_entries() loads at a time with search shape `S`.
 template <Search S>
@@ -249,10 +251,84 @@ __global__ void __launch_bounds__(kSearchThreads, kBlocksOf<S>)
                               row[(y + 1) * columns + x1 + 1]);
 }
 
-/// The search of the fast entries find_pairs listed (`flags->fast` of them in `a.rank`): a team
-/// of kFastTeam threads for each, sharing every run of entries within its reach, one run per
-/// row (a pair found twice is harmless); any grid, the teams stride over the list. Search shape
-/// `S` (Search).
+/// What a lane of find_pairs_balanced() tells the rest of its warp: its entry and the two runs
+/// it searches, as a span of the warp's tests.
+struct LaneRuns {
+  double x, y, vx, vy;  //!< the entry's midpoint position and velocity
+  int e;                //!< the entry
+  int first;            //!< the first of its row's later entries it searches (e + 1)
+  int next_row;         //!< where its run in the next row starts
+  int row_tests;        //!< entries of the run in its own row (the rest are in the next row)
+  int from, to;         //!< its tests are the warp's tests [from, to)
+};
+
+/// find_pairs() with a warp's tests shared evenly by its 32 lanes. Each lane takes an entry, as
+/// in find_pairs(), and finds its two runs (a fast entry is listed for find_fast_pairs() and has
+/// none); the warp lays the runs end to end (a prefix sum of their lengths), and lane l takes the
+/// warp's tests l, l + 32, l + 64, ...: every lane tests as many entries as the next, where
+/// find_pairs() keeps a warp until its longest run ends, and the 32 lanes read 32 consecutive
+/// entries of a run together. The same entries are tested with the same arithmetic, so the same
+/// pairs are filed.
+__global__ void __launch_bounds__(kSearchThreads, 4)
+    find_pairs_balanced(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
+  namespace cg = cooperative_groups;
+  __shared__ LaneRuns lanes[kSearchThreads];
+  if (a.flags->overflow) return;  // the same for every thread: written before this kernel
+  const int lane = static_cast<int>(threadIdx.x % 32);
+  LaneRuns* warp = lanes + (threadIdx.x - lane);  // this warp's lanes
+  const int e = blockIdx.x * blockDim.x + threadIdx.x;
+  int count = 0;  // this lane's tests
+  LaneRuns mine{};
+  if (e < a.start[d.slabs * d.cells]) {
+    const Entry me = a.entry[e];
+    const sweep::Search q = sweep::search_of(me.vx, me.vy, d.g);
+    if (q.fast) {  // one atomic for the fast threads of the warp
+      const cg::coalesced_group fast = cg::coalesced_threads();
+      int first = 0;
+      if (fast.thread_rank() == 0)
+        first = atomicAdd(&a.flags->fast, static_cast<int>(fast.size()));
+      a.rank[fast.shfl(first, 0) + static_cast<int>(fast.thread_rank())] = e;
+    } else {
+      const int columns = d.g.columns;
+      const int* row = a.start + (slab_of(a, d, p.n, e) - d.first) * d.cells;  // its slab's cells
+      int x0, x1;
+      sweep::columns_within(me.x, q.d, d.g, x0, x1);
+      const int y = sweep::row_of(me.y, d.g);
+      mine = LaneRuns{me.x, me.y, me.vx, me.vy, e, e + 1, 0, 0, 0, 0};
+      mine.row_tests = max(0, row[y * columns + x1 + 1] - (e + 1));
+      count = mine.row_tests;
+      if (y + 1 < d.g.rows) {
+        mine.next_row = row[(y + 1) * columns + x0];
+        count += max(0, row[(y + 1) * columns + x1 + 1] - mine.next_row);
+      }
+    }
+  }
+  int end = count;  // the warp's prefix sum of the counts, this lane included
+  for (int step = 1; step < 32; step <<= 1) {
+    const int before = __shfl_up_sync(0xffffffffu, end, step);
+    if (lane >= step) end += before;
+  }
+  const int total = __shfl_sync(0xffffffffu, end, 31);
+  mine.from = end - count;
+  mine.to = end;
+  warp[lane] = mine;
+  __syncwarp();
+  int owner = 0;  // the lane whose entry test t belongs to: the warp's tests go in lane order
+  for (int t = lane; t < total; t += 32) {
+    while (t >= warp[owner].to) ++owner;
+    const LaneRuns& r = warp[owner];
+    const int j = t - r.from;
+    const int f = j < r.row_tests ? r.first + j : r.next_row + (j - r.row_tests);
+    const Entry o = a.entry[f];
+    if (sweep::close_in_slab(r.x - o.x, r.y - o.y, r.vx - o.vx, r.vy - o.vy, d.g))
+      file_pair(p, box, a, d, particle_of(a, p.n, r.e), slab_of(a, d, p.n, r.e), f);
+  }
+}
+
+/// The search of the fast entries find_pairs or find_pairs_balanced listed (`flags->fast` of them
+/// in `a.rank`): a team of kFastTeam threads for each, sharing every run of entries within its
+/// reach, one run per row (a pair found twice is harmless); any grid, the teams stride over the
+/// list. Search shape `S` (Search).
 template <Search S>
 __global__ void __launch_bounds__(kSearchThreads, kBlocksOf<S>)
     find_fast_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {

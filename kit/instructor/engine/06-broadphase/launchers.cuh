@@ -55,14 +55,32 @@ inline void find_pairs_as(const cuda::ParticlesView& p, const Box& box,
   PLAB_CUDA_CHECK_LAUNCH("find_fast_pairs");
 }
 
-/// find_pairs_as() in the shape `shape` names.
+/// The pair search of a pass with the slow entries' tests shared evenly by a warp's lanes
+/// (kernels::find_pairs_balanced()), then the fast entries it listed as find_pairs_as() searches
+/// them (lean).
+inline void find_pairs_balanced(const cuda::ParticlesView& p, const Box& box,
+                                const kernels::StepArrays& a, const kernels::DeviceGrid& d,
+                                bool cleared, cudaStream_t s) {
+  const long long most = static_cast<long long>(p.n) * d.slabs;  // entries this pass, at most
+  if (!cleared) PLAB_CUDA_CHECK(cudaMemsetAsync(&a.flags->fast, 0, sizeof(int), s));
+  kernels::find_pairs_balanced<<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d);
+  PLAB_CUDA_CHECK_LAUNCH("find_pairs_balanced");
+  kernels::find_fast_pairs<kernels::Search::kLean>
+      <<<blocks((most / 10 + 1) * kernels::kFastTeam), kernels::kSearchThreads, 0, s>>>(p, box,
+                                                                                        a, d);
+  PLAB_CUDA_CHECK_LAUNCH("find_fast_pairs");
+}
+
+/// The pair search of a pass in the shape `shape` names.
 inline void find_pairs(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
                        const kernels::DeviceGrid& d, bool cleared, kernels::Search shape,
                        cudaStream_t s) {
   if (shape == kernels::Search::kBatched)
     find_pairs_as<kernels::Search::kBatched>(p, box, a, d, cleared, s);
-  else
+  else if (shape == kernels::Search::kLean)
     find_pairs_as<kernels::Search::kLean>(p, box, a, d, cleared, s);
+  else
+    find_pairs_balanced(p, box, a, d, cleared, s);
 }
 
 /// One thread per pair the list can hold.

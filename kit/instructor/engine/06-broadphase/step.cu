@@ -45,13 +45,15 @@ bool separate_asked() {
   return v && std::string(v) == "separate";
 }
 
-/// The pair search's shape for `n` particles: PLAB_ENGINE_SEARCH=batched or lean when it asks (to
-/// measure the difference), otherwise batched below `lean_from` particles and lean from there.
-kernels::Search search_shape(int n, int lean_from) {
+/// The pair search's shape for `n` particles: PLAB_ENGINE_SEARCH=batched, lean or balanced when it
+/// asks (to measure the difference), otherwise batched below `balanced_from` particles and
+/// balanced from there.
+kernels::Search search_shape(int n, int balanced_from) {
   const char* v = std::getenv("PLAB_ENGINE_SEARCH");
   if (v && std::string(v) == "batched") return kernels::Search::kBatched;
   if (v && std::string(v) == "lean") return kernels::Search::kLean;
-  return n < lean_from ? kernels::Search::kBatched : kernels::Search::kLean;
+  if (v && std::string(v) == "balanced") return kernels::Search::kBalanced;
+  return n < balanced_from ? kernels::Search::kBatched : kernels::Search::kBalanced;
 }
 
 /// The device's memory bandwidth in bytes a second: the best of three device-to-device copies
@@ -272,10 +274,11 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   /// N = 1000, 2000 and 4000, 10% faster at 10^4 and 45% at 4 x 10^4; the crossing, about 5000,
   /// is interpolated.
   static constexpr int kFinishSmallFrom = 5000;
-  /// From this N the pair search is lean rather than batched (kernels::Search). Measured on an
-  /// H100 (2026-11-27, ms a step, batched / lean): N = 10^4 0.090 / 0.103, 4 x 10^4 0.362 / 0.314,
-  /// 10^6 5.91 / 5.09; the crossing is measured in handouts/engine-gpu.md.
-  static constexpr int kLeanSearchFrom = 20000;
+  /// From this N the pair search is balanced rather than batched (kernels::Search). Measured on
+  /// an H200 (2026-11-27, ms a step, medians of 5 runs, 3 at 10^6; batched or lean / balanced): N = 4000
+  /// 0.061 / 0.063, 10^4 0.090 / 0.089, 2 x 10^4 0.155 / 0.138, 10^5 0.565 / 0.526 and 10^6
+  /// 4.650 / 4.363 (lean from 2 x 10^4); handouts/engine-gpu.md has the table.
+  static constexpr int kBalancedSearchFrom = 10000;
   double bandwidth_ = 0;  //!< measure_bandwidth(), once, before the steps
   double alpha_;  //!< slabs per sqrt(N) v_cut / L (StageOptions::sweep_alpha, or kAlpha)
   kernels::DeviceGrid grid_{};
@@ -296,7 +299,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   /// for the separate kernels (to compare) or the GPU cannot hold its blocks at once.
   bool finish_small_ = false;
   /// The pair search's shape (search_shape()).
-  kernels::Search search_ = search_shape(n_, kLeanSearchFrom);
+  kernels::Search search_ = search_shape(n_, kBalancedSearchFrom);
 };
 
 }  // namespace
