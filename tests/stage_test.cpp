@@ -109,6 +109,11 @@ Result run_here(const plab::Scene& scene, const std::string& what) {
   return r;
 }
 
+/// What this stage is compared with in the AgainstOtherStage tests: the other stage's solution.
+std::string reference_name() {
+  return std::string("stage ") + kOtherId + "'s solution (the reference)";
+}
+
 /// Fails with `plab diff`'s report when two texts differ.
 void expect_same(const std::string& expected, const std::string& actual, const std::string& what) {
   if (const auto d = plab::first_difference(expected, actual))
@@ -175,7 +180,7 @@ void expect_same_on_cpu(const std::string& expected, const plab::Scene& scene,
   plab::set_threads(1);
   const std::string serial = run_here(scene, what).output;
   if (plab::first_difference(expected, serial)) {
-    expect_same(expected, serial, std::string("stage ") + kOtherId + " on " + how_made);
+    expect_same(expected, serial, reference_name() + " on " + how_made);
     return;
   }
   for (const char* schedule : {"static", "dynamic,1", "guided"}) {
@@ -185,21 +190,25 @@ void expect_same_on_cpu(const std::string& expected, const plab::Scene& scene,
       const std::string output = run_here(scene, what).output;
       if (!plab::first_difference(expected, output)) continue;
       expect_same(expected, output,
-                  std::string("stage ") + kOtherId + " with " + std::to_string(threads) +
-                      " threads, schedule " +
-                      schedule + " (with 1 thread it prints the same) on " + how_made);
+                  reference_name() + " on " + how_made + ", run here with " +
+                      std::to_string(threads) + " threads and schedule " + schedule +
+                      " (with 1 thread it prints the same)");
       return;
     }
   }
+}
+
+/// Whether this run draws fresh random scenes (PLAB_FUZZ=1: the `fuzz` tests).
+bool fuzzing() {
+  const char* fuzz = std::getenv("PLAB_FUZZ");
+  return fuzz != nullptr && std::string(fuzz) == "1";
 }
 
 /// The seed of a random scene: its fixed seed, so that a failure comes back when rerun, or a
 /// fresh one from the machine's entropy under PLAB_FUZZ=1 (the `fuzz` tests). Either way the
 /// failure message prints it as `plab gen ... --seed S`.
 std::uint64_t scene_seed(std::uint64_t fixed) {
-  const char* fuzz = std::getenv("PLAB_FUZZ");
-  if (fuzz != nullptr && std::string(fuzz) == "1") return std::random_device{}();
-  return fixed;
+  return fuzzing() ? std::random_device{}() : fixed;
 }
 
 /// Checks this stage's output against `expected` with each of its switches off (none, each alone,
@@ -218,7 +227,7 @@ void expect_same_with_switches(const std::string& expected, const plab::Scene& s
     std::string named;
     for (const std::string& s : off) named += (named.empty() ? "" : ",") + s;
     expect_same(expected, output,
-                std::string("stage ") + kOtherId + " with --off '" + named + "' on " + how_made);
+                reference_name() + " on " + how_made + ", run here with --off '" + named + "'");
     break;  // one report: the first variant that differs
   }
   stage_options = saved;
@@ -256,7 +265,8 @@ TEST_P(AgainstOtherStage, SameText) {
   plab::GenParams g = GetParam();
   g.seed = scene_seed(GetParam().seed);
   expect_same_as_other(plab::generate_scene(g),
-                       "a fresh scene (plab gen --n " + std::to_string(g.n) + " --l " +
+                       std::string(fuzzing() ? "a fresh" : "a fixed") +
+                           " random scene (plab gen --n " + std::to_string(g.n) + " --l " +
                            std::to_string(g.L) + " --r " + std::to_string(g.r) + " --steps " +
                            std::to_string(g.steps) + " --seed " + std::to_string(g.seed) +
                            (g.speed_min >= 0 ? " --speed " + std::to_string(g.speed_min) + ":" +
@@ -312,10 +322,19 @@ TEST(Invariants, EnergyConservedFiniteCountersGrow) {
     stage->step();
     plab::test::stepped(s + 1);
     stage->read(p);
-    for (std::size_t i = 0; i < p.size(); ++i)
+    // Finite, and inside the box: in this scene every wall is taken at its time, so a centre
+    // never passes [r, L - r] (a margin of 10^-9 L for rounding).
+    const double lo = scene.box.r - 1e-9 * scene.box.L, hi = scene.box.L - lo;
+    for (std::size_t i = 0; i < p.size(); ++i) {
       ASSERT_TRUE(std::isfinite(p.x[i]) && std::isfinite(p.y[i]) && std::isfinite(p.vx[i]) &&
                   std::isfinite(p.vy[i]))
-          << "particle " << i << " at step " << s;
+          << "particle " << i << " after step " << s + 1 << " is not finite: x " << p.x[i]
+          << ", y " << p.y[i] << ", vx " << p.vx[i] << ", vy " << p.vy[i];
+      ASSERT_TRUE(p.x[i] >= lo && p.x[i] <= hi && p.y[i] >= lo && p.y[i] <= hi)
+          << "particle " << i << " after step " << s + 1 << " is outside the box: (" << p.x[i]
+          << ", " << p.y[i] << "), where every centre stays within [r, L - r] = ["
+          << scene.box.r << ", " << scene.box.L - scene.box.r << "]";
+    }
   }
   plab::test::unwatch();
   for (std::size_t i = 0; i < p.size(); ++i) events += p.pc[i] + p.wc[i];
@@ -446,8 +465,8 @@ void expect_same_on_ranks(const plab::Scene& scene, const std::string& how_made,
     const std::string output = run_on_ranks(scene_file, ranks, scratch, how_made, options);
     if (output.empty()) return;
     if (plab::first_difference(expected, output)) {
-      expect_same(expected, output, std::string("stage ") + kOtherId + " on " + how_made + " (" +
-                                        std::to_string(ranks) + " ranks)");
+      expect_same(expected, output, reference_name() + " on " + how_made + ", run here on " +
+                                        std::to_string(ranks) + " ranks");
       return;
     }
   }

@@ -5,23 +5,35 @@
 namespace plab::cli {
 
 void add_demo(CLI::App& app) {
-  auto* c = app.add_subcommand("demo", "Run the reference solutions on the course scenes and a "
-                                       "random 1000-particle scene, check them against the golden "
-                                       "files, and print the timings.");
+  auto* c = app.add_subcommand("demo", "Run the reference solutions (in a student's copy, the "
+                                       "compiled reference) on the course scenes and a random "
+                                       "1000-particle scene, check them against the golden files, "
+                                       "and print the timings.");
   c->callback([] {
     const Manifest m = load_manifest(source_dir() + "/datasets");
     std::printf("%-16s %6s %5s  %-6s %10s  %s\n", "scene", "N", "S", "stage", "time (s)",
                 "golden");
+    // What runs: every built solution stage; in a student's copy (no solutions/), the compiled
+    // reference that `plab release` ships (kit/reference/bin/plab-reference).
+    struct Runner {
+      std::string id, program;
+    };
+    std::vector<Runner> runners;
+    for (const StageDir& s : stages("solution")) {
+      const std::string program = stage_program(s.id, "solution");
+      if (fs::exists(program)) runners.push_back({s.id, program});
+    }
+    const std::string reference = source_dir() + "/kit/reference/bin/plab-reference";
+    if (runners.empty() && fs::exists(reference)) runners.push_back({"ref", reference});
     int failures = 0;
     int runs = 0;  // runs that checked something (a CUDA stage without a GPU does not count)
     std::vector<std::string> no_device;  // CUDA stages that found no GPU: not run again
     for (const Dataset& d : m.datasets) {
       if (d.origin != "course" && d.name != "random-1000") continue;
       const Scene scene = parse_scene(read_file(m.scene_path(d)), m.scene_path(d));
-      for (const StageDir& s : stages("solution")) {
+      for (const Runner& s : runners) {
         if (s.id == "01" && d.size != "small") continue;  // O(N^3): the demo keeps it to small scenes
-        const std::string program = stage_program(s.id, "solution");
-        if (!fs::exists(program)) continue;
+        const std::string& program = s.program;
         if (std::find(no_device.begin(), no_device.end(), s.id) != no_device.end()) continue;
         const std::string out = temp_path(d.name + ".demo");
         const auto t0 = std::chrono::steady_clock::now();
@@ -47,7 +59,8 @@ void add_demo(CLI::App& app) {
       }
     }
     if (runs == 0) {
-      std::printf("nothing to run: no solution stage is built and usable here (see ./plab test)\n");
+      std::printf("nothing to run: no solution stage and no compiled reference is built and usable "
+                  "here (see ./plab test)\n");
       g_status = 1;
       return;
     }

@@ -6,7 +6,7 @@ namespace plab::cli {
 
 void add_run(CLI::App& app) {
   struct Args {
-    std::string stage, impl, scene, out, digest, schedule, explain;
+    std::string stage, impl, scene, out, digest, events, schedule, explain;
     int threads = 0;
     int ranks = 0;
     double timeout = 0;
@@ -28,6 +28,9 @@ void add_run(CLI::App& app) {
   c->add_option("--schedule", a->schedule, "OpenMP schedule: static, dynamic or guided[,CHUNK]");
   c->add_option("--out", a->out, "write the output to this file (only when the run succeeds)");
   c->add_option("--digest", a->digest, "write one state digest per step to this file");
+  c->add_option("--events", a->events,
+                "write `STEP INDEX wall|pair` for every collision to this file (what plab render "
+                "and plab view --events read)");
   c->add_option("--seed", a->seed, "seed for scenes without particle lines")->capture_default_str();
   c->add_flag("--quiet", a->quiet, "no timing summary");
   c->add_option("--timeout", a->timeout,
@@ -47,6 +50,7 @@ void add_run(CLI::App& app) {
     if (!a->schedule.empty()) args.insert(args.end(), {"--schedule", a->schedule});
     if (!a->out.empty()) args.insert(args.end(), {"--out", a->out});
     if (!a->digest.empty()) args.insert(args.end(), {"--digest", a->digest});
+    if (!a->events.empty()) args.insert(args.end(), {"--events", a->events});
     if (!a->explain.empty()) args.insert(args.end(), {"--explain", a->explain});
     if (a->quiet) args.emplace_back("--quiet");
     const std::string status = temp_path("run.status");

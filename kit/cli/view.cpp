@@ -200,8 +200,8 @@ void add_view(CLI::App& app) {
   c->add_option("--compare", a->compare, "the expected print-mode output of the same scene (a "
                                          "golden file): what the input is compared with")
       ->check(CLI::ExistingFile);
-  c->add_option("--events", a->events, "the events file of the input output (the runner's "
-                                       "--events); a scene's run records its own")
+  c->add_option("--events", a->events, "the events file of the input output (`plab run "
+                                       "--events`); a scene's run records its own")
       ->check(CLI::ExistingFile);
   c->add_option("--max-mb", a->max_mb, "most MB of run data in the page; past it, every k-th "
                                        "step is kept")->capture_default_str();

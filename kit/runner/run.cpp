@@ -72,9 +72,12 @@ void step_from_each(const Options& o, const Scene& scene) {
 
 void explain(const Options& o, const Scene& scene) {
 #if !PLAB_HAVE_ORACLE
-  (void)o, (void)scene;
-  throw std::runtime_error("--explain needs the kit's oracle, which this build leaves out (a "
-                           "graded build of a submission); run it with the kit's own build");
+  (void)scene;
+  throw std::runtime_error(
+      "--explain needs the kit's oracle (the event selection of stages 01-03), which this build "
+      "leaves out, as a student's copy and a graded build do; in a student's copy the compiled "
+      "reference answers it: kit/reference/bin/plab-reference " + o.scene_path + " --explain " +
+      o.explain);
 #else
   std::vector<int> which;
   const auto colon = o.explain.find(':');

@@ -4,8 +4,10 @@ It runs a stage (found with `plab built --json`) on the scene, or draws any prin
 golden file, a student's output), or two side by side with their first difference ringed.
 
 Frame k shows the state at the start of step k and marks the particles that collide during that
-step: orange for a wall, red for another particle. Without --events, collisions are read from the
-velocities of the next printed step (a flip of signs with equal magnitudes counts as a wall).
+step: orange for a wall, red for another particle. A run of the scene records its events (the
+runner's --events, also `plab run --events`); for an output drawn as it is (--from, --diff),
+collisions are read from the velocities of the next printed step (a flip of signs with equal
+magnitudes counts as a wall).
 The files are read by the kit's own reader (`plab read --json`, through plab.plabio).
 """
 import argparse
