@@ -211,8 +211,8 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     on_.rank = reinterpret_cast<int*>(base + rank);
     on_.entry_at = reinterpret_cast<int*>(base + entry_at);
     on_.entry = reinterpret_cast<kernels::Entry*>(base + entry);
-    on_.rows = reinterpret_cast<int*>(base + rows);
-    on_.rows_length = slots_.rows();
+    rows_ = reinterpret_cast<int*>(base + rows);
+    rows_length_ = slots_.rows();
     on_.best = reinterpret_cast<model::Event*>(base + best);
     on_.resolved = reinterpret_cast<char*>(base + resolved);
     on_.contested = reinterpret_cast<int*>(base + contested);
@@ -224,20 +224,14 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     return cuda::bytes_of(wall_, last_, slots_, phases_, temp_);
   }
 
+  /// The step's arrays: those of the two phases (lay_out()) with the ones kept for the run.
   [[nodiscard]] kernels::StepArrays arrays() const {
-    return {wall_.get(),
-            last_.get(),
-            slots_.view(on_.rows, on_.rows_length),
-            on_.best,
-            on_.resolved,
-            on_.contested,
-            on_.partner,
-            on_.ptime,
-            on_.start,
-            on_.rank,
-            on_.entry_at,
-            on_.entry,
-            flags_.get()};
+    kernels::StepArrays a = on_;
+    a.wall = wall_.get();
+    a.last = last_.get();
+    a.slots = slots_.view(rows_, rows_length_);
+    a.flags = flags_.get();
+    return a;
   }
 
   /// Byte offsets of arrays laid one after the other, each on a 256-byte boundary.
@@ -250,21 +244,6 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
       at = (at + count * sizeof(T) + 255) / 256 * 256;
       return here;
     }
-  };
-
-  /// Where the arrays of the two phases lie in `phases_`.
-  struct Phases {
-    int* start = nullptr;           //!< passes: kernels::StepArrays::start
-    int* rank = nullptr;            //!< passes: kernels::StepArrays::rank
-    int* entry_at = nullptr;        //!< passes: kernels::StepArrays::entry_at
-    kernels::Entry* entry = nullptr;  //!< passes: kernels::StepArrays::entry
-    int* rows = nullptr;            //!< rounds: the candidates' rows (cuda::CompactView::row)
-    std::size_t rows_length = 0;    //!< ... and their length in ints
-    model::Event* best = nullptr;   //!< rounds: kernels::StepArrays::best
-    char* resolved = nullptr;       //!< rounds: kernels::StepArrays::resolved
-    int* contested = nullptr;       //!< rounds: kernels::StepArrays::contested
-    int* partner = nullptr;         //!< rounds (and apply): the plan's partner
-    double* ptime = nullptr;        //!< rounds (and apply): the plan's pair time
   };
 
   static constexpr long long kCheckEvery = 32;  //!< steps between two looks at the flags
@@ -290,7 +269,11 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   /// rounds and apply (written only after the search) in one allocation, as large as the larger
   /// phase: a step never needs both at once (handouts/engine-gpu.md measures what this saves).
   cuda::DeviceArray<unsigned char> phases_;
-  Phases on_;
+  /// Where lay_out() put the arrays of the two phases in `phases_` (the rest of the step's arrays
+  /// are set by arrays()), and the candidates' rows (cuda::CompactView::row) with their length.
+  kernels::StepArrays on_{};
+  int* rows_ = nullptr;
+  std::size_t rows_length_ = 0;
   cuda::DeviceArray<unsigned char> temp_;
   cuda::Graph graph_;
   bool stale_ = true;
