@@ -345,8 +345,23 @@ pid_t start_ctest(const std::vector<std::string>& args, const std::string& log) 
   _exit(127);
 }
 
-/// Follows the log while ctest runs, printing one line per test as it ends.
+/// The test a CTest "Start N: NAME" line starts, if it is one.
+std::optional<std::string> parse_start_line(const std::string& line) {
+  static const std::regex re(R"(^\s*Start\s+\d+: (\S+)\s*$)");
+  std::smatch m;
+  if (!std::regex_match(line, m, re)) return std::nullopt;
+  return m[1].str();
+}
+
+/// Follows the log while ctest runs, printing one line per test as it ends, and a line for a
+/// test still running after 30 s, 1, 2, 4, ... minutes (a slow stage shows before it ends).
 int follow(pid_t pid, const std::string& log) {
+  using Clock = std::chrono::steady_clock;
+  struct Running {
+    Clock::time_point since;
+    double notice = 30;  //!< seconds at which the next "still running" line is due
+  };
+  std::map<std::string, Running> running;
   std::ifstream in;
   std::string pending;
   int status = 0;
@@ -356,10 +371,21 @@ int follow(pid_t pid, const std::string& log) {
     char buf[4096];
     while (in.is_open() && in.read(buf, sizeof buf).gcount() > 0) pending.append(buf, in.gcount());
     in.clear();
-    for (std::size_t nl; (nl = pending.find('\n')) != std::string::npos; pending.erase(0, nl + 1))
-      if (const auto r = parse_result_line(pending.substr(0, nl)))
+    for (std::size_t nl; (nl = pending.find('\n')) != std::string::npos; pending.erase(0, nl + 1)) {
+      const std::string line = pending.substr(0, nl);
+      if (const auto started = parse_start_line(line)) running[*started] = {Clock::now()};
+      if (const auto r = parse_result_line(line)) {
+        running.erase(r->name);
         std::printf("  %-8s %s (%.1f s)\n", lower(r->status).c_str(), r->name.c_str(),
                     r->seconds);
+      }
+    }
+    for (auto& [name, r] : running) {
+      const double for_s = std::chrono::duration<double>(Clock::now() - r.since).count();
+      if (done || for_s < r.notice) continue;
+      std::printf("  running  %s (%.0f s so far)\n", name.c_str(), for_s);
+      r.notice = r.notice < 60 ? 60 : 2 * r.notice;
+    }
     std::fflush(stdout);
     if (!done) std::this_thread::sleep_for(std::chrono::milliseconds(200));
   }
