@@ -98,6 +98,15 @@ void add_bench(CLI::App& app) {
                 by_ranks ? "ranks" : "threads",
                 "schedule", "median s", "spread", "speedup", "in steps", "ms/step", "device");
     const std::string report = temp_path("bench-report.json");
+    // The scenes and the run report are the bench's own: removed however it ends.
+    std::vector<std::string> made{report};
+    struct RemoveMade {
+      const std::vector<std::string>& files;
+      ~RemoveMade() {
+        std::error_code ignored;
+        for (const std::string& f : files) fs::remove(f, ignored);
+      }
+    } remove_made{made};
     // Rows whose runs differ by more than this share of their median: noise (a shared machine).
     constexpr double kNoisy = 0.2;
     std::vector<std::pair<double, std::string>> noisy;  //!< (spread, which row)
@@ -115,6 +124,7 @@ void add_bench(CLI::App& app) {
         g.speed_min = 2500;
         g.speed_max = 5000;
       }
+      made.push_back(scene);
       write_text(scene, format_scene(generate_scene(g)));
       for (const std::string& raw : a->stages) {
         const std::string id = two_digits(raw);
