@@ -266,9 +266,10 @@ struct LaneRuns {
 /// in find_pairs(), and finds its two runs (a fast entry is listed for find_fast_pairs() and has
 /// none); the warp lays the runs end to end (a prefix sum of their lengths), and lane l takes the
 /// warp's tests l, l + 32, l + 64, ...: every lane tests as many entries as the next, where
-/// find_pairs() keeps a warp until its longest run ends, and the 32 lanes read 32 consecutive
-/// entries of a run together. The same entries are tested with the same arithmetic, so the same
-/// pairs are filed.
+/// find_pairs() keeps a warp until its longest run ends, and the lanes read neighbouring entries
+/// of two or three overlapping runs together. The same entries are tested with the same
+/// arithmetic, so the same pairs are filed. (The warp's sum of run lengths is an int: it would
+/// overflow only past 2^31 tests for 32 entries, a grid no search could finish.)
 __global__ void __launch_bounds__(kSearchThreads, 4)
     find_pairs_balanced(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
   namespace cg = cooperative_groups;
