@@ -249,8 +249,7 @@ void expect_same_as_other(const plab::Scene& scene, const std::string& how_made)
     std::fclose(f);
   }
   const std::string command = other + " --quiet --out " + out_file + " " + scene_file;
-  plab::test::watch(std::string("stage ") + kOtherId + "'s solution (the reference) on " + how_made,
-                    0);
+  plab::test::watch(reference_name() + " on " + how_made, 0);
   ASSERT_EQ(plab::test::run_watched(command), 0) << command;
   const std::string expected = plab::read_file(out_file);
   const std::string what = this_name() + " on " + how_made;
@@ -458,7 +457,7 @@ void expect_same_on_ranks(const plab::Scene& scene, const std::string& how_made,
     std::fclose(f);
   }
   const std::string reference = scratch.file("reference.out");
-  plab::test::watch(std::string("stage ") + kOtherId + "'s solution on " + how_made, 0);
+  plab::test::watch(reference_name() + " on " + how_made, 0);
   ASSERT_EQ(plab::test::run_watched(other + " --quiet --out " + reference + " " + scene_file), 0);
   const std::string expected = plab::read_file(reference);
   for (int ranks = 1; ranks <= most; ++ranks) {
