@@ -4,10 +4,12 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
 
+#include "plab/driver.hpp"
 #include "plab/generate.hpp"
 #include "plab/io.hpp"
 #include "plab/runtime.hpp"
@@ -65,6 +67,32 @@ TEST(OutputWriter, BlockLines) {
             "0 1 2.00000000 2.00000000 0.00000000 1.00000000\n"
             "100 0 8.00000000 6.00000000 -1.00000000 0.00000000 14 7\n"
             "100 1 2.00000000 2.00000000 0.00000000 1.00000000 3 21\n");
+}
+
+/// A step for the driver's tests: every particle hits a wall (its counter grows), nothing moves.
+void count_a_wall(const plab::Box&, plab::Particles& p) {
+  for (auto& w : p.wc) ++w;
+}
+
+TEST(Simulate, TimeOnlyPrintsNoStateAndCountsTheSame) {
+  plab::Scene scene;
+  scene.box = plab::Box{100, 1};
+  scene.steps = 3;
+  scene.mode = plab::Mode::kPerf;
+  scene.particles = plab::generate(scene.box, 20, 5, plab::default_speeds(scene.box));
+  plab::OutputWriter printed(nullptr);
+  const plab::RunStats all = plab::simulate(scene, count_a_wall, printed);
+  plab::OutputWriter silent(nullptr);
+  plab::RunOptions options;
+  options.print = false;
+  const plab::RunStats timed = plab::simulate(scene, count_a_wall, silent, options);
+  const std::string& text = printed.text();
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 40) << "the step-0 and the final block";
+  EXPECT_EQ(silent.text(), "");
+  EXPECT_EQ(timed.wall_events, 60);
+  EXPECT_EQ(timed.wall_events, all.wall_events);
+  EXPECT_EQ(timed.particles, 20u);
+  EXPECT_EQ(timed.steps, 3);
 }
 
 TEST(Digest, SeesEveryField) {

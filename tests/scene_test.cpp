@@ -16,11 +16,11 @@ struct BadCase {
 };
 
 const BadCase kBad[] = {
-    {"empty", "", "1: expected the number of particles N (a whole number, 1 to 100000000), found end of file"},
-    {"n_zero", "0\n10\n1\n5\nprint\n", "1: expected the number of particles N (a whole number, 1 to 100000000), found '0'"},
-    {"n_negative", "-3\n10\n1\n5\nprint\n", "1: expected the number of particles N (a whole number, 1 to 100000000), found '-3'"},
-    {"n_fraction", "2.5\n10\n1\n5\nprint\n", "1: expected the number of particles N (a whole number, 1 to 100000000), found '2.5'"},
-    {"n_word", "two\n10\n1\n5\nprint\n", "1: expected the number of particles N (a whole number, 1 to 100000000), found 'two'"},
+    {"empty", "", "1: expected the number of particles N (a whole number, 1 to 1000000000), found end of file"},
+    {"n_zero", "0\n10\n1\n5\nprint\n", "1: expected the number of particles N (a whole number, 1 to 1000000000), found '0'"},
+    {"n_negative", "-3\n10\n1\n5\nprint\n", "1: expected the number of particles N (a whole number, 1 to 1000000000), found '-3'"},
+    {"n_fraction", "2.5\n10\n1\n5\nprint\n", "1: expected the number of particles N (a whole number, 1 to 1000000000), found '2.5'"},
+    {"n_word", "two\n10\n1\n5\nprint\n", "1: expected the number of particles N (a whole number, 1 to 1000000000), found 'two'"},
     {"l_missing", "2\n", "2: expected the box side L (a number), found end of file"},
     {"l_word", "2\nten\n1\n5\nprint\n", "2: expected the box side L (a number), found 'ten'"},
     {"r_zero", "2\n10\n0\n5\nprint\n", "3: expected a radius r > 0, found '0'"},

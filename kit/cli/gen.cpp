@@ -28,17 +28,7 @@ void add_gen(CLI::App& app) {
     s.steps = g->steps;
     s.mode = *mode == "perf" ? Mode::kPerf : Mode::kPrint;
     SpeedRange range = default_speeds(s.box);
-    if (!speed->empty()) {
-      const auto colon = speed->find(':');
-      try {
-        if (colon == std::string::npos) throw std::invalid_argument("no colon");
-        range = SpeedRange{std::stod(speed->substr(0, colon)), std::stod(speed->substr(colon + 1))};
-      } catch (const std::exception&) {
-        throw std::runtime_error("--speed expects MIN:MAX, e.g. 1:5, not '" + *speed + "'");
-      }
-      if (!(range.min >= 0 && range.max >= range.min))
-        throw std::runtime_error("--speed needs 0 <= MIN <= MAX");
-    }
+    if (!speed->empty()) range = parse_speed_range(*speed);
     s.particles = generate(s.box, static_cast<std::size_t>(g->n), g->seed, range);
     write_text(*out, format_scene(s));
   });

@@ -3,6 +3,7 @@
 /// with the kit's driver, writes the output. `plab run` starts it. Compiled once, linked with
 /// each stage's library (its plab::make_stepper() and plab::stage_info()).
 #include <cstdio>
+#include <utility>
 
 #include "plab/errors.hpp"
 #include "plab/runtime.hpp"
@@ -24,7 +25,7 @@ int main(int argc, char** argv) {
     plab::runner::finish_options(o);
     plab::set_threads(o.threads);
     plab::set_schedule(o.schedule);
-    const plab::Scene scene = plab::runner::load(o);
+    plab::Scene scene = plab::runner::load(o);
     // the grader's modes
     if (!o.step_from.empty()) {
       plab::runner::step_from_each(o, scene);
@@ -35,8 +36,8 @@ int main(int argc, char** argv) {
       return 0;
     }
     // the loop, then the report
-    const plab::RunStats stats = plab::runner::simulate_scene(o, scene);
-    plab::runner::report(o, scene, stats);
+    const plab::RunStats stats = plab::runner::simulate_scene(o, std::move(scene));
+    plab::runner::report(o, stats);
     return 0;
   } catch (const plab::NoDevice& e) {
     std::fprintf(stderr, "stage %s: %s\n", stage.id.c_str(), e.what());

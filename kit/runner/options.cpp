@@ -26,13 +26,17 @@ std::string listed(const std::vector<std::string>& items) {
 void add_options(CLI::App& app, Options& o) {
   o.seed = kDefaultSeed;
   app.add_option("scene", o.scene_path, "scene file (model.md's input format)")->required();
-  app.add_option("--out", o.out_path, "write the output here instead of stdout (all or nothing)");
+  auto* out =
+      app.add_option("--out", o.out_path, "write the output here instead of stdout (all or nothing)");
   app.add_option("--digest", o.digest_path, "write one state digest per step to this file");
   app.add_option("--threads", o.threads, "threads for stages that use them (default: all cores)");
   app.add_option("--schedule", o.schedule,
                  "OpenMP schedule of the stage's schedule(runtime) loops: static, dynamic or "
                  "guided, with an optional ,CHUNK")->capture_default_str();
   app.add_option("--seed", o.seed, "seed for scenes without particle lines")->capture_default_str();
+  app.add_option("--speed", o.speed,
+                 "speeds MIN:MAX for scenes without particle lines (default: model.md's, L/(8r) "
+                 "to L/4)");
   app.add_option("--events", o.events_path,
                  "write `STEP INDEX wall|pair` for every collision to this file (plab render)");
   app.add_option("--mode", o.mode, "print or perf, instead of the scene's own mode")
@@ -64,6 +68,10 @@ void add_options(CLI::App& app, Options& o) {
                  "keep `STEPS-DONE STEPS` in this file, rewritten after every step (plab run "
                  "reads it to say where a hung or crashed run was)");
   app.add_flag("--quiet", o.quiet, "no timing summary on stderr");
+  app.add_flag("--time-only", o.time_only,
+               "print no state, only run and time the steps (for scenes too large to print: "
+               "10^9 particles are about 100 GB of text)")
+      ->excludes(out);
 
   auto* stage = app.add_option_group("stage options", "what reaches the stage (stage.hpp's "
                                      "StageOptions; the environment's PLAB_DEVICE, PLAB_SIMD, "

@@ -9,13 +9,13 @@
 
 namespace plab::runner {
 
-void report(const Options& o, const Scene& scene, const RunStats& stats) {
+void report(const Options& o, const RunStats& stats) {
   const StageInfo& info = stage_info();
   if (!o.report_path.empty()) {
     OutputFile file(o.report_path);
     const nlohmann::json j = {
         {"stage", info.id},               {"impl", info.impl},
-        {"n", scene.particles.size()},    {"steps", scene.steps},
+        {"n", stats.particles},           {"steps", stats.steps},
         {"threads", get_threads()},       {"device", stats.device},
         {"timer", stats.timer},           {"step_seconds", stats.step_seconds},
         {"device_bytes", stats.device_bytes}, {"bandwidth", stats.bandwidth},
@@ -32,9 +32,9 @@ void report(const Options& o, const Scene& scene, const RunStats& stats) {
   std::fprintf(stderr,
                "stage %s (%s) on %s: N=%zu S=%lld threads=%d: %.3f s in steps (%.3f ms/step, "
                "%s), %.3f s total; %lld pair and %lld wall collisions\n",
-               info.id.c_str(), info.impl.c_str(), stats.device.c_str(), scene.particles.size(),
-               scene.steps, get_threads(), stats.step_seconds,
-               scene.steps ? 1e3 * stats.step_seconds / scene.steps : 0.0, stats.timer.c_str(),
+               info.id.c_str(), info.impl.c_str(), stats.device.c_str(), stats.particles,
+               stats.steps, get_threads(), stats.step_seconds,
+               stats.steps ? 1e3 * stats.step_seconds / stats.steps : 0.0, stats.timer.c_str(),
                stats.total_seconds, stats.pair_events, stats.wall_events);
   if (stats.traffic.ranks > 1)
     std::fprintf(stderr, "stage %s (%s) on %d ranks: %.3g bytes sent, %.3f s in exchanges (the "

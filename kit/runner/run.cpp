@@ -3,7 +3,9 @@
 /// grader's two modes (one step from each printed block, the events of chosen particles).
 #include <cstdio>
 #include <stdexcept>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "plab/grading.hpp"
@@ -27,13 +29,15 @@ MakeStepper stage_maker(const Options& o) {
 }  // namespace
 
 Scene load(const Options& o) {
-  Scene scene = load_scene(o.scene_path, o.seed);
+  Scene scene = load_scene(o.scene_path, o.seed,
+                           o.speed.empty() ? std::nullopt
+                                           : std::optional<SpeedRange>(parse_speed_range(o.speed)));
   if (!o.mode.empty()) scene.mode = (o.mode == "print") ? Mode::kPrint : Mode::kPerf;
   if (o.steps >= 0) scene.steps = o.steps;
   return scene;
 }
 
-RunStats simulate_scene(const Options& o, const Scene& scene) {
+RunStats simulate_scene(const Options& o, Scene scene) {
   const MakeStepper make = with_status(stage_maker(o), o.status_path, scene.steps * o.substeps);
   OutputFile out(o.out_path);
   OutputFile digest(o.digest_path, /*optional=*/true);
@@ -46,11 +50,12 @@ RunStats simulate_scene(const Options& o, const Scene& scene) {
 #endif
   OutputWriter writer(out.get());
   const RunStats stats =
-      simulate(scene, make, writer,
+      simulate(std::move(scene), make, writer,
                {digest.get(), events.get(),
                 !o.quiet && o.status_path.empty() && stderr_is_terminal(),
                 o.audit_path.empty() ? nullptr : &audit,
-                /*audit_steps=*/stage_info().model == "stepped", o.substeps});
+                /*audit_steps=*/stage_info().model == "stepped", o.substeps,
+                /*print=*/!o.time_only});
   out.commit();
   digest.commit();
   events.commit();

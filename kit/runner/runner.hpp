@@ -32,6 +32,8 @@ struct Options {
   std::string schedule = "dynamic,16";  //!< the OpenMP schedule of schedule(runtime) loops
   int threads = 0;          //!< threads (0: all cores)
   std::uint64_t seed = 0;   //!< seed for scenes without particle lines
+  std::string speed;        //!< `MIN:MAX`, their speeds ("": model.md's default range)
+  bool time_only = false;   //!< print no state: run and time the steps only
   int substeps = 1;         //!< plab accuracy: model steps per printed step
   bool quiet = false;       //!< no timing summary on stderr
   std::string device;       //!< StageOptions::device as written ("": PLAB_DEVICE, else auto)
@@ -52,7 +54,8 @@ void finish_options(Options& o);
 Scene load(const Options& o);
 
 /// Runs the scene with the stage, writing the output, digests, events and audit: the loop.
-RunStats simulate_scene(const Options& o, const Scene& scene);
+/// The scene is moved in (10^9 particles are 48 GB: one copy only).
+RunStats simulate_scene(const Options& o, Scene scene);
 
 /// Grading: from each block of the output o.step_from, one step of the stage, printed.
 void step_from_each(const Options& o, const Scene& scene);
@@ -61,7 +64,7 @@ void step_from_each(const Options& o, const Scene& scene);
 void explain(const Options& o, const Scene& scene);
 
 /// The timing summary on stderr and the JSON report (--report).
-void report(const Options& o, const Scene& scene, const RunStats& stats);
+void report(const Options& o, const RunStats& stats);
 
 /// `make`, reporting every step in the status file `path` (none when `path` is empty).
 MakeStepper with_status(MakeStepper make, const std::string& path, long long total);

@@ -91,7 +91,8 @@ RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOpt
     return scaled;
   };
   const Particles* shown = k > 1 ? &initial : &p;  // the state as shown
-  Particles before = p;  // the counters at the start of the step (only kept for options.events)
+  // the counters at the start of the step (only kept for options.events)
+  Particles before = options.events ? p : Particles();
   // Steps are audited from the state before them (model.md's steps only: K == 1, not stage 07).
   const bool audit_steps = options.audit && options.audit_steps && k == 1;
   const bool with_oracle = p.size() <= 3000;  // the oracle is O(N^2) a step
@@ -100,7 +101,7 @@ RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOpt
   if (audit_steps) audited = *shown;
   double clock_seconds = 0;
   for (long long s = 0; s < steps; ++s) {
-    if (scene.mode == Mode::kPrint || s == 0) {
+    if (options.print && (scene.mode == Mode::kPrint || s == 0)) {
       if (s > 0) shown = &read();
       out.block(s, *shown, false);
     }
@@ -120,8 +121,10 @@ RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOpt
   const auto ts = Clock::now();
   shown = &read();  // waits for queued steps: part of the step time on the driver's clock
   clock_seconds += seconds_since(ts);
-  out.block(steps, *shown, true);
+  if (options.print) out.block(steps, *shown, true);
   out.flush();
+  stats.particles = p.size();
+  stats.steps = steps;
   stats.step_seconds = stage->own_seconds() >= 0 ? stage->own_seconds() : clock_seconds;
   stats.timer = stage->own_seconds() >= 0 ? "cuda events" : "steady_clock";
   stats.device = stage->device();

@@ -19,6 +19,8 @@ using MakeStepper = std::function<std::unique_ptr<Stepper>(const Box&, Particles
 
 /// What a run measured.
 struct RunStats {
+  std::size_t particles = 0;   //!< N
+  long long steps = 0;         //!< steps run (printed steps: model steps over substeps)
   double step_seconds = 0;     //!< time spent in steps (not reading or printing): the driver's
                                //!< clock around step(), or the stage's own (CUDA events)
   std::string timer;           //!< how step_seconds was measured: "steady_clock" or "cuda events"
@@ -44,12 +46,14 @@ struct RunOptions {
   int substeps = 1;             //!< `plab accuracy`: K model steps per printed step (velocities
                                 //!< divided by K, K S steps, every K-th state printed with its
                                 //!< velocities times K); a power of two keeps both scalings exact
+  bool print = true;            //!< write the state blocks (false: run and time only, for scenes
+                                //!< too large to print; digests and events are still written)
 };
 
 /// Runs `scene` with `step`, writing model.md's output to `out`: in print mode the blocks of steps
 /// 0..S-1 then the final block (step S, with `pc wc`); in perf mode the step-0 block and the final
-/// block (only the final block when S = 0). The state is read back from the stage only when it is
-/// printed or digested. With `options.substeps` = K > 1 each printed step is K model steps of
+/// block (only the final block when S = 0); no block without `options.print`. The state is read
+/// back from the stage only when it is printed or digested, and at the end (for the counters). With `options.substeps` = K > 1 each printed step is K model steps of
 /// 1/K (model.md's model refined in time; not model.md's output).
 RunStats simulate(Scene scene, MakeStepper make, OutputWriter& out, const RunOptions& options = {});
 

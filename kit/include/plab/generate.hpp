@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include "plab/scene.hpp"
 
@@ -38,6 +39,11 @@ struct SpeedRange {
 
 /// model.md's default speeds: between L/(8r) and L/4 (the smaller is the lower bound).
 SpeedRange default_speeds(const Box& box);
+
+/// A speed range written `MIN:MAX` (`plab gen --speed`, the runner's `--speed`).
+/// \throws std::invalid_argument, saying what was expected, when `text` is not two numbers
+/// 0 <= MIN <= MAX
+SpeedRange parse_speed_range(const std::string& text);
 
 /// Generates `n` particles: centres uniform in \f$[r, L-r]^2\f$ with no two disks overlapping
 /// (reject and redraw), speeds uniform in `speeds`, directions uniform (a point in the unit disc

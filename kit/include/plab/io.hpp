@@ -6,10 +6,12 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "plab/generate.hpp"
 #include "plab/scene.hpp"
 
 namespace plab {
@@ -23,9 +25,11 @@ Scene parse_scene(std::string_view text, const std::string& file);
 /// \throws InputError when the file cannot be read
 std::string read_file(const std::string& path);
 
-/// Reads a scene file; generates the particles from `seed` when it has no particle lines.
+/// Reads a scene file; generates the particles from `seed` when it has no particle lines, with
+/// speeds in `speeds` (model.md's default range when none is given).
 /// \throws InputError when the file cannot be read or is malformed
-Scene load_scene(const std::string& path, std::uint64_t seed);
+Scene load_scene(const std::string& path, std::uint64_t seed,
+                 const std::optional<SpeedRange>& speeds = std::nullopt);
 
 /// Writes a scene file with every particle line (reals with 17 significant digits, so reading
 /// it back gives the same bits).
