@@ -114,10 +114,11 @@ std::string reference_name() {
   return std::string("stage ") + kOtherId + "'s solution (the reference)";
 }
 
-/// Fails with `plab diff`'s report when two texts differ.
-void expect_same(const std::string& expected, const std::string& actual, const std::string& what) {
+/// Fails with `plab diff`'s report when two texts differ (and `note` after it, if any).
+void expect_same(const std::string& expected, const std::string& actual, const std::string& what,
+                 const std::string& note = "") {
   if (const auto d = plab::first_difference(expected, actual))
-    ADD_FAILURE() << this_name() << " differs from " << what << ":\n" << d->describe();
+    ADD_FAILURE() << this_name() << " differs from " << what << ":\n" << d->describe() << note;
 }
 
 std::vector<plab::Dataset> datasets(bool large) {
@@ -144,13 +145,24 @@ void check_golden(const plab::Dataset& d) {
   if (std::find(info.test_sizes.begin(), info.test_sizes.end(), d.size) == info.test_sizes.end())
     GTEST_SKIP() << this_name() << " runs no " << d.size << " scenes (test_sizes in its stage.json)";
   const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
-  const Result r = run_here(plab::load_scene(m.scene_path(d), plab::kDefaultSeed),
-                            this_name() + ", scene " + d.name);
-  // The digests only locate what the output shows already: checked when the output is equal.
-  if (plab::first_difference(plab::read_file(m.golden_path(d)), r.output))
-    expect_same(plab::read_file(m.golden_path(d)), r.output, m.golden_path(d));
-  else
-    expect_same(plab::read_file(m.digest_path(d)), r.digests, m.digest_path(d));
+  const plab::Scene scene = plab::load_scene(m.scene_path(d), plab::kDefaultSeed);
+  const Result r = run_here(scene, this_name() + ", scene " + d.name);
+  const std::string golden = plab::read_file(m.golden_path(d));
+  const std::string digests = plab::read_file(m.digest_path(d));
+  if (plab::first_difference(golden, r.output)) {
+    // A perf-mode output prints only the first and the last step: the digests say which step
+    // went wrong first (plab's test report reads this line).
+    std::string note;
+    if (scene.mode == plab::Mode::kPerf)
+      if (const auto k = plab::first_difference(digests, r.digests))
+        note = "\nthe state first differs after step " + k->step +
+               " (the per-step digests; a perf-mode output prints only the first and the last "
+               "step)";
+    expect_same(golden, r.output, m.golden_path(d), note);
+  } else {
+    // The digests only locate what the output shows already: checked when the output is equal.
+    expect_same(digests, r.digests, m.digest_path(d));
+  }
 }
 
 class Golden : public testing::TestWithParam<plab::Dataset> {};

@@ -179,9 +179,13 @@ void print_cases(const std::vector<Case>& cases, const Manifest& m) {
       continue;
     }
     std::string what = c.status;
-    if (const auto f = find_difference(c.message))
+    static const std::regex first_bad(R"(the state first differs after step (\d+))");
+    if (const auto f = find_difference(c.message)) {
       what = "step " + f->step + (f->particle.empty() ? "" : ", particle " + f->particle) + ", " +
              f->field + ": expected " + f->expected + ", got " + f->actual;
+      if (std::smatch k; std::regex_search(c.message, k, first_bad) && k[1].str() != f->step)
+        what = "wrong from step " + k[1].str() + " (digests); printed " + what;
+    }
     else if (c.status == "failed")
       what = "failed: " + failure_line(c.message);
     std::printf("    %-22s %s\n", name.c_str(), what.c_str());
@@ -261,6 +265,29 @@ void explain_golden(const FirstFailure& f, const Dataset& d, const Manifest& m, 
   const long long step = std::atoll(diff.step.c_str());
   const std::string explain = std::to_string(step > 0 ? step - 1 : 0) + ":" + diff.particle;
   const Explainer how = explainer(f, scene);
+  static const std::regex first_bad(R"(the state first differs after step (\d+))");
+  if (std::smatch k; std::regex_search(f.c.message, k, first_bad) && k[1].str() != diff.step) {
+    // A perf-mode scene prints its last step only: the oracle's line there would explain the
+    // wrong step. The digests name the first wrong one; print mode shows its particle.
+    const std::string bad = k[1].str();
+    std::printf("  the state first differs after step %s (the per-step digests: this perf-mode "
+                "scene prints only its first and last steps)\n", bad.c_str());
+    std::printf("  see that step, particle by particle:\n    %s --steps %s --mode print --out "
+                "mine.out\n", run.c_str(), bad.c_str());
+    // The same steps printed by the reference: its solution here, the compiled one in a student
+    // copy (explainer()'s second case).
+    const std::string reference =
+        fs::is_directory(fs::path(source_dir()) / "solutions")
+            ? "./plab run --stage " + m.reference_stage + " --impl solution " + scene
+            : how.command;
+    if (!reference.empty())
+      std::printf("    %s --steps %s --mode print --out expected.out\n    ./plab diff "
+                  "expected.out mine.out      # names the particle I\n",
+                  reference.c_str(), bad.c_str());
+    if (!how.command.empty())
+      std::printf("    %s --explain %lld:I\n", how.command.c_str(), std::atoll(bad.c_str()) - 1);
+    return;
+  }
   if (!diff.particle.empty() && !how.program.empty()) {
     const Captured c = capture_program({how.program, m.scene_path(d), "--explain", explain});
     if (c.status == 0)
@@ -417,6 +444,36 @@ void print_stalled_run(const std::string& stopped, const std::string& test, cons
                   shown_path(m.scene_path(d)).c_str());
 }
 
+/// For a test whose program died (CTest's "Subprocess aborted", "SEGFAULT", "Exception: ...")
+/// in the middle of a case: the last thing the program said (glibc's "double free or
+/// corruption", a sanitizer's summary) and the command that runs that case's scene, which names
+/// the signal and the step.
+void print_crash(const TestResult& t, const std::vector<Case>& cases, const Manifest& m) {
+  static const std::regex impl(R"(^stage(\d\d)\.(\w+)\.)");
+  std::smatch which;
+  if (t.status == "Failed" || !std::regex_search(t.name, which, impl)) return;
+  // The C library's and the sanitizers' messages (CTest interleaves its own lines with them).
+  static const std::regex last_words(
+      R"((free|corrupt|malloc|Segmentation|Sanitizer|terminate|Assertion|abort|stack smashing))");
+  std::string said;
+  for (const std::string& line : lines_of(t.output))
+    if (std::regex_search(line, last_words) && line.find("Start ") == std::string::npos)
+      said = line;
+  if (!said.empty()) std::printf("  the program's last words: %s\n", said.c_str());
+  for (const Case& c : cases) {
+    if (c.status != "stopped") continue;
+    const auto d = scene_of(m, c.name);
+    if (d)
+      std::printf("  it died on scene %s; see it: ./plab run --stage %s --impl %s %s --out "
+                  "mine.out   (names the signal and the step)\n",
+                  d->name.c_str(), which[1].str().c_str(), which[2].str().c_str(),
+                  shown_path(m.scene_path(*d)).c_str());
+    else
+      std::printf("  it died in case %s\n", c.name.c_str());
+    break;
+  }
+}
+
 /// A line per test that did not pass, its cases for a stage's test, the first failure's page.
 void print_failures(const std::vector<TestResult>& tests) {
   const Manifest m = load_manifest(source_dir() + "/datasets");
@@ -431,8 +488,9 @@ void print_failures(const std::vector<TestResult>& tests) {
     }
     const std::string stopped = stop_message(t.output);
     const std::string status = t.status == "Failed" ? "FAILED"
-                               : t.status.rfind("Subprocess aborted", 0) == 0 ? "ABORTED"
-                                                                              : t.status;
+                               : t.status.rfind("Subprocess aborted", 0) == 0 ? "CRASHED (aborted)"
+                               : t.status == "Exception: SegFault" ? "CRASHED (segmentation fault)"
+                                                                   : t.status;
     const std::string head = t.name + ": " + status +
                              (stopped.empty() ? "" : ": " + stopped);
     const std::vector<Case> cases = gtest_cases(t.output);
@@ -443,6 +501,7 @@ void print_failures(const std::vector<TestResult>& tests) {
       print_summary(head, cases);
     }
     print_stalled_run(stopped, t.name, m);
+    if (stopped.empty()) print_crash(t, cases, m);
     // The page goes to the first failing scene of a golden test, else to the first failing case.
     const bool golden = t.name.find(".Golden") != std::string::npos;
     if ((first && (!golden || first->test.find(".Golden") != std::string::npos)) ||

@@ -27,15 +27,36 @@ plab::Particles lattice_and(std::initializer_list<Disk> more) {
   return p;
 }
 
+/// 400 disks at rest, 5 apart (x and y = 2.5, 7.5, ..., 97.5) in a box of 100, then `more`: with
+/// 400 disks the grid (plab::grid::choose()) has 20 x 20 cells of 5, one disk a cell. The lane
+/// y = 50 lies 2.5 from the rows either side, so a disk moving along it touches none of them.
+plab::Particles fine_lattice_and(std::initializer_list<Disk> more) {
+  std::vector<Disk> all;
+  for (int j = 0; j < 20; ++j)
+    for (int i = 0; i < 20; ++i) all.push_back({2.5 + 5 * i, 2.5 + 5 * j, 0, 0});
+  all.insert(all.end(), more);
+  plab::Particles p;
+  p.resize(all.size());
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    p.x[i] = all[i].x;
+    p.y[i] = all[i].y;
+    p.vx[i] = all[i].vx;
+    p.vy[i] = all[i].vy;
+  }
+  return p;
+}
+
 // A pair that can meet is found even when the two sit in cells far apart because one is fast:
-// disk 20 at x = 5 (speed 86) meets disk 21 at rest at x = 50 (gap 45 - 2 = 43) at t = 0.5, eight
-// columns away (22 disks: 4 rows of 25, 16 columns of 6.25). At 0.5: x20 = 48, x21 = 50; exchange:
-// v20 = 0, v21 = 86; on 0.5: x21 = 50 + 43 = 93 (its wall: (99 - 50)/86 > 0.5). The 20 others
-// stay put, uncounted.
+// disk 400 at x = 5 (speed 86) meets disk 401 at rest at x = 28.5 (gap 23.5 - 2 = 21.5) at
+// t = 0.25. Every other disk is at rest, so the grid has one slab (midpoint 0.5) and cells of 5:
+// at the midpoint 400 stands at 5 + 43 = 48, column 9, and 401 at column 5, four columns away.
+// Searching the 3 x 3 cells around each disk misses the pair; the fast disk's own reach (2r +
+// 86) does not. Exchange: v400 = 0, v401 = 86; on 0.75: x401 = 28.5 + 64.5 = 93 (its wall:
+// (99 - 28.5)/86 > 0.75). The 400 others stay put, uncounted.
 TEST(Stage06Spec, AFastDiskFindsItsPartnerInAFarCell) {
-  const plab::Particles start = lattice_and({{5, 50, 86, 0}, {50, 50, 0, 0}});
-  plab::Particles expected = lattice_and({{48, 50, 0, 0}, {93, 50, 86, 0}});
-  expected.pc[20] = expected.pc[21] = 1;
+  const plab::Particles start = fine_lattice_and({{5, 50, 86, 0}, {28.5, 50, 0, 0}});
+  plab::Particles expected = fine_lattice_and({{26.5, 50, 0, 0}, {93, 50, 86, 0}});
+  expected.pc[400] = expected.pc[401] = 1;
   expect_state(expected, run({100, 1}, start));
 }
 

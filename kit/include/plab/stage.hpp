@@ -165,7 +165,7 @@ class CpuStep {
 
 /// cpu_stage() for a stage whose step is an object (see CpuStep): `gpu` (its GPU path, if any)
 /// when `options` and the machine allow it, otherwise `state` steps `p` in place on the CPU.
-/// 	hrows std::runtime_error for Real::kFloat (such a stage has no float variant)
+/// \throws std::runtime_error for Real::kFloat (such a stage has no float variant)
 std::unique_ptr<Stepper> cpu_stage(const Box& box, Particles& p, const StageOptions& options,
                                    std::unique_ptr<CpuStep> state, GpuStarter gpu = nullptr);
 

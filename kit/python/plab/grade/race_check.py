@@ -5,13 +5,15 @@
 Builds the stage's program with ThreadSanitizer in its own folder (DIR/races-NN: clang++, LLVM's
 OpenMP and its Archer tool, the cmake arguments of races.py, no tests: only the stage's program),
 runs it with three threads on crowded scenes under the OpenMP schedules of races.py (static,1
-deals every loop's iterations round-robin, so every thread works in every loop), and stops at the
+deals every loop's iterations round-robin, so every thread works in every loop of
+schedule(runtime); the largest scene gives a loop with a schedule of its own several chunks), and stops at the
 first race: it prints the file and line of both accesses (the stage's own files first) and keeps
 TSan's whole report in DIR/races-NN/report.txt. Exit code 0: no race seen; 1: a race; 2: the check
 could not run (no clang++, libomp or Archer; the build failed). The same build and run as the
 grader's race check (plab.grade.grader), without the sandbox and the hidden scene.
 """
 import argparse
+import json
 import os
 import pathlib
 import shutil
@@ -22,8 +24,12 @@ import time
 from plab.grade import races  # the grader's race machinery: TSan's build, environment and report
 
 #: The scenes a race check runs by default: crowded ones, where every loop has work for every
-#: thread and particles meet (dense-box: 40 disks in a small box; course-1).
+#: thread and particles meet (dense-box: 40 disks in a small box; course-1), then a generated one
+#: as large as the grader's (the rubric's races_scene, a seed of its own): a loop with a chunked
+#: schedule of its own, e.g. schedule(dynamic, 64), ignores the schedules run here, and only a
+#: scene of several chunks shares its iterations between the threads.
 SCENES = ("dense-box.in", "course-1.in")
+CROWDED_SEED = 1
 
 
 def say(text):
@@ -48,6 +54,18 @@ def build(source, folder, target):
             f"{done.stderr[-2000:]}")
         return None
     return folder / "bin" / target
+
+
+def crowded_scene(source, build_dir, folder):
+    """The rubric's races_scene, generated (once) into `folder` by the kit's `plab gen`."""
+    spec = json.loads((source / "kit" / "grade" / "rubric.json").read_text())["correctness"][
+        "races_scene"]
+    scene = folder / f"crowded-{spec['n']}.in"
+    if not scene.exists():
+        subprocess.run([str(build_dir / "bin" / "plab"), "gen", "--n", str(spec["n"]), "--l",
+                        str(spec["L"]), "--r", str(spec["r"]), "--steps", str(spec["steps"]),
+                        "--seed", str(CROWDED_SEED), "--out", str(scene)], check=True)
+    return str(scene)
 
 
 def main():
@@ -76,7 +94,8 @@ def main():
     if program is None:
         return 2
     say(f"built in {time.monotonic() - started:.0f} s; running it with 3 threads")
-    scenes = a.scene or [str(source / "datasets" / "scenes" / s) for s in SCENES]
+    scenes = a.scene or [str(source / "datasets" / "scenes" / s) for s in SCENES] + [
+        crowded_scene(source, pathlib.Path(a.build).resolve(), folder)]
     env = dict(os.environ, **races.tsan_env(threads=3))
     report_file = folder / "report.txt"
     for scene in scenes:
