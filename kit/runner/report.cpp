@@ -2,6 +2,7 @@
 /// \brief The runner's report: one timing line on stderr, and the JSON that plab bench reads.
 #include <cstdio>
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "plab/io.hpp"
 #include "plab/runtime.hpp"
@@ -11,12 +12,13 @@ namespace plab::runner {
 
 void report(const Options& o, const RunStats& stats) {
   const StageInfo& info = stage_info();
+  const int threads = info.openmp ? get_threads() : 1;  // a sequential stage runs on one
   if (!o.report_path.empty()) {
     OutputFile file(o.report_path);
     const nlohmann::json j = {
         {"stage", info.id},               {"impl", info.impl},
         {"n", stats.particles},           {"steps", stats.steps},
-        {"threads", get_threads()},       {"device", stats.device},
+        {"threads", threads},       {"device", stats.device},
         {"timer", stats.timer},           {"step_seconds", stats.step_seconds},
         {"device_bytes", stats.device_bytes}, {"bandwidth", stats.bandwidth},
         {"total_seconds", stats.total_seconds},
@@ -30,10 +32,11 @@ void report(const Options& o, const RunStats& stats) {
   }
   if (o.quiet) return;
   std::fprintf(stderr,
-               "stage %s (%s) on %s: N=%zu S=%lld threads=%d: %.3f s in steps (%.3f ms/step, "
+               "stage %s (%s) on %s: N=%zu S=%lld%s: %.3f s in steps (%.3f ms/step, "
                "%s), %.3f s total; %lld pair and %lld wall collisions\n",
                info.id.c_str(), info.impl.c_str(), stats.device.c_str(), stats.particles,
-               stats.steps, get_threads(), stats.step_seconds,
+               stats.steps, info.openmp ? (" threads=" + std::to_string(threads)).c_str() : "",
+               stats.step_seconds,
                stats.steps ? 1e3 * stats.step_seconds / stats.steps : 0.0, stats.timer.c_str(),
                stats.total_seconds, stats.pair_events, stats.wall_events);
   if (stats.traffic.ranks > 1)

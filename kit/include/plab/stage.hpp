@@ -66,6 +66,7 @@ struct StageInfo {
   std::vector<std::string> simd;        //!< narrower vector paths its tests also run (06 engine)
   bool mpi = false;                     //!< runs on several processes started by mpirun (08)
   int (*worker)() = nullptr;            //!< with `mpi`: plab::stage_worker()
+  bool openmp = false;                  //!< shares its work among OpenMP threads (`--threads`)
 };
 
 /// This stage's declaration (defined in the library CMake builds for it).

@@ -3,6 +3,8 @@
 /// counting sort's scan is the kit's, plab::cuda::exclusive_scan()).
 #pragma once
 
+#include <algorithm>
+#include <cstdlib>
 
 #include "kernels.cuh"
 #include "plab/cuda/check.hpp"
@@ -17,6 +19,16 @@ static_assert(kernels::kSearchThreads == kThreads);
 
 /// Blocks of kThreads covering `n`.
 inline unsigned blocks(long long n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
+
+/// Blocks of find_fast_pairs() for a pass of at most `most` entries: a team for each of the
+/// fast entries expected (EXPERIMENT: a 1/PLAB_ENGINE_FAST_SHARE of the entries, default 10).
+inline unsigned fast_blocks(long long most) {
+  static const long long share = [] {
+    const char* v = std::getenv("PLAB_ENGINE_FAST_SHARE");
+    return v ? std::max(1LL, std::atoll(v)) : 10LL;
+  }();
+  return blocks((most / share + 1) * kernels::kFastTeam);
+}
 
 /// `buckets` > 0: also clears the one pass's bucket counts and fast counter (see the kernel).
 inline void start_step(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
@@ -50,8 +62,7 @@ inline void find_pairs_as(const cuda::ParticlesView& p, const Box& box,
   if (!cleared) PLAB_CUDA_CHECK(cudaMemsetAsync(&a.flags->fast, 0, sizeof(int), s));
   kernels::find_pairs<S><<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d);
   PLAB_CUDA_CHECK_LAUNCH("find_pairs");
-  kernels::find_fast_pairs<S><<<blocks((most / 10 + 1) * kernels::kFastTeam),
-                                kernels::kSearchThreads, 0, s>>>(p, box, a, d);
+  kernels::find_fast_pairs<S><<<fast_blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d);
   PLAB_CUDA_CHECK_LAUNCH("find_fast_pairs");
 }
 
@@ -66,8 +77,7 @@ inline void find_pairs_balanced(const cuda::ParticlesView& p, const Box& box,
   kernels::find_pairs_balanced<<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d);
   PLAB_CUDA_CHECK_LAUNCH("find_pairs_balanced");
   kernels::find_fast_pairs<kernels::Search::kLean>
-      <<<blocks((most / 10 + 1) * kernels::kFastTeam), kernels::kSearchThreads, 0, s>>>(p, box,
-                                                                                        a, d);
+      <<<fast_blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d);
   PLAB_CUDA_CHECK_LAUNCH("find_fast_pairs");
 }
 
