@@ -3,8 +3,6 @@
 /// counting sort's scan is the kit's, plab::cuda::exclusive_scan()).
 #pragma once
 
-#include <algorithm>
-#include <cstdlib>
 
 #include "kernels.cuh"
 #include "plab/cuda/check.hpp"
@@ -20,14 +18,16 @@ static_assert(kernels::kSearchThreads == kThreads);
 /// Blocks of kThreads covering `n`.
 inline unsigned blocks(long long n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
 
-/// Blocks of find_fast_pairs() for a pass of at most `most` entries: a team for each of the
-/// fast entries expected (EXPERIMENT: a 1/PLAB_ENGINE_FAST_SHARE of the entries, default 10).
+/// Blocks of find_fast_pairs() for a pass of at most `most` entries: a team of
+/// kernels::kFastTeam threads for each fast entry expected. The grid is chosen from the first
+/// state, where a tenth of the particles are fast; a gas that heats has more (the report's scene
+/// after 500 steps: 21%, as a 2D Maxwell gas of its energy has, exp(-(v_cut / v_rms)^2)), and a
+/// team then takes two or three entries in turn. A small pass leaves most of the GPU idle: teams
+/// for a fifth of its entries (the report's scene: 0.088 to 0.083 ms a step on an H200). A large
+/// pass fills the GPU either way: a tenth (a fifth was 0.7% slower at N = 10^6).
 inline unsigned fast_blocks(long long most) {
-  static const long long share = [] {
-    const char* v = std::getenv("PLAB_ENGINE_FAST_SHARE");
-    return v ? std::max(1LL, std::atoll(v)) : 10LL;
-  }();
-  return blocks((most / share + 1) * kernels::kFastTeam);
+  constexpr long long kSmallPass = 1 << 18;  // entries: the report's scene has 9 x 10^4
+  return blocks((most / (most < kSmallPass ? 5 : 10) + 1) * kernels::kFastTeam);
 }
 
 /// `buckets` > 0: also clears the one pass's bucket counts and fast counter (see the kernel).
@@ -50,9 +50,8 @@ inline void bin_scatter(const cuda::ParticlesView& p, const kernels::StepArrays&
 }
 
 /// The pair search of a pass: find_pairs over every entry (the slow ones), then find_fast_pairs
-/// over the fast ones it listed (a team of kernels::kFastTeam threads each, on a grid for a
-/// tenth of the entries: the fastest tenth of the particles are the fast ones, sweep::choose()),
-/// in search shape `S` (kernels::Search).
+/// over the fast ones it listed (a team of kernels::kFastTeam threads each, on fast_blocks()'s
+/// grid), in search shape `S` (kernels::Search).
 /// `cleared`: start_step() cleared the fast entries' counter already (a step of one pass).
 template <kernels::Search S>
 inline void find_pairs_as(const cuda::ParticlesView& p, const Box& box,
