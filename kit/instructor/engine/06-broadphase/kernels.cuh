@@ -224,16 +224,18 @@ constexpr int kBlocksOf = S == Search::kBatched ? 2 : 4;
 /// columns within reach of the row above (two runs of entries of its slab). A fast entry
 /// searches about twice as many entries (every row within its reach): it is listed in `a.rank`
 /// (free once bin_scatter ran) for find_fast_pairs, so that the threads of a warp run loops of
-/// like length. Search shape `S` (Search).
+/// like length (`list_fast`; otherwise find_fast_pairs finds the fast entries itself, running
+/// beside this kernel). Search shape `S` (Search).
 template <Search S>
 __global__ void __launch_bounds__(kSearchThreads, kBlocksOf<S>)
-    find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
+    find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d, bool list_fast) {
   namespace cg = cooperative_groups;
   const int e = blockIdx.x * blockDim.x + threadIdx.x;
   if (e >= a.start[d.slabs * d.cells] || a.flags->overflow) return;
   const Entry me = a.entry[e];
   const sweep::Search q = sweep::search_of(me.vx, me.vy, d.g);
   if (q.fast) {  // one atomic for the fast threads of the warp
+    if (!list_fast) return;
     const cg::coalesced_group fast = cg::coalesced_threads();
     int first = 0;
     if (fast.thread_rank() == 0) first = atomicAdd(&a.flags->fast, static_cast<int>(fast.size()));
@@ -271,7 +273,7 @@ struct LaneRuns {
 /// arithmetic, so the same pairs are filed. (The warp's sum of run lengths is an int: it would
 /// overflow only past 2^31 tests for 32 entries, a grid no search could finish.)
 __global__ void __launch_bounds__(kSearchThreads, 4)
-    find_pairs_balanced(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
+    find_pairs_balanced(ParticlesView p, Box box, StepArrays a, DeviceGrid d, bool list_fast) {
   namespace cg = cooperative_groups;
   __shared__ LaneRuns lanes[kSearchThreads];
   if (a.flags->overflow) return;  // the same for every thread: written before this kernel
@@ -283,12 +285,14 @@ __global__ void __launch_bounds__(kSearchThreads, 4)
   if (e < a.start[d.slabs * d.cells]) {
     const Entry me = a.entry[e];
     const sweep::Search q = sweep::search_of(me.vx, me.vy, d.g);
-    if (q.fast) {  // one atomic for the fast threads of the warp
-      const cg::coalesced_group fast = cg::coalesced_threads();
-      int first = 0;
-      if (fast.thread_rank() == 0)
-        first = atomicAdd(&a.flags->fast, static_cast<int>(fast.size()));
-      a.rank[fast.shfl(first, 0) + static_cast<int>(fast.thread_rank())] = e;
+    if (q.fast) {  // one atomic for the fast threads of the warp (find_pairs()' `list_fast`)
+      if (list_fast) {
+        const cg::coalesced_group fast = cg::coalesced_threads();
+        int first = 0;
+        if (fast.thread_rank() == 0)
+          first = atomicAdd(&a.flags->fast, static_cast<int>(fast.size()));
+        a.rank[fast.shfl(first, 0) + static_cast<int>(fast.thread_rank())] = e;
+      }
     } else {
       const int columns = d.g.columns;
       const int* row = a.start + (slab_of(a, d, p.n, e) - d.first) * d.cells;  // its slab's cells
@@ -326,22 +330,26 @@ __global__ void __launch_bounds__(kSearchThreads, 4)
   }
 }
 
-/// The search of the fast entries find_pairs or find_pairs_balanced listed (`flags->fast` of them
-/// in `a.rank`): a team of kFastTeam threads for each, sharing every run of entries within its
-/// reach, one run per row (a pair found twice is harmless); any grid, the teams stride over the
-/// list. Search shape `S` (Search).
+/// The search of the fast entries: a team of kFastTeam threads for each, sharing every run of
+/// entries within its reach, one run per row (a pair found twice is harmless); any grid, the
+/// teams stride over the entries. `listed`: those find_pairs or find_pairs_balanced listed
+/// (`flags->fast` of them in `a.rank`); otherwise every entry of the pass, each team keeping
+/// its entry only if it is fast, so that this kernel can run beside the slow entries' search
+/// instead of after it (small scenes, which leave most of the GPU idle). Search shape `S`.
 template <Search S>
 __global__ void __launch_bounds__(kSearchThreads, kBlocksOf<S>)
-    find_fast_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d) {
+    find_fast_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d, bool listed) {
   const int t = blockIdx.x * blockDim.x + threadIdx.x;
   const int lane = t % kFastTeam, teams = gridDim.x * blockDim.x / kFastTeam;
   if (a.flags->overflow) return;
-  const int m = a.flags->fast, columns = d.g.columns;
+  const int m = listed ? a.flags->fast : a.start[d.slabs * d.cells], columns = d.g.columns;
   for (int q = t / kFastTeam; q < m; q += teams) {
-    const int e = a.rank[q];
-    const int* row = a.start + (slab_of(a, d, p.n, e) - d.first) * d.cells;
+    const int e = listed ? a.rank[q] : q;
     const Entry me = a.entry[e];
-    const double reach = sweep::search_of(me.vx, me.vy, d.g).d;
+    const sweep::Search search = sweep::search_of(me.vx, me.vy, d.g);
+    if (!search.fast) continue;  // (a listed entry is fast)
+    const int* row = a.start + (slab_of(a, d, p.n, e) - d.first) * d.cells;
+    const double reach = search.d;
     int x0, x1, y0, y1;
     sweep::columns_within(me.x, reach, d.g, x0, x1);
     sweep::rows_within(me.y, reach, d.g, y0, y1);

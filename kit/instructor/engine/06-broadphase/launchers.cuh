@@ -18,6 +18,10 @@ static_assert(kernels::kSearchThreads == kThreads);
 /// Blocks of kThreads covering `n`.
 inline unsigned blocks(long long n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
 
+/// A pass of fewer entries than this leaves most of the GPU idle (the report's scene has
+/// 9 x 10^4 in its one pass; 10^5 particles at the report's density have 10^6).
+constexpr long long kSmallPass = 1 << 18;
+
 /// Blocks of find_fast_pairs() for a pass of at most `most` entries: a team of
 /// kernels::kFastTeam threads for each fast entry expected. The grid is chosen from the first
 /// state, where a tenth of the particles are fast; a gas that heats has more (the report's scene
@@ -26,7 +30,6 @@ inline unsigned blocks(long long n) { return static_cast<unsigned>((n + kThreads
 /// for a fifth of its entries (the report's scene: 0.088 to 0.083 ms a step on an H200). A large
 /// pass fills the GPU either way: a tenth (a fifth was 0.7% slower at N = 10^6).
 inline unsigned fast_blocks(long long most) {
-  constexpr long long kSmallPass = 1 << 18;  // entries: the report's scene has 9 x 10^4
   return blocks((most / (most < kSmallPass ? 5 : 10) + 1) * kernels::kFastTeam);
 }
 
@@ -59,9 +62,10 @@ inline void find_pairs_as(const cuda::ParticlesView& p, const Box& box,
                           cudaStream_t s) {
   const long long most = static_cast<long long>(p.n) * d.slabs;  // entries this pass, at most
   if (!cleared) PLAB_CUDA_CHECK(cudaMemsetAsync(&a.flags->fast, 0, sizeof(int), s));
-  kernels::find_pairs<S><<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d);
+  kernels::find_pairs<S><<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d, true);
   PLAB_CUDA_CHECK_LAUNCH("find_pairs");
-  kernels::find_fast_pairs<S><<<fast_blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d);
+  kernels::find_fast_pairs<S><<<fast_blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d,
+                                                                                    true);
   PLAB_CUDA_CHECK_LAUNCH("find_fast_pairs");
 }
 
@@ -73,10 +77,11 @@ inline void find_pairs_balanced(const cuda::ParticlesView& p, const Box& box,
                                 bool cleared, cudaStream_t s) {
   const long long most = static_cast<long long>(p.n) * d.slabs;  // entries this pass, at most
   if (!cleared) PLAB_CUDA_CHECK(cudaMemsetAsync(&a.flags->fast, 0, sizeof(int), s));
-  kernels::find_pairs_balanced<<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d);
+  kernels::find_pairs_balanced<<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d,
+                                                                               true);
   PLAB_CUDA_CHECK_LAUNCH("find_pairs_balanced");
   kernels::find_fast_pairs<kernels::Search::kLean>
-      <<<fast_blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d);
+      <<<fast_blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d, true);
   PLAB_CUDA_CHECK_LAUNCH("find_fast_pairs");
 }
 
@@ -90,6 +95,30 @@ inline void find_pairs(const cuda::ParticlesView& p, const Box& box, const kerne
     find_pairs_as<kernels::Search::kLean>(p, box, a, d, cleared, s);
   else
     find_pairs_balanced(p, box, a, d, cleared, s);
+}
+
+/// The pair search of a pass in two streams at once: the slow entries on `s` in the shape `shape`
+/// names, and the fast ones on `side` (a team for every entry of the pass, each keeping its entry
+/// only if it is fast: nothing to wait for). The caller orders `side` after the pass's sort and
+/// before what reads the pairs.
+inline void find_pairs_beside(const cuda::ParticlesView& p, const Box& box,
+                              const kernels::StepArrays& a, const kernels::DeviceGrid& d,
+                              kernels::Search shape, cudaStream_t s, cudaStream_t side) {
+  const long long most = static_cast<long long>(p.n) * d.slabs;  // entries this pass, at most
+  if (shape == kernels::Search::kBatched)
+    kernels::find_pairs<kernels::Search::kBatched>
+        <<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d, false);
+  else if (shape == kernels::Search::kLean)
+    kernels::find_pairs<kernels::Search::kLean>
+        <<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d, false);
+  else
+    kernels::find_pairs_balanced<<<blocks(most), kernels::kSearchThreads, 0, s>>>(p, box, a, d,
+                                                                                 false);
+  PLAB_CUDA_CHECK_LAUNCH("find_pairs");
+  kernels::find_fast_pairs<kernels::Search::kLean>
+      <<<blocks(most * kernels::kFastTeam), kernels::kSearchThreads, 0, side>>>(p, box, a, d,
+                                                                                false);
+  PLAB_CUDA_CHECK_LAUNCH("find_fast_pairs");
 }
 
 /// One thread per pair the list can hold.

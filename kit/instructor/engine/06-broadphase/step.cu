@@ -45,6 +45,13 @@ bool separate_asked() {
   return v && std::string(v) == "separate";
 }
 
+/// Whether PLAB_ENGINE_BESIDE=off asks a small pass to search its fast entries after the slow ones
+/// (as a large pass does) rather than beside them: to measure the difference.
+bool beside_off() {
+  const char* v = std::getenv("PLAB_ENGINE_BESIDE");
+  return v && std::string(v) == "off";
+}
+
 /// The pair search's shape for `n` particles: PLAB_ENGINE_SEARCH=batched, lean or balanced when it
 /// asks (to measure the difference), otherwise batched below `balanced_from` particles and
 /// balanced from there.
@@ -142,7 +149,15 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
       launch::bin_count(p_.view(), a, pass, main_);
       cuda::exclusive_scan(a.start, a.start, buckets, temp_.get(), temp_.size(), main_);
       launch::bin_scatter(p_.view(), a, pass, main_);
-      launch::find_pairs(p_.view(), box_, a, pass, one_pass, search_, main_);
+      if (beside_) {  // the fast entries' search on side_, beside the slow ones' (a small pass)
+        PLAB_CUDA_CHECK(cudaEventRecord(sorted_.e, main_));
+        PLAB_CUDA_CHECK(cudaStreamWaitEvent(side_, sorted_.e));
+        launch::find_pairs_beside(p_.view(), box_, a, pass, search_, main_, side_);
+        PLAB_CUDA_CHECK(cudaEventRecord(searched_.e, side_));
+        PLAB_CUDA_CHECK(cudaStreamWaitEvent(main_, searched_.e));
+      } else {
+        launch::find_pairs(p_.view(), box_, a, pass, one_pass, search_, main_);
+      }
     }
     if (finish_small_) {  // the scan, place_pairs, start_rounds, the rounds and apply in one
       launch::finish_small(p_.view(), box_, a, main_);
@@ -185,6 +200,8 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     const long long most = std::max<long long>(1, kEntriesPerPass / std::max(n_, 1));
     const int passes = static_cast<int>((grid_.g.slabs + most - 1) / most);
     per_pass_ = (grid_.g.slabs + passes - 1) / passes;
+    beside_ = passes == 1 && static_cast<long long>(n_) * per_pass_ < launch::kSmallPass &&
+              !beside_off();
     const int size = per_pass_ * grid_.cells + 1;
     temp_.resize(std::max(cuda::exclusive_scan_bytes(size), cuda::exclusive_scan_bytes(n_)));
     lay_out();
@@ -283,6 +300,19 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   bool finish_small_ = false;
   /// The pair search's shape (search_shape()).
   kernels::Search search_ = search_shape(n_, kBalancedSearchFrom);
+  /// A step of one small pass searches its fast entries on side_ beside the slow ones
+  /// (launch::find_pairs_beside()), unless PLAB_ENGINE_BESIDE=off asks otherwise (to compare).
+  bool beside_ = false;
+  cuda::Stream side_;
+  /// An event without timing: where side_ starts (the pass sorted) and where main_ waits for it.
+  struct Mark {
+    cudaEvent_t e = nullptr;
+    Mark() { PLAB_CUDA_CHECK(cudaEventCreateWithFlags(&e, cudaEventDisableTiming)); }
+    ~Mark() { cudaEventDestroy(e); }
+    Mark(const Mark&) = delete;
+    Mark& operator=(const Mark&) = delete;
+  };
+  Mark sorted_, searched_;
 };
 
 }  // namespace
