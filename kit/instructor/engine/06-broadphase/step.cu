@@ -201,7 +201,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     const int passes = static_cast<int>((grid_.g.slabs + most - 1) / most);
     per_pass_ = (grid_.g.slabs + passes - 1) / passes;
     beside_ = passes == 1 && static_cast<long long>(n_) * per_pass_ < launch::kSmallPass &&
-              !beside_off();
+              n_ < kBesideBelow && !beside_off();
     const int size = per_pass_ * grid_.cells + 1;
     temp_.resize(std::max(cuda::exclusive_scan_bytes(size), cuda::exclusive_scan_bytes(n_)));
     lay_out();
@@ -275,6 +275,11 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   /// 0.061 / 0.063, 10^4 0.090 / 0.089, 2 x 10^4 0.155 / 0.138, 10^5 0.565 / 0.526 and 10^6
   /// 4.650 / 4.363 (lean from 2 x 10^4); handouts/engine-gpu.md has the table.
   static constexpr int kBalancedSearchFrom = 10000;
+  /// Below this N a step of one pass searches its fast entries beside the slow ones (beside_).
+  /// Measured on an H200 (2026-11-27, the report's box, S = 500, medians of 5 runs, ms a step,
+  /// after / beside): N = 1000 0.043 / 0.036, 4000 0.054 / 0.049, 10^4 0.082 / 0.087 (there
+  /// the slow search is balanced and fills more of the GPU), 2 x 10^4 0.139 / 0.139.
+  static constexpr int kBesideBelow = 10000;
   double bandwidth_ = 0;  //!< measure_bandwidth(), once, before the steps
   double alpha_;  //!< slabs per sqrt(N) v_cut / L (StageOptions::sweep_alpha, or kAlpha)
   kernels::DeviceGrid grid_{};
