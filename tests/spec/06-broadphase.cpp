@@ -16,15 +16,7 @@ plab::Particles lattice_and(std::initializer_list<Disk> more) {
   for (double y : {10, 30, 70, 90})
     for (double x : {10, 30, 50, 70, 90}) all.push_back({x, y, 0, 0});
   all.insert(all.end(), more);
-  plab::Particles p;
-  p.resize(all.size());
-  for (std::size_t i = 0; i < all.size(); ++i) {
-    p.x[i] = all[i].x;
-    p.y[i] = all[i].y;
-    p.vx[i] = all[i].vx;
-    p.vy[i] = all[i].vy;
-  }
-  return p;
+  return disks(all);
 }
 
 /// 400 disks at rest, 5 apart (x and y = 2.5, 7.5, ..., 97.5) in a box of 100, then `more`: with
@@ -35,15 +27,7 @@ plab::Particles fine_lattice_and(std::initializer_list<Disk> more) {
   for (int j = 0; j < 20; ++j)
     for (int i = 0; i < 20; ++i) all.push_back({2.5 + 5 * i, 2.5 + 5 * j, 0, 0});
   all.insert(all.end(), more);
-  plab::Particles p;
-  p.resize(all.size());
-  for (std::size_t i = 0; i < all.size(); ++i) {
-    p.x[i] = all[i].x;
-    p.y[i] = all[i].y;
-    p.vx[i] = all[i].vx;
-    p.vy[i] = all[i].vy;
-  }
-  return p;
+  return disks(all);
 }
 
 // A pair that can meet is found even when the two sit in cells far apart because one is fast:

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <initializer_list>
 #include <string>
+#include <vector>
 
 #include "plab/stage.hpp"
 
@@ -21,7 +22,7 @@ struct Disk {
 };
 
 /// The particles of `disks`, index i being the i-th.
-inline Particles disks(std::initializer_list<Disk> disks) {
+inline Particles disks(const std::vector<Disk>& disks) {
   Particles p;
   p.resize(disks.size());
   int i = 0;
@@ -34,6 +35,9 @@ inline Particles disks(std::initializer_list<Disk> disks) {
   }
   return p;
 }
+
+/// The same from a list written in the test.
+inline Particles disks(std::initializer_list<Disk> list) { return disks(std::vector<Disk>(list)); }
 
 /// `p` after `steps` steps of the stage under test, started through plab::make_stepper().
 inline Particles run(const Box& box, Particles p, int steps = 1,
