@@ -131,7 +131,10 @@ void install_scratch_cleanup() {
 /// Ends the test program (and its child, if any) with `why` on both streams (CTest keeps both).
 [[noreturn]] void stop(const std::string& why) {
   Watched& w = state();
-  if (const pid_t child = w.child.load(); child > 0) kill(child, SIGKILL);
+  if (const pid_t child = w.child.load(); child > 0) {
+    kill(-child, SIGKILL);  // its process group: mpirun and its ranks too
+    kill(child, SIGKILL);
+  }
   remove_scratch();  // no destructor runs after _exit()
   std::fprintf(stdout, "\n%s\n", why.c_str());
   std::fprintf(stderr, "\n%s\n", why.c_str());
@@ -244,21 +247,84 @@ MakeStepper watched(MakeStepper make) {
   };
 }
 
-int run_watched(const std::string& command_line) {
+namespace {
+
+/// Starts `command_line` through sh in a process group of its own (what it starts, e.g. mpirun's
+/// ranks, can be ended with it), as the watched child.
+pid_t start_child(const std::string& command_line) {
   std::fflush(nullptr);
   const pid_t pid = fork();
   if (pid == 0) {
+    setpgid(0, 0);
     execl("/bin/sh", "sh", "-c", ("exec " + command_line).c_str(), static_cast<char*>(nullptr));
     _exit(127);
   }
+  if (pid > 0) {
+    setpgid(pid, pid);  // (also here: no signal may reach the group before the child set it)
+    set_child(pid);
+  }
+  return pid;
+}
+
+int exit_status(int status) {
+  return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WEXITSTATUS(status);
+}
+
+/// The steps done that a runner's status file (`DONE TOTAL`, its --status) says, or -1.
+long long steps_done(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "r");
+  if (!f) return -1;
+  long long done = -1;
+  if (std::fscanf(f, "%lld", &done) != 1) done = -1;
+  std::fclose(f);
+  return done;
+}
+
+}  // namespace
+
+int run_watched(const std::string& command_line) {
+  const pid_t pid = start_child(command_line);
   if (pid < 0) return 127;
-  set_child(pid);
   int status = 0;
   while (waitpid(pid, &status, 0) < 0) {
   }
   set_child(0);
   unwatch();
-  return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WEXITSTATUS(status);
+  return exit_status(status);
+}
+
+int run_watched_steps(const std::string& command_line, const std::string& what, long long steps,
+                      const std::string& status_file, double stall, long long& done) {
+  {  // what the program's own limit names, should it run out now (not armed: the stall is here)
+    watch(what, steps);
+    unwatch();
+  }
+  const pid_t pid = start_child(command_line);
+  if (pid < 0) return 127;
+  done = 0;
+  auto last = Clock::now();
+  int status = 0;
+  for (;;) {
+    const pid_t ended = waitpid(pid, &status, WNOHANG);
+    if (ended == pid) break;
+    if (const long long now = steps_done(status_file); now > done) {
+      done = now;
+      last = Clock::now();
+      stepped(done);
+    }
+    if (std::chrono::duration<double>(Clock::now() - last).count() >= stall) {
+      kill(-pid, SIGTERM);  // the whole group: mpirun ends its ranks, then the rest is killed
+      std::this_thread::sleep_for(std::chrono::seconds(3));
+      kill(-pid, SIGKILL);
+      while (waitpid(pid, &status, 0) < 0) {
+      }
+      set_child(0);
+      return -1;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  set_child(0);
+  return exit_status(status);
 }
 
 ScratchDir::ScratchDir() {

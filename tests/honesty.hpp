@@ -52,4 +52,11 @@ MakeStepper watched(MakeStepper make);
 /// the test when a limit runs out. Returns its exit status (128 + signal when killed).
 int run_watched(const std::string& command_line);
 
+/// run_watched() for a runner that writes its progress to `status_file` (its --status): when no
+/// step finishes for `stall` seconds (a deadlock between ranks), its whole process group is
+/// ended and -1 returned. `done`: the steps it finished. `what` and `steps` name the run in the
+/// watchdog's messages.
+int run_watched_steps(const std::string& command_line, const std::string& what, long long steps,
+                      const std::string& status_file, double stall, long long& done);
+
 }  // namespace plab::test

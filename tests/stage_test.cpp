@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cctype>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -359,6 +360,9 @@ TEST(Invariants, EnergyConservedFiniteCountersGrow) {
 
 /// How long one run under mpirun may take (the kit's scenes take a few seconds on 4 ranks).
 constexpr int kRanksSeconds = 240;
+/// How long it may go without finishing a step (mpirun's start included) before it is taken for
+/// ranks waiting for each other for ever, and ended with all its processes.
+constexpr double kRanksStallSeconds = 60;
 
 /// Runs this stage's program on `ranks` ranks on `scene_file`; returns its output ("" and a
 /// failure when it fails).
@@ -369,20 +373,40 @@ std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::t
     setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
     setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
   }
+  // After one run whose ranks waited for ever, the next would too: each would cost the stall
+  // limit, and the test program's own limit would end the rest unseen.
+  static std::string stalled;
+  if (!stalled.empty()) {
+    ADD_FAILURE() << this_name() << " on " << ranks << " ranks, " << what
+                  << ": not run, since an earlier run's ranks waited for ever (" << stalled << ")";
+    return std::string();
+  }
   const std::string out = dir.file("ranks-" + std::to_string(ranks) + ".out");
-  // mpirun's session files go to the scratch folder (removed with it, however the run ends); the
-  // run reports no steps to the watchdog, so `timeout` bounds it instead of the stall limit.
+  const std::string status_file = dir.file("ranks-" + std::to_string(ranks) + ".status");
+  // mpirun's session files go to the scratch folder (removed with it, however the run ends); rank
+  // 0 writes each step it finishes to the status file, so that a stall ends this case alone
+  // (and every process of it), and `timeout` bounds the whole run.
   const std::string command = "env TMPDIR=" + dir.file("mpi") + " timeout --kill-after=5 " +
                               std::to_string(kRanksSeconds) + " mpirun --oversubscribe -np " +
                               std::to_string(ranks) + " " + plab::test::kThisProgram + " " +
-                              options + " --quiet --out " + out + " " + scene_file +
-                              (stderr_file.empty() ? "" : " 2> " + stderr_file);
+                              options + " --quiet --status " + status_file + " --out " + out +
+                              " " + scene_file + (stderr_file.empty() ? "" : " 2> " + stderr_file);
   std::filesystem::create_directories(dir.file("mpi"));
-  plab::test::unwatch();
-  const int status = plab::test::run_watched(command);
-  if (status == 124)
-    ADD_FAILURE() << this_name() << " on " << ranks << " ranks, " << what << ": not done in "
-                  << kRanksSeconds << " s (an endless loop, or a rank waiting for ever?)";
+  const std::string where = this_name() + " on " + std::to_string(ranks) + " ranks, " + what;
+  long long done = 0;
+  const int status = plab::test::run_watched_steps(command, where, 0, status_file,
+                                                   kRanksStallSeconds, done);
+  if (status == -1) stalled = where + ", after step " + std::to_string(done);
+  if (status == -1)
+    ADD_FAILURE() << where << ": no step finished in " << kRanksStallSeconds << " s after step "
+                  << done << " (ranks waiting for each other for ever: a send without its "
+                  << "receive, a collective some rank skips?); its processes were ended";
+  else if (status == 124)
+    ADD_FAILURE() << where << ": not done in " << kRanksSeconds
+                  << " s (an endless loop, or a rank waiting for ever?)";
+  else if (status > 128)
+    ADD_FAILURE() << where << ": a rank crashed (signal " << status - 128 << ", "
+                  << strsignal(status - 128) << ") after step " << done;
   else
     EXPECT_EQ(status, 0) << command;
   return status == 0 ? plab::read_file(out) : std::string();

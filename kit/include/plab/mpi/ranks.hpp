@@ -10,8 +10,9 @@
 /// ranks.cpp defines MPI_Send, MPI_Isend, MPI_Sendrecv, MPI_Alltoall, MPI_Alltoallv,
 /// MPI_Allreduce, MPI_Allgather(v) (the bytes this rank sends to other ranks; an all-reduce counts
 /// its buffer once) and the calls that wait (MPI_Recv, MPI_Wait, MPI_Waitall: time), each calling
-/// the library's PMPI_ version. `plab run --report` prints the sum of the bytes and the most
-/// seconds any rank spent in them.
+/// the library's PMPI_ version. The runner's summary (mpirun -np N build/bin/plab-run-08-IMPL
+/// SCENE), its `--report` JSON and `plab bench --stage 08 --ranks ...` give the sum of the bytes
+/// and the most seconds any rank spent in them.
 #pragma once
 
 #include <mpi.h>
