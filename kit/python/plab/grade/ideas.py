@@ -133,7 +133,8 @@ class Ideas:
     def bytes_sent(self, idea, run, text):
         """(problem or None, text): the bytes the ranks sent a particle and step, counted by the
         kit's MPI layer, against the rubric's most. The halo and the rounds' messages of a
-        slow scene are a few bytes; every particle sent to one rank and back, about 75."""
+        slow scene are a few bytes; every particle sent to one rank and back, about 75; none at
+        all, ranks that never worked together (rank 0 stepping alone while the others spin)."""
         sc, most = idea["scene"], idea["max_bytes_per_particle_step"]
         try:
             sent = float(json.loads(run.read_output("report.json") or "")["bytes_sent"])
@@ -141,6 +142,10 @@ class Ideas:
             return "its run left no report of the bytes its ranks sent", text
         per = sent / (sc["n"] * sc["steps"])
         text += f"; its ranks sent {per:.1f} bytes a particle and step"
+        if sent <= 0:  # ranks that share no halo and no round: each ran alone (or idled)
+            return (f"its ranks sent each other nothing in {sc['steps']} steps of {sc['n']} "
+                    f"particles: no halo, no round's message, so no rank stepped a slab of "
+                    f"its own with the others. {idea['hint']}"), text
         if per > most:
             return (f"its ranks sent {per:.1f} bytes a particle and step (at most {most:g} may: "
                     f"the halo and the rounds' messages; every particle sent to one rank and "
