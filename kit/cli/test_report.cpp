@@ -166,6 +166,13 @@ std::optional<Dataset> scene_of(const Manifest& m, const std::string& case_name)
   return std::nullopt;
 }
 
+/// The line a perf-mode golden failure adds (tests/stage_test.cpp): the first step whose digest
+/// differs.
+const std::regex& first_bad() {
+  static const std::regex re(R"(the state first differs after step (\d+))");
+  return re;
+}
+
 /// One line per case: a scene's name and "passed" or its first difference; skips grouped.
 void print_cases(const std::vector<Case>& cases, const Manifest& m) {
   std::map<std::string, std::pair<int, std::string>> skipped;
@@ -179,11 +186,10 @@ void print_cases(const std::vector<Case>& cases, const Manifest& m) {
       continue;
     }
     std::string what = c.status;
-    static const std::regex first_bad(R"(the state first differs after step (\d+))");
     if (const auto f = find_difference(c.message)) {
       what = "step " + f->step + (f->particle.empty() ? "" : ", particle " + f->particle) + ", " +
              f->field + ": expected " + f->expected + ", got " + f->actual;
-      if (std::smatch k; std::regex_search(c.message, k, first_bad) && k[1].str() != f->step)
+      if (std::smatch k; std::regex_search(c.message, k, first_bad()) && k[1].str() != f->step)
         what = "wrong from step " + k[1].str() + " (digests); printed " + what;
     }
     else if (c.status == "failed")
@@ -265,8 +271,7 @@ void explain_golden(const FirstFailure& f, const Dataset& d, const Manifest& m, 
   const long long step = std::atoll(diff.step.c_str());
   const std::string explain = std::to_string(step > 0 ? step - 1 : 0) + ":" + diff.particle;
   const Explainer how = explainer(f, scene);
-  static const std::regex first_bad(R"(the state first differs after step (\d+))");
-  if (std::smatch k; std::regex_search(f.c.message, k, first_bad) && k[1].str() != diff.step) {
+  if (std::smatch k; std::regex_search(f.c.message, k, first_bad()) && k[1].str() != diff.step) {
     // A perf-mode scene prints its last step only: the oracle's line there would explain the
     // wrong step. The digests name the first wrong one; print mode shows its particle.
     const std::string bad = k[1].str();
