@@ -5,6 +5,7 @@
 /// CUDA stage's tests skip without a GPU, its switches are each checked, scene sizes and N are
 /// limited as its stage.json says.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -475,6 +476,23 @@ TEST(RanksPhases, OneLineEachRank) {
     EXPECT_NE(text.find(" ghosts\n", at), std::string::npos) << text;
     EXPECT_EQ(text.find(head, at + 1), std::string::npos) << "two lines from rank " << rank;
   }
+}
+
+/// The runner's report on 2 ranks with a status file (as `plab run --ranks` and the tests above
+/// start it): the ranks and the bytes they sent, which the grader's idea check reads.
+TEST(RanksTraffic, ReportedWithAStatusFile) {
+  if (!plab::stage_info().mpi) GTEST_SKIP() << this_name() << " runs on one process";
+  const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
+  const std::vector<plab::Dataset> all = rank_datasets();
+  ASSERT_FALSE(all.empty());
+  const plab::test::ScratchDir scratch;
+  const std::string report = scratch.file("report.json");
+  const std::string output =
+      run_on_ranks(m.scene_path(all.front()), 2, scratch, "--report", "--report " + report);
+  ASSERT_FALSE(output.empty());
+  const nlohmann::json j = nlohmann::json::parse(plab::read_file(report));
+  EXPECT_EQ(j.at("ranks").get<int>(), 2) << j.dump();
+  EXPECT_GT(j.at("bytes_sent").get<double>(), 0) << j.dump();
 }
 
 /// A scene that stresses the cut, on 1 to `most` ranks (with the runner's `options`): the other

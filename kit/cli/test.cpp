@@ -50,6 +50,8 @@ void add_test(CLI::App& app) {
                                        "the kit, the solutions, the engine and the starting-point "
                                        "checks in the instructor's copy; the kit and your stages "
                                        "otherwise.");
+  c->footer("Exit status: 0 when every test asked for passed (skipped ones count as passed), "
+            "1 otherwise. The whole log: build/test-logs/plab-test.log.");
   c->add_option("--impl", *impl, "solution, student or engine (default as for run)");
   c->add_option("--stage", *stage, "only this stage's tests, e.g. 01");
   c->add_flag("--long", *long_too, "also the long tests (large scenes, several minutes)");

@@ -537,7 +537,7 @@ int run_tests_reported(const TestRun& run) {
   }
   print_failures(tests);
   print_counts(tests, run.log_path);
-  return rc;
+  return rc == 0 ? 0 : 1;  // CTest says 8 for a failed test: `plab test --help` promises 1
 }
 
 }  // namespace plab::cli

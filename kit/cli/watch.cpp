@@ -99,6 +99,25 @@ int report_end(int status, const RunWatch& w, const Steps& s) {
   return 128 + sig;
 }
 
+/// Ends the program `pid` and its process group: SIGTERM first, so that mpirun can end the ranks
+/// it started (they are not all in its group, and outlived a SIGKILL by seconds), then SIGKILL
+/// after at most 3 s for whatever is left. Returns its wait status.
+int end_group(pid_t pid) {
+  kill(-pid, SIGTERM);
+  int status = 0;
+  const auto t0 = Clock::now();
+  while (waitpid(pid, &status, WNOHANG) != pid) {
+    if (std::chrono::duration<double>(Clock::now() - t0).count() >= 3) {
+      kill(-pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  kill(-pid, SIGKILL);  // anything left in the group
+  return status;
+}
+
 }  // namespace
 
 int run_stage_watched(const std::vector<std::string>& args, const RunWatch& w) {
@@ -128,8 +147,7 @@ int run_stage_watched(const std::vector<std::string>& args, const RunWatch& w) {
     progress.show(t, steps);
     const bool limit = w.timeout > 0 && t >= w.timeout;
     if (limit || g_stop_signal) {
-      kill(-pid, SIGKILL);
-      waitpid(pid, &status, 0);
+      end_group(pid);
       progress.clear();
       const double quiet = std::chrono::duration<double>(now - last_change).count();
       if (!limit) return 128 + g_stop_signal;

@@ -13,7 +13,9 @@ namespace plab::runner {
 
 namespace {
 
-/// A stepper that writes "DONE TOTAL" to a status file after each step.
+/// A stepper that writes "DONE TOTAL" to a status file after each step, and passes every other
+/// question to the stage's own stepper (a question left out answers the base class's default:
+/// `plab run --ranks` once printed no bytes line because traffic() was).
 class StatusStepper final : public Stepper {
  public:
   StatusStepper(std::unique_ptr<Stepper> inner, int fd, long long total)
@@ -30,6 +32,7 @@ class StatusStepper final : public Stepper {
   [[nodiscard]] std::string device() const override { return inner_->device(); }
   [[nodiscard]] std::size_t device_bytes() const override { return inner_->device_bytes(); }
   [[nodiscard]] double memory_bandwidth() const override { return inner_->memory_bandwidth(); }
+  Traffic traffic() override { return inner_->traffic(); }  // every rank asks: a collective
 
  private:
   void write_status() {
