@@ -27,6 +27,7 @@ from pathlib import Path
 KIT = Path(sys.argv[1]).resolve()
 WORK = Path(sys.argv[2]).resolve()
 COPY = WORK / "kit"
+TOKEN = f"{os.getpid()}-{time.time_ns()}"  # marks the processes this self-test starts
 STEP = COPY / "stages" / "01-naive" / "step.cpp"
 SOLUTION = (KIT / "solutions" / "01-naive" / "step.cpp").read_text()
 failures = []
@@ -58,7 +59,7 @@ def make_copy():
 def plab(*args, timeout=600, env=None):
     """Runs ./plab in the copy (it builds first, as for a student); returns (status, text).
     At the timeout its whole process group (the build, ctest, the tests) is ended."""
-    e = dict(os.environ, **(env or {}))
+    e = dict(os.environ, **(env or {}), PLAB_HONEST_SELFTEST=TOKEN)
     p = subprocess.Popen(["./plab", *args], cwd=COPY, stdout=subprocess.PIPE,
                          stderr=subprocess.STDOUT, text=True, env=e, start_new_session=True)
     try:
@@ -71,9 +72,21 @@ def plab(*args, timeout=600, env=None):
 
 
 def leftovers():
-    """Stage programs of the copy still running."""
-    ps = subprocess.run(["ps", "-eo", "pid,args"], stdout=subprocess.PIPE, text=True).stdout
-    return [l for l in ps.splitlines() if str(COPY / "build") in l and "plab-run-" in l]
+    """Processes that this self-test's plab calls started and that still run: they carry its
+    TOKEN in their environment. (Not "any process running the copy's programs": the red team's
+    control case, beside it in CI, finds and runs every plab-run-* program on the machine.)"""
+    left = []
+    for proc in Path("/proc").iterdir():
+        if not proc.name.isdigit() or int(proc.name) == os.getpid():
+            continue
+        try:
+            if f"PLAB_HONEST_SELFTEST={TOKEN}".encode() not in (proc / "environ").read_bytes():
+                continue
+            args = (proc / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+        except OSError:  # ended meanwhile, or not ours to read
+            continue
+        left.append(f"{proc.name} {args}")
+    return left
 
 
 def broken_compile():

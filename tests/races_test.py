@@ -47,6 +47,21 @@ class FirstRace(unittest.TestCase):
         self.assertTrue(races.first_race(text, ["step.cpp"]).endswith("in the main thread"))
 
 
+class Summary(unittest.TestCase):
+    def test_an_error_before_any_race(self):
+        # What the grader's self-test saw: the race mutant's shared vector corrupted under TSan,
+        # the next allocation too big, and no race named first.
+        text = ("==2==ERROR: ThreadSanitizer: requested allocation size 0xfffffffffffffff8 ...\n"
+                "SUMMARY: ThreadSanitizer: allocation-size-too-big (/plab/stage+0xd94d6) "
+                "(BuildId: f00d9abc7bac9ae41ccdee5e7d480d747bac025c) in operator new(unsigned long)\n")
+        self.assertEqual(races.tsan_summary(text),
+                         "ThreadSanitizer: allocation-size-too-big in operator new(unsigned long)")
+        self.assertIsNone(races.first_race(text, ["step.cpp"]))
+
+    def test_none_without_a_summary(self):
+        self.assertIsNone(races.tsan_summary("Segmentation fault\n"))
+
+
 class Environment(unittest.TestCase):
     def test_env_stops_at_first_race_with_the_exit_code(self):
         env = races.tsan_env()

@@ -47,6 +47,11 @@ assert {pairs[0]["a"], pairs[0]["b"]} == {"bo", "dee"}, f"the copy is not first:
 assert pairs[0]["flagged"], f"the copy is not flagged: {pairs[0]}"
 honest = [p for p in pairs if {p["a"], p["b"]} != {"bo", "dee"}]
 assert not any(p["flagged"] for p in honest), f"an independent pair is flagged: {honest}"
+# ann handed in the kit's own solution: the instructor's copy compares everyone with it.
+near = {k["student"]: k for k in r["kit_solution"]}
+assert near["ann"]["flagged"], f"ann's copy of the kit's solution is not flagged: {near}"
+assert not any(k["flagged"] for s, k in near.items() if s != "ann"), f"others flagged: {near}"
+assert "ann" in done.stdout and "kit's own solution" in done.stdout, done.stdout
 text = page.read_text()
 assert "bo and dee" in text and "highlight-red" in text, "the page does not show the pair"
 assert "http://" not in text and "https://" not in text, "the page loads from the network"

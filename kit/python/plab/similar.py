@@ -24,6 +24,9 @@ from plab import KIT
 EXTENSIONS = (".cpp", ".cu", ".cuh", ".hpp", ".h", ".cc")
 
 
+KIT_SOLUTION = "(the kit's solution)"  #: the instructor copy's own solution, compared with each
+
+
 def stage_folder(kit, stage):
     found = sorted((kit / "stages").glob(f"{stage}-*"))
     if not found:
@@ -182,12 +185,27 @@ def main():
                      (f" (not compared: {'; '.join(skipped)})" if skipped else ""))
         print(f"plab similar: comparing {len(files)} submissions of stage {stage} "
               f"({len(files) * (len(files) - 1) // 2} pairs)", flush=True)
+        # In the instructor's copy the kit's own solution takes part, as one more "student": a
+        # submission close to it is a leaked answer, which pairs among students would only show
+        # as everyone alike.
+        solution = sorted((a.kit / "solutions").glob(f"{stage}-*"))
+        if solution:
+            text = "".join(f"// ---- {f.name}\n{f.read_text(errors='replace')}\n"
+                           for f in sorted(solution[0].iterdir()) if f.suffix in EXTENSIONS)
+            files[KIT_SOLUTION] = scratch / "students" / "__kit_solution__.cpp"
+            files[KIT_SOLUTION].write_text(text)
         pairs = rank(files, boilerplate(folder, scratch))
+        leaked = [p for p in pairs if KIT_SOLUTION in (p["a"], p["b"])]
+        pairs = [p for p in pairs if KIT_SOLUTION not in (p["a"], p["b"])]
+        files.pop(KIT_SOLUTION, None)
         write_page(out, stage, files, pairs, a.threshold, skipped, a.show)
     if a.json:
         a.json.write_text(json.dumps({
             "stage": stage, "threshold": a.threshold, "submissions": sorted(files),
             "not_compared": skipped,
+            "kit_solution": [{"student": p["b"] if p["a"] == KIT_SOLUTION else p["a"],
+                              "similarity": p["score"], "flagged": p["score"] >= a.threshold}
+                             for p in leaked],
             "pairs": [{"a": p["a"], "b": p["b"], "similarity": p["score"],
                        "shared_tokens": p["overlap"], "flagged": p["score"] >= a.threshold}
                       for p in pairs]}, indent=1))
@@ -195,6 +213,12 @@ def main():
     for k, p in enumerate(pairs[:10], 1):
         mark = "  FLAGGED" if p["score"] >= a.threshold else ""
         print(f"{k:>4}  {p['score']:>10.0%}  {p['a']} / {p['b']}{mark}")
+    close = [(p["b"] if p["a"] == KIT_SOLUTION else p["a"], p["score"]) for p in leaked
+             if p["score"] >= a.threshold]
+    if close:
+        print(f"plab similar: {len(close)} submission(s) at or above {a.threshold:.0%} of the "
+              f"kit's own solution (solutions/{folder.name}): "
+              + ", ".join(f"{name} {score:.0%}" for name, score in close))
     for s in skipped:
         print(f"not compared: {s}")
     print(f"plab similar: {sum(p['score'] >= a.threshold for p in pairs)} pair(s) at or above "

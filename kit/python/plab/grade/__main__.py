@@ -16,6 +16,7 @@ import argparse
 import os
 import pathlib
 import shutil
+import signal
 import sys
 import traceback
 
@@ -36,9 +37,19 @@ def existing(kind):
     return check
 
 
+def stage_list(text):
+    """--stages as the rubric names stages: "2,6-gpu" is "02,06-gpu"."""
+    out = []
+    for item in (t.strip() for t in text.split(",") if t.strip()):
+        head, sep, tail = item.partition("-")
+        out.append((head.zfill(2) if head.isdigit() else head) + sep + tail)
+    return ",".join(out)
+
+
 def parser():
     ap = argparse.ArgumentParser(
-        prog="plab grade", description=__doc__.split("\n\n")[1].replace("\n", " "))
+        prog="plab grade", description=__doc__.split("\n\n")[1].replace("\n", " "),
+        allow_abbrev=False)  # `--stage 02` is a mistake to report, not `--stages 02`
     what = ap.add_mutually_exclusive_group(required=True)
     what.add_argument("--submission", metavar="PATH", type=existing("path"),
                       help="what the student uploaded: the kit folder, a stages/ folder, a zip of "
@@ -53,7 +64,7 @@ def parser():
     ap.add_argument("--regrade", action="store_true",
                     help="with --class: grade again the submissions already graded (default: "
                          "resume)")
-    ap.add_argument("--stages", default="", metavar="LIST",
+    ap.add_argument("--stages", default="", metavar="LIST", type=stage_list,
                     help="stages to grade, e.g. 01,06 (default: every stage the submission has; "
                          "06 means 06 on the CPU and, with a GPU, 06-gpu)")
     ap.add_argument("--out", default=None,
@@ -108,15 +119,32 @@ def grader_argv(a):
     return argv
 
 
+class Stopped(BaseException):
+    """SIGTERM or SIGHUP arrived (a `timeout`, a closed terminal): the grading ends, its scratch
+    folder (student code, builds) is removed, and its results.json says "not graded" instead of
+    the tests run so far."""
+
+
+def _stop(signum, _frame):
+    raise Stopped(signum)
+
+
 def grade_one(a):
     """Grades one submission; returns the exit status (0 graded, 2 refused, 1 the grader failed)."""
     a.out = a.out or "results.json"
     a.junit = a.junit or str(pathlib.Path(a.out).with_suffix(".xml"))
     summary_path = pathlib.Path(a.out).with_suffix(".summary.txt")
-    g, status = None, 0
+    g, status, stopped = None, 0, False
     try:
         g = Grader(a)
         g.grade()
+    except Stopped as e:
+        stopped = True
+        if g is not None:  # results.json is rewritten after each test: no partial grade stays
+            g.results.tests = []
+            g.results.add("not graded", 0, 0, False, f"the grading was stopped (signal "
+                          f"{e.args[0]}) before it ended: grade again")
+        raise
     except Refused as e:
         status = 2
         if g is None:
@@ -132,18 +160,39 @@ def grade_one(a):
             g.results = Results(a.out, a.junit)
         g.results.add("grader error", 0, 0, False, traceback.format_exc())
     finally:
-        if g is not None:
+        if stopped:
+            if hasattr(g, "scratch") and not a.keep:
+                shutil.rmtree(g.scratch, ignore_errors=True)
+        elif g is not None:
             total, most = g.results.total()
             report = [f"total: {total:.2f} / {most:g}   (results: {a.out}, JUnit: {a.junit})"]
             report += [f"  {note}" for note in g.results.notes]
-            failed = [t for t in g.results.tests if t["status"] == "failed"]
-            shown = set()
+            noisy = [t["name"] for t in g.results.tests if "TOO NOISY" in t.get("output", "")]
+            if noisy:
+                report.append(f"  timing TOO NOISY (spread above the rubric's limit) in "
+                              f"{', '.join(noisy)}: its points were kept; grade again on a "
+                              "quieter machine to measure it")
+            failed = [t for t in g.results.tests  # a refusal is said once, in the notes
+                      if t["status"] == "failed" and t["name"] != "not graded"]
+            by_stage = {}
             for t in failed:
-                stage = t["name"].split(":")[0]
-                if stage not in shown:
-                    shown.add(stage)
-                    report.append(f"\nfirst failure of stage {stage}: {t['name']}\n"
-                                  + "\n".join("  " + ln for ln in t["output"].splitlines()[:14]))
+                by_stage.setdefault(t["name"].split(":")[0], []).append(t)
+            for stage, tests in by_stage.items():
+                # A public scene's failure carries the diagnosis (step, particle, field) and the
+                # commands to reproduce it; the idea test, run first, only says that its hidden
+                # scene's output differs. Show the first public scene the stage got wrong (not
+                # one it got right that the failed idea test left without points), and say that
+                # the idea test failed.
+                own = [t for t in tests if not t["output"].startswith("counts 0 (it would earn")]
+                t = next((t for t in own if ": public " in t["name"]), (own or tests)[0])
+                report.append(f"\nfirst failure of stage {stage}: {t['name']}\n"
+                              + "\n".join("  " + ln for ln in t["output"].splitlines()[:14]))
+                idea = next((i for i in tests if ": idea (" in i["name"] and i is not t
+                             and not i["output"].startswith("not run:")), None)
+                if idea is not None:
+                    first = (idea["output"].splitlines() or [""])[0]
+                    report.append(f"  (its idea test failed too: {first}; the stage's other "
+                                  "tests earn points only once it passes)")
             text = "\n".join(report)
             print("\n" + text)
             atomic_write(summary_path, text + "\n")  # the instructor's copy, seed included
@@ -154,6 +203,17 @@ def grade_one(a):
 
 
 def main(argv=None):
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, _stop)
+    try:
+        return _main(argv)
+    except Stopped as e:
+        print(f"plab grade: stopped by signal {e.args[0]} ({signal.Signals(e.args[0]).name}); "
+              "nothing of this grading is kept", file=sys.stderr)
+        return 128 + e.args[0]
+
+
+def _main(argv=None):
     ap = parser()
     a = ap.parse_args(argv)
     if a.seed is None and os.environ.get("PLAB_GRADE_SEED"):

@@ -7,6 +7,12 @@ import shutil
 from plab.grade import symbols, upload
 
 
+def unbuilt(sid, program, lines=8):
+    """Why stage `sid` has no program, for a test it could not run: "stage 02: it does not
+    compile:" and the compiler's first error lines (at most `lines` in all), or the refusal."""
+    return f"stage {sid}: " + "\n".join(program.splitlines()[:lines])
+
+
 def readable_by_all(folder):
     """Folders 0755 and files 0644 (0755 where the owner may run them) under `folder`: a copy that
     the sandbox's uid can read whatever the modes of what it was copied from."""

@@ -5,8 +5,8 @@ each by its own grader process in its own sandbox, J at a time, and writes the g
 
 OUT/students/NAME/ holds each student's results.json (Gradescope's format), JUnit XML and the
 summary a student is shown. A batch that was stopped starts again where it stopped: a student
-whose results.json exists for the same upload (its hash in OUT/students/NAME/upload.sha256) is
-not graded twice unless --regrade. At the end: OUT/gradebook.csv (one row per student: each
+whose results.json exists for the same upload, the same --stages, options and rubric (their hash
+in OUT/students/NAME/upload.sha256) is not graded twice unless --regrade. At the end: OUT/gradebook.csv (one row per student: each
 stage's points, the total, flags, the student's anonymous leaderboard name), OUT/summary.html
 (the score histogram of every stage) and OUT/leaderboard.html (plab.grade.leaderboard: the
 grader's measured times under anonymous names; with the rubric's relative scoring, the
@@ -44,6 +44,15 @@ def upload_hash(entry):
             h.update(str(p.relative_to(entry.parent)).encode() + b"\0")
             h.update(p.read_bytes())
     return h.hexdigest()
+
+
+def grading_key(entry, stages, grader_args, rubric_path):
+    """What a stored result must match to be kept on resume (OUT/students/NAME/upload.sha256):
+    the upload's hash, the stages asked for, the grader's options and the rubric's bytes. A batch
+    resumed with other --stages or another rubric grades everyone again."""
+    h = hashlib.sha256(json.dumps([stages, grader_args]).encode())
+    h.update(pathlib.Path(rubric_path).read_bytes())
+    return upload_hash(entry) + " " + h.hexdigest()
 
 
 def students(folder):
@@ -84,8 +93,9 @@ class Progress:
                   f"  elapsed {clock(spent)}  ETA {clock(eta)}  {name}: {text}", flush=True)
 
 
-def grade_one(name, entry, out, grader_args, stages, jobs_cpu):
-    """Runs one grader on one upload; returns (name, results dict or None, seconds)."""
+def grade_one(name, entry, out, grader_args, stages, jobs_cpu, key):
+    """Runs one grader on one upload (`key`: its grading_key(), stored with the results);
+    returns (name, results dict or None, seconds)."""
     mine = out / "students" / name
     mine.mkdir(parents=True, exist_ok=True)
     results = mine / "results.json"
@@ -102,7 +112,7 @@ def grade_one(name, entry, out, grader_args, stages, jobs_cpu):
         data = json.loads(results.read_text())
     except (OSError, ValueError):
         return name, None, seconds
-    (mine / "upload.sha256").write_text(upload_hash(entry) + "\n")
+    (mine / "upload.sha256").write_text(key + "\n")
     return name, data, seconds
 
 
@@ -120,10 +130,12 @@ def stage_points(data):
 
 def flags(data):
     """Short words a TA scans for: not built, refused (goes around the kit's measurements), idea
-    missed, race, limit hit, not graded."""
+    missed, race, limit hit, not graded, a timing too noisy to trust."""
     words = set()
     for t in data.get("tests", []):
         n, o = t.get("name", ""), t.get("output", "")
+        if "TOO NOISY" in o:  # points kept, but the timing says nothing: regrade on a quiet machine
+            words.add("noisy")
         if t.get("status") != "failed":
             continue
         if "does not compile" in o or "did not compile" in o:
@@ -226,21 +238,29 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
         sys.exit(f"plab grade --class: {e}")
     out.mkdir(parents=True, exist_ok=True)
     anonymous = anonymous_names(out, everyone)
-    todo, done = [], []
+    todo, done, changed = [], [], 0
+    keys = {}
     for name, entry in everyone:
         mine = out / "students" / name
-        same = (mine / "results.json").is_file() and (mine / "upload.sha256").is_file() and \
-            (mine / "upload.sha256").read_text().strip() == upload_hash(entry)
+        keys[name] = grading_key(entry, stages, grader_args, rubric_path)
+        stored = (mine / "upload.sha256").read_text().split() \
+            if (mine / "results.json").is_file() and (mine / "upload.sha256").is_file() else []
+        same = stored == keys[name].split()
+        changed += bool(stored) and not same
         (done if same and not regrade else todo).append((name, entry))
     cores = os.cpu_count() or 2
     per_job = max(1, cores // max(1, jobs))
     print(f"plab grade --class: {len(everyone)} submissions, {len(done)} graded already, "
           f"{len(todo)} to grade, {jobs} at a time ({per_job} cores each)", flush=True)
+    if changed and not regrade:
+        print(f"plab grade --class: {changed} graded before with another upload, other --stages, "
+              "other options or another rubric: graded again", flush=True)
     progress = Progress(len(everyone), len(done))
     failures = []
     with concurrent.futures.ThreadPoolExecutor(max_workers=jobs) as pool:
         futures = [pool.submit(grade_one, n, e, out,
-                               [*grader_args, "--leaderboard-name", anonymous[n]], stages, per_job)
+                               [*grader_args, "--leaderboard-name", anonymous[n]], stages, per_job,
+                               keys[n])
                    for n, e in todo]
         for fut in concurrent.futures.as_completed(futures):
             name, data, seconds = fut.result()

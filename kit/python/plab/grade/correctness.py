@@ -3,6 +3,7 @@ grading's seed, one step at a time from every printed state."""
 import subprocess
 
 from plab.grade import hidden as hidden_module
+from plab.grade.build import unbuilt
 
 
 class Correctness:
@@ -51,7 +52,7 @@ class Correctness:
         h = corr["one_step_scene"]
         test = f"{st.key}: one step at a time on a hidden dense box"
         if isinstance(program, str) or stopped:
-            why = f"stage {st.sid} {program}" if isinstance(program, str) else stopped
+            why = unbuilt(st.sid, program) if isinstance(program, str) else stopped
             self.results.add(test, 0, points, False, f"not run: {why}")
             return False
         scene = folder / "one-step.in"

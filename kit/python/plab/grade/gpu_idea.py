@@ -37,6 +37,7 @@ import subprocess
 import time
 
 from plab.grade import branches
+from plab.grade.build import unbuilt
 
 #: The trace library's name in the kit's build (kit/CMakeLists.txt: plab_gputrace).
 LIBRARY = "libplab_gputrace.so"
@@ -133,8 +134,8 @@ def idea_test(g, st, program, folder):
     idea = st.idea
     test = f"{st.key}: idea ({idea['what']})"
     if isinstance(program, str):
-        g.results.add(test, 0, 0, False, f"not run: stage {st.sid} {program.splitlines()[0]}")
-        g.idea_failed[st.key] = f"stage {st.sid} {program.splitlines()[0]}"
+        g.results.add(test, 0, 0, False, f"not run: {unbuilt(st.sid, program)}")
+        g.idea_failed[st.key] = unbuilt(st.sid, program, 1)
         return
     lib = library(g.kit_build)
     scene, what = g.idea_scene(st, folder)

@@ -26,6 +26,7 @@ from plab.grade.racecheck import RaceCheck
 from plab.grade.results import Results
 from plab.grade.run import Run
 from plab.grade.stage import Refused, Stage
+from plab.grade.build import unbuilt
 
 
 class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
@@ -125,7 +126,7 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
     # -- one stage: its tests in order (the mixins' methods) --------------------------------------
     def grade_stage(self, st, program):
         if isinstance(program, str):
-            self.notes.append(f"{st.title}: {program.splitlines()[0]}")
+            self.notes.append(f"{st.title}: " + " ".join(program.splitlines()[:2]))
         limits = self.rubric["limits"]
         stopped = None  # why later runs of this stage are not started (a time-out)
         folder = self.private / f"stage{st.key}"
@@ -144,7 +145,7 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
         for name, scene, expected, points, hidden, how in tests:
             test = f"{st.key}: {'hidden' if hidden else 'public'} {name}"
             if isinstance(program, str) or stopped:
-                why = f"stage {st.sid} {program}" if isinstance(program, str) else stopped
+                why = unbuilt(st.sid, program) if isinstance(program, str) else stopped
                 self.results.add(test, 0, points, False, f"not run: {why}", hidden)
                 all_right = False
                 continue

@@ -8,6 +8,7 @@ import subprocess
 import time
 
 from plab.grade.rounds_count import RoundsCount
+from plab.grade.build import unbuilt
 
 
 class Ideas:
@@ -32,8 +33,8 @@ class Ideas:
         idea = st.idea
         test = f"{st.sid}: idea ({idea['what']})"
         if isinstance(program, str):
-            self.results.add(test, 0, 0, False, f"not run: stage {st.sid} {program.splitlines()[0]}")
-            self.idea_failed[st.sid] = f"stage {st.sid} {program.splitlines()[0]}"
+            self.results.add(test, 0, 0, False, f"not run: {unbuilt(st.sid, program)}")
+            self.idea_failed[st.sid] = unbuilt(st.sid, program, 1)
             return
         scene, what = self.idea_scene(st, folder)
         expected, own_seconds = self.own_run(st, scene, idea.get("threads", 1), folder / "idea.out")

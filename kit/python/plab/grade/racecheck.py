@@ -15,7 +15,9 @@ class RaceCheck:
         sandbox, and run on a hidden crowded scene with 3 threads: the first data race with file
         and line. A race found costs the rubric's races_points (a racy program is wrong even when
         the race did not change a printed bit on this machine); visible, so that the student
-        learns where it is. Not checked (no clang here, the build failed): no points either way.
+        learns where it is. A program that fails under TSan before a race is named (a crash, a
+        corrupted allocation) loses them too. Not checked (no clang here, the build failed, a
+        limit of the run): no points either way.
         Run once the stage passes a correctness test (a race is reported to a stage still
         being fixed); its points only when every correctness test (and the idea test) passed:
         no race in a program that does nothing is worth nothing."""
@@ -71,9 +73,18 @@ class RaceCheck:
                 break
         if race:
             self.results.add(test, 0, points, False, race, False, run.seconds)
-        elif run.reason or (run.rc not in (0, 3)):
+        elif run.reason:  # a limit of the run (TSan is slow): the program is not to blame
             self.results.add(test, 0, 0, False, "not checked: the ThreadSanitizer run "
-                             f"{run.reason or 'exited ' + str(run.rc)}: {report.strip()[-300:]}")
+                             f"{run.reason}: {report.strip()[-300:]}")
+        elif run.rc not in (0, 3):
+            # The program failed under TSan before any race was named: often the race itself
+            # (threads appending to one vector corrupt it, and the next allocation asks for
+            # petabytes). No race points for a program that fails on 3 threads.
+            self.results.add(test, 0, points, False, "the program failed under ThreadSanitizer "
+                             f"(3 threads) before a race was named (exit {run.rc}): "
+                             f"{races.tsan_summary(report) or report.strip()[-300:]}. A program "
+                             "that works on 1 thread and fails on 3 usually has a data race.",
+                             False, run.seconds)
         else:
             text = (f"no data race found (3 threads, schedules {' and '.join(races.SCHEDULES)}, "
                     f"one hidden scene of N = {h['n']}, {h['steps']} steps)")

@@ -152,6 +152,16 @@ def first_race(stderr_text: str, source_names: list[str]) -> str | None:
     return message + " in " + thread
 
 
+def tsan_summary(stderr_text: str) -> str | None:
+    """TSan's last SUMMARY line without its program path and build id, e.g.
+    "ThreadSanitizer: allocation-size-too-big in operator new(unsigned long)"; None without one."""
+    lines = [l for l in stderr_text.splitlines() if l.startswith("SUMMARY: ThreadSanitizer:")]
+    if not lines:
+        return None
+    text = lines[-1][len("SUMMARY: "):]
+    return re.sub(r" \((?:BuildId: [0-9a-f]+|/[^()]*\+0x[0-9a-f]+)\)", "", text).strip()
+
+
 def toolchain_problem() -> str | None:
     """None when a thread-sanitized OpenMP build can be made and run here (clang++, LLVM's OpenMP
     runtime, Archer); otherwise one sentence saying what is missing."""
