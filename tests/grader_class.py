@@ -59,6 +59,12 @@ assert f"{len(graded)} graded already, {5 - len(graded)} to grade" in done.stdou
 for name in graded:
     assert f" {name}: " not in done.stdout, f"{name} was graded twice:\n{done.stdout}"
 
+# Third batch: the same stages written "1" (read as 01): nothing to grade. (Other --stages, options
+# or another rubric would grade everyone again: the stored key covers them.)
+again = subprocess.run([*cmd[:cmd.index("--stages") + 1], "1", *cmd[cmd.index("--stages") + 2:]],
+                       capture_output=True, text=True, timeout=600)
+assert "5 graded already, 0 to grade" in again.stdout, again.stdout + again.stderr
+
 rows = {r["student"]: r for r in csv.DictReader(open(out / "gradebook.csv", newline=""))}
 assert sorted(rows) == sorted(expected), f"gradebook rows: {sorted(rows)}"
 for name, what in expected.items():

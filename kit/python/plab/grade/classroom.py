@@ -106,8 +106,10 @@ def grade_one(name, entry, out, grader_args, stages, jobs_cpu, key):
     env = dict(python_env(), PLAB_BUILD_JOBS=str(jobs_cpu))
     t0 = time.monotonic()
     with open(mine / "grader.log", "w") as log:
-        subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
+        done = subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
     seconds = time.monotonic() - t0
+    if done.returncode < 0 or done.returncode >= 128:  # stopped by a signal: graded again later
+        return name, None, seconds
     try:
         data = json.loads(results.read_text())
     except (OSError, ValueError):
@@ -285,14 +287,18 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
     for name, _ in everyone:
         if name not in graded:
             rows.append({"name": name, "anonymous": anonymous[name], "per": {}, "total": 0,
-                         "max": 0, "flags": ["not-graded"]})
+                         "flags": ["not-graded"]})
             continue
         data = graded[name]
         per = stage_points(data)
         rows.append({"name": name, "anonymous": anonymous[name], "per": per,
-                     "total": sum(s for s, _ in per.values()),
-                     "max": sum(m for _, m in per.values()), "flags": flags(data)})
+                     "total": sum(s for s, _ in per.values()), "flags": flags(data)})
     keys = sorted({k for r in rows for k in r["per"]})
+    # Every row out of the same most: a stage a student did not hand in (or an upload that held
+    # none) counts 0 of that stage's points, not 0 of 0 (a spreadsheet's percentage divides by it).
+    most = {k: max(r["per"][k][1] for r in rows if k in r["per"]) for k in keys}
+    for r in rows:
+        r["max"] = sum(most.values())
     write_outputs(out, rows, keys)
     leaderboard.write_page(out / "leaderboard.html", {anonymous[n]: d for n, d in graded.items()},
                            rubric["performance"])

@@ -136,6 +136,7 @@ def find_stages(submission, kit_folders, wanted, scratch):
     if dropped:
         note += (f"left out {len(dropped)} symbolic link(s) ({', '.join(dropped[:4])}"
                  f"{' ...' if len(dropped) > 4 else ''}): upload the files themselves; ")
+    top = root  # flat files are named from here: a folder gone into shows in the note
     # A single folder at the top (a zip of the kit folder, a folder uploaded whole): go in.
     for _ in range(2):
         entries = [p for p in root.iterdir() if not p.name.startswith((".", "__MACOSX"))]
@@ -162,9 +163,14 @@ def find_stages(submission, kit_folders, wanted, scratch):
         dest.mkdir(parents=True)
         for p in flat:
             shutil.copy2(p, dest / p.name)
-        return {stage: dest}, note + (f"took {len(flat)} files uploaded flat "
-                                      f"({', '.join(p.name for p in flat)}) as stage {stage}")
+        where = ", ".join(str(p.relative_to(top)) for p in flat)  # an odd folder shows here
+        return {stage: dest}, note + (f"took {len(flat)} files uploaded flat ({where}) as "
+                                      f"stage {stage}")
     shown = uploaded if uploaded.is_dir() and root != uploaded and not any(root.iterdir()) else root
+    uploads = [e for e in root.iterdir() if not e.name.startswith(".") and
+               (e.is_dir() or e.suffix == ".zip")]
+    several = ("\n(a folder of several students' uploads, one each, is graded with "
+               "plab grade --class)" if len(uploads) > 1 else "")
     raise UploadError(f"found {_describe_plain(shown)}: no stage folder and no source file\n"
                       f"{EXPECTED}\n"
-                      "re-upload your stages/ folder (or the whole kit folder)")
+                      "re-upload your stages/ folder (or the whole kit folder)" + several)
