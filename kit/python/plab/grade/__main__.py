@@ -208,8 +208,10 @@ def main(argv=None):
     try:
         return _main(argv)
     except Stopped as e:
+        klass = "--class" in (sys.argv[1:] if argv is None else argv)
         print(f"plab grade: stopped by signal {e.args[0]} ({signal.Signals(e.args[0]).name}); "
-              "nothing of this grading is kept", file=sys.stderr)
+              + ("the students graded so far are kept: the same command resumes" if klass else
+                 "nothing of this grading is kept"), file=sys.stderr)
         return 128 + e.args[0]
 
 
