@@ -63,6 +63,11 @@ def unpack(entry, scratch):
     return dest
 
 
+def concatenated(files):
+    """One text of a submission's sources, each after a `// ---- NAME` line (what is compared)."""
+    return "".join(f"// ---- {f.name}\n{f.read_text(errors='replace')}\n" for f in files)
+
+
 def gather(submissions, stage_name, scratch):
     """{student: one file holding their stage's sources, in name order}."""
     flat = scratch / "students"
@@ -81,9 +86,8 @@ def gather(submissions, stage_name, scratch):
         if not files:
             skipped.append(f"{entry.name} (no source file of {stage_name})")
             continue
-        text = "".join(f"// ---- {f.name}\n{f.read_text(errors='replace')}\n" for f in files)
         path = flat / f"{student}.cpp"
-        path.write_text(text)
+        path.write_text(concatenated(files))
         out[student] = path
     return out, skipped
 
@@ -190,10 +194,9 @@ def main():
         # as everyone alike.
         solution = sorted((a.kit / "solutions").glob(f"{stage}-*"))
         if solution:
-            text = "".join(f"// ---- {f.name}\n{f.read_text(errors='replace')}\n"
-                           for f in sorted(solution[0].iterdir()) if f.suffix in EXTENSIONS)
             files[KIT_SOLUTION] = scratch / "students" / "__kit_solution__.cpp"
-            files[KIT_SOLUTION].write_text(text)
+            files[KIT_SOLUTION].write_text(concatenated(
+                f for f in sorted(solution[0].iterdir()) if f.suffix in EXTENSIONS))
         pairs = rank(files, boilerplate(folder, scratch))
         leaked = [p for p in pairs if KIT_SOLUTION in (p["a"], p["b"])]
         pairs = [p for p in pairs if KIT_SOLUTION not in (p["a"], p["b"])]

@@ -6,8 +6,9 @@ each by its own grader process in its own sandbox, J at a time, and writes the g
 OUT/students/NAME/ holds each student's results.json (Gradescope's format), JUnit XML and the
 summary a student is shown. A batch that was stopped starts again where it stopped: a student
 whose results.json exists for the same upload, the same --stages, options and rubric (their hash
-in OUT/students/NAME/upload.sha256) is not graded twice unless --regrade. At the end: OUT/gradebook.csv (one row per student: each
-stage's points, the total, flags, the student's anonymous leaderboard name), OUT/summary.html
+in OUT/students/NAME/upload.sha256) is not graded twice unless --regrade. At the end:
+OUT/gradebook.csv (one row per student: each stage's points, the total, flags, the student's
+anonymous leaderboard name), OUT/summary.html
 (the score histogram of every stage) and OUT/leaderboard.html (plab.grade.leaderboard: the
 grader's measured times under anonymous names; with the rubric's relative scoring, the
 performance points against the class).
