@@ -33,7 +33,9 @@ and, measured by the grader outside the student's code (each must score nothing)
                   which does not fall on a calmer scene), 03 serial with a
                   thread burning CPU beside it (OpenMP synchronisations counted against the
                   scene's rounds), 07 with a linear scan for the next event, 08 whose rank 0 steps
-                  everything through gathers and scatters (bytes counted in every MPI call); and
+                  everything through gathers and scatters (bytes counted in every MPI call), 08
+                  whose rank 0 takes every particle once and steps them alone while the others
+                  spin in MPI_Barrier (the work outside MPI calls, sampled by the kit); and
                   03 as one parallel region with dynamic and guided loops, which keeps its points
   ties            02 whose heap orders events by time only loses the hidden-ties scene
   shortcuts       the one-step answers (next-state), a stage 02 that skips the work on the timed
@@ -971,6 +973,31 @@ LINEAR_07 = """    const int k = at_[e.i];
     put(m, top);
 """
 
+# Stage 08: every particle moves to rank 0 once (the first step's migration: a few bytes a
+# particle and step over the scene), which steps them all alone from then on, while the other
+# ranks wait for it in MPI_Barrier, whose wait spins: as much CPU time as rank 0's, and nothing
+# sent but the one migration.
+WAIT_08 = """
+void step(const Box& box, const Ranks& r, Local& s) {
+  std::vector<std::vector<Record>> out(r.ranks);
+  Local all;
+  for (int k = 0; k < s.owned; ++k) {
+    if (r.rank == 0) all.push(s.record(k));
+    else out[0].push_back(s.record(k));
+  }
+  migrate(r, out, all);
+  if (r.rank == 0) {
+    Ranks one = r;
+    one.comm = MPI_COMM_SELF;
+    one.ranks = 1;
+    real_step(box, one, all);
+  }
+  s = std::move(all);
+  MPI_Barrier(r.comm);
+}
+}  // namespace plab::dist
+"""
+
 # Stage 08: every particle gathered on rank 0 (MPI_Gather(v)), stepped there alone, and
 # scattered back to its owner (MPI_Scatter(v)): rooted collectives only.
 GATHER_08 = """
@@ -1142,6 +1169,14 @@ def case_rounds():
             ("}  // namespace plab::dist\n", GATHER_08)],
             "stage 08's solution no longer has the shape the gather patch needs"):
         gradings.append((name, "08-ranks3", False))
+    name = "redteam-rounds-barrier-08"
+    shutil.rmtree(scratch / name, ignore_errors=True)
+    if patched(name, "08", "solutions/08-mpi", [(
+            "void step(const Box& box, const Ranks& r, Local& s) {",
+            "void real_step(const Box& box, const Ranks& r, Local& s) {"),
+            ("}  // namespace plab::dist\n", WAIT_08)],
+            "stage 08's solution no longer has the shape the barrier patch needs"):
+        gradings.append((name, "08-ranks3", False))
     for name, key, honest in gradings:
         tests, doc, _ = grade(name, scratch / name, key, "--no-races")
         sid = key[:2]
@@ -1201,6 +1236,12 @@ def case_leaderboard():
           and mine.get("order") == "asc" and mine.get("value", 0) > 1e-4
           and abs(mine["value"] - float(said.group(1))) < 1e-3,
           f"leaderboard {doc.get('leaderboard')}, performance test {perf.get('output', '')[:120]!r}")
+    # and the ratio a class is ranked by: the measured time over the reference's
+    ratio = board.get("02: time / reference", {})
+    stated = re.search(r"\(ratio ([0-9.]+);", perf.get("output", ""))
+    check("leaderboard", stated is not None and ratio.get("order") == "asc"
+          and abs(ratio.get("value", -1) - float(stated.group(1))) < 6e-3,
+          f"leaderboard {doc.get('leaderboard')}, performance test {perf.get('output', '')[:160]!r}")
 
 
 def case_bypass():

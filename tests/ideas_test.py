@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
-"""Unit test of plab.grade.ideas' bytes check (stage 08's idea: every rank steps its own slab):
-the bytes the kit's MPI layer counted, against the rubric's most, and none at all (ranks that
-never worked together: rank 0 stepping alone while the others idle or spin).
+"""Unit test of plab.grade.ideas' checks of stage 08's idea (every rank steps its own slab): the
+bytes the kit's MPI layer counted, against the rubric's most, and none at all (ranks that never
+worked together: rank 0 stepping alone while the others idle or spin); and each rank's work
+outside MPI calls, sampled by the kit, against the rubric's shares (rank 0 stepping everything
+while the others spin in an MPI wait).
 
   ideas_test.py   (PYTHONPATH=kit/python: CTest sets it)
 """
@@ -10,15 +12,18 @@ import unittest
 
 from plab.grade.ideas import Ideas
 
-IDEA = {"scene": {"n": 1000, "steps": 10}, "max_bytes_per_particle_step": 20,
+IDEA = {"scene": {"n": 1000, "steps": 10}, "max_bytes_per_particle_step": 20, "ranks": 3,
+        "min_work_seconds": 0.05, "min_cpu_seconds": 0.4, "share": 0.1, "max_share": 0.55,
         "hint": "each rank must step its own slab"}
 
 
 class Run:
-    """What bytes_sent() reads of a graded run: its report.json."""
+    """What bytes_sent() and work_outside_mpi() read of a graded run: its report.json, and each
+    process's CPU seconds read from /proc."""
 
-    def __init__(self, report):
+    def __init__(self, report, cpu=None):
         self.report = report
+        self.cpu = cpu or {}
 
     def read_output(self, name):
         assert name == "report.json"
@@ -47,6 +52,47 @@ class BytesSent(unittest.TestCase):
     def test_no_report_fails(self):
         problem, _ = Ideas.bytes_sent(None, IDEA, Run(""), "ran")
         self.assertIn("left no report", problem)
+
+
+def work(seconds, waiting=None, cpu=None):
+    report = json.dumps({"rank_work_seconds": seconds,
+                         "rank_mpi_seconds": waiting or [0.05] * len(seconds)})
+    return Ideas.work_outside_mpi(None, IDEA, Run(report, cpu), "ran")
+
+
+class WorkOutsideMpi(unittest.TestCase):
+    def test_even_work_passes(self):
+        problem, text = work([0.310, 0.254, 0.267])  # the solution, graded on this machine
+        self.assertIsNone(problem)
+        self.assertIn("outside MPI calls: 0.310, 0.254, 0.267", text)
+
+    def test_ranks_that_wait_fail(self):
+        problem, _ = work([1.029, 0.007, 0.0])  # rank 0 steps all; the others spin in a wait
+        self.assertIn("rank 2 did 0% of the work", problem)
+
+    def test_one_rank_doing_most_fails(self):
+        problem, _ = work([0.6, 0.2, 0.2])
+        self.assertIn("rank 0 did 60% of the work", problem)
+
+    def test_too_little_is_not_held_against(self):
+        problem, text = work([0.03, 0.0, 0.0])
+        self.assertIsNone(problem)
+        self.assertIn("too little to judge", text)
+
+    def test_sampling_stopped_fails(self):
+        # a program that ignores SIGPROF or stops the timer: nothing sampled, CPU time used
+        problem, _ = work([0.0, 0.0, 0.0], [0.0, 0.0, 0.0], {(1, 1): 0.9, (2, 2): 0.5, (3, 3): 0.5})
+        self.assertIn("(SIGPROF) was changed", problem)
+        problem, _ = work([0.3, 0.3, 0.3], [0.1, 0.1, 0.1], {(1, 1): 0.9, (2, 2): 0.5, (3, 3): 0.5})
+        self.assertIsNone(problem)
+
+    def test_wrong_rank_count_fails(self):
+        problem, _ = work([0.1, 0.1])
+        self.assertIn("work of 2 ranks, not 3", problem)
+
+    def test_no_report_fails(self):
+        problem, _ = Ideas.work_outside_mpi(None, IDEA, Run(json.dumps({"bytes_sent": 1.0})), "ran")
+        self.assertIn("left no report of the work", problem)
 
 
 if __name__ == "__main__":

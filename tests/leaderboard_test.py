@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
 """Unit test of plab.grade.leaderboard: the performance points given again against the class
-(class_best, curve) rank a faster submission higher, reference scoring changes nothing, and the
+(class_best, curve) rank a faster submission higher (by its time over the reference's in the
+same grading, or by its time in a results.json without that ratio), reference scoring changes
+nothing, and the
 class's page is one offline file with every measured time under its anonymous name. The times
 themselves are the grader's (tests/grader_redteam.py's leaderboard case checks that a program's
 printed time plays no part). Run by CTest (label kit); needs PYTHONPATH=kit/python.
@@ -17,13 +19,17 @@ PERF = {"points": 5, "runs": 5, "full_up_to_ratio": 1.3, "zero_at_ratio": 4,
         "scene": {"n": 1500, "steps": 300}}
 
 
-def graded(seconds, score=5.0):
-    """A results.json's data with a stage 03 performance test and its measured time."""
+def graded(seconds, score=5.0, reference=1.0):
+    """A results.json's data with a stage 03 performance test, its measured time and its ratio
+    to the reference's time in the same grading (None: a results.json from before the ratio)."""
+    board = [leaderboard.entry("03", seconds)]
+    if reference is not None:
+        board.append(leaderboard.ratio_entry("03", seconds / reference))
     return {"score": 10 + score, "tests": [
         {"name": "03: correctness", "score": 10, "max_score": 10, "status": "passed", "output": ""},
         {"name": "03: performance", "score": score, "max_score": 5, "status": "passed",
-         "output": f"median {seconds:.3f} s against the reference's 1.000 s"}],
-        "leaderboard": [leaderboard.entry("03", seconds)]}
+         "output": f"median {seconds:.3f} s against the reference's {reference or 1:.3f} s"}],
+        "leaderboard": board}
 
 
 def perf_score(data):
@@ -72,6 +78,22 @@ class Leaderboard(unittest.TestCase):
         self.assertGreater(got["fast"], got["mid"])
         self.assertGreater(got["mid"], got["slow"])
 
+    def test_ranked_by_ratio(self):
+        # "busy" was graded on a loaded machine: its time is the slower, its ratio the better
+        cls = {"busy": graded(1.4, reference=1.4), "quiet": graded(1.1, reference=1.0)}
+        leaderboard.rescore(cls, dict(PERF, relative="curve"))
+        self.assertEqual(perf_score(cls["busy"]), 5)
+        self.assertLess(perf_score(cls["quiet"]), 5)
+        self.assertIn("by the time over the reference's): 1.000 x, rank 1 of 2",
+                      cls["busy"]["tests"][1]["output"])
+
+    def test_times_without_ratios(self):
+        # a results.json from before the ratio: the class falls back to the times
+        cls = {"busy": graded(1.4, reference=1.4), "old": graded(1.1, reference=None)}
+        leaderboard.rescore(cls, dict(PERF, relative="curve"))
+        self.assertEqual(perf_score(cls["old"]), 5)
+        self.assertIn("by the time): 1.100 s, rank 1 of 2", cls["old"]["tests"][1]["output"])
+
     def test_unknown_mode(self):
         with self.assertRaises(ValueError):
             leaderboard.rescore(self.cls, dict(PERF, relative="fastest"))
@@ -84,6 +106,13 @@ class Leaderboard(unittest.TestCase):
             text = page.read_text()
         self.assertIn("anon-1a2b", text)
         self.assertLess(text.index("anon-1a2b"), text.index("anon-3c4d"))  # fastest first
+        with tempfile.TemporaryDirectory() as d:  # ranked by the ratio, not the time
+            page = pathlib.Path(d) / "leaderboard.html"
+            leaderboard.write_page(page, {"anon-busy": graded(1.4, reference=1.4),
+                                          "anon-quiet": graded(1.1, reference=1.0)}, PERF)
+            text = page.read_text()
+        self.assertLess(text.index("anon-busy"), text.index("anon-quiet"))
+        self.assertIn("<td>1.000</td><td>1.400</td>", text)
         self.assertNotIn("anon-5e6f", text)  # never timed: not on the board
         for remote in ("http:", "https:", "<script", "<link", "src=", "@import"):
             self.assertNotIn(remote, text)

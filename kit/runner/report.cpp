@@ -10,6 +10,17 @@
 
 namespace plab::runner {
 
+namespace {
+
+/// `v` with `digits` digits after the point.
+std::string format_fixed(double v, int digits) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*f", digits, v);
+  return text;
+}
+
+}  // namespace
+
 void report(const Options& o, const RunStats& stats) {
   const StageInfo& info = stage_info();
   const int threads = info.openmp ? get_threads() : 1;  // a sequential stage runs on one
@@ -25,7 +36,9 @@ void report(const Options& o, const RunStats& stats) {
         {"pair_events", stats.pair_events}, {"wall_events", stats.wall_events},
         {"substeps", o.substeps},         {"real", o.real},
         {"ranks", stats.traffic.ranks},   {"bytes_sent", stats.traffic.bytes_sent},
-        {"comm_seconds", stats.traffic.comm_seconds}};
+        {"comm_seconds", stats.traffic.comm_seconds},
+        {"rank_work_seconds", stats.traffic.work_seconds},
+        {"rank_mpi_seconds", stats.traffic.mpi_seconds}};
     const std::string text = j.dump(2) + "\n";
     std::fputs(text.c_str(), file.get());
     file.commit();
@@ -43,6 +56,15 @@ void report(const Options& o, const RunStats& stats) {
     std::fprintf(stderr, "stage %s (%s) on %d ranks: %.3g bytes sent, %.3f s in exchanges (the "
                  "busiest rank)\n", info.id.c_str(), info.impl.c_str(), stats.traffic.ranks,
                  stats.traffic.bytes_sent, stats.traffic.comm_seconds);
+  if (!stats.traffic.work_seconds.empty()) {
+    std::string work;
+    for (std::size_t q = 0; q < stats.traffic.work_seconds.size(); ++q)
+      work += (q ? ", " : "") + std::to_string(q) + ": " +
+              format_fixed(stats.traffic.work_seconds[q], 3) + " (" +
+              format_fixed(stats.traffic.mpi_seconds[q], 3) + ")";
+    std::fprintf(stderr, "stage %s (%s), CPU seconds of each rank's steps outside MPI calls "
+                 "(inside), sampled: %s\n", info.id.c_str(), info.impl.c_str(), work.c_str());
+  }
   if (stats.device_bytes)
     std::fprintf(stderr, "stage %s (%s): %.2f MB of device memory held\n", info.id.c_str(),
                  info.impl.c_str(), stats.device_bytes / 1e6);

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "plab/scene.hpp"
 
@@ -39,6 +40,11 @@ class Stepper {
     double comm_seconds = 0;  //!< seconds in exchanges and reductions (waits included), on
                               //!< the rank that spent the most
     int ranks = 1;            //!< processes
+    /// Per rank: CPU seconds of its steps outside the stage's MPI calls, sampled every ms of
+    /// CPU time (kit/mpi: the work each rank did; empty for a stage on one process).
+    std::vector<double> work_seconds;
+    /// Per rank: CPU seconds of its steps inside the stage's MPI calls (waits that spin), sampled.
+    std::vector<double> mpi_seconds;
   };
   /// This run's Traffic (a stage on several processes asks every rank: call it after the steps).
   virtual Traffic traffic() { return {}; }

@@ -225,6 +225,9 @@ def _main(argv=None):
             ap.error(f"the seed must be a whole number, not {os.environ['PLAB_GRADE_SEED']!r}")
     if a.jobs < 1:
         ap.error("--jobs must be at least 1")
+    if a.scratch and not pathlib.Path(a.scratch).is_dir():
+        ap.error(f"--scratch {a.scratch}: no such folder (the grader builds and runs in a new "
+                 f"folder inside it)")
     if a.klass is not None:
         return classroom.run(a.klass, pathlib.Path(a.out or "grades"), a.jobs, a.stages,
                              a.regrade, grader_argv(a), a.rubric)

@@ -27,8 +27,11 @@ class Ideas:
                    (`min_syncs_per_round`) it ran that many OpenMP synchronisations for each
                    mutual-earliest round of the scene's steps (rounds_count.RoundsCount: counted
                    by the kit's preloaded libplab-ompcount.so, the rounds from plab-rounds);
-          ranks:   the stage under mpirun on `ranks` processes: every rank used `share` of the
-                   ranks' CPU time (read from /proc), so rank 0 does not step everything.
+          ranks:   the stage under mpirun on `ranks` processes: it sent at most
+                   `max_bytes_per_particle_step` and more than none (counted by the kit's MPI
+                   layer), every rank did `share` of the steps' work outside MPI calls (sampled
+                   by the kit's MPI layer: `min_work_seconds`) and used `share` of the ranks' CPU
+                   time (read from /proc), so rank 0 does not step everything.
         Both watched kinds also take `max_share`: the most that one thread or rank may use."""
         idea = st.idea
         test = f"{st.sid}: idea ({idea['what']})"
@@ -59,6 +62,8 @@ class Ideas:
         text = f"the {what}: {run.seconds:.2f} s (the kit's solution: {own_seconds:.2f} s)"
         if problem is None and kind == "ranks" and "max_bytes_per_particle_step" in idea:
             problem, text = self.bytes_sent(idea, run, text)  # counted, so decided first
+        if problem is None and kind == "ranks" and "min_work_seconds" in idea:
+            problem, text = self.work_outside_mpi(idea, run, text)  # sampled by the kit
         if problem is None and counter:
             problem, text = counter.check(idea, run, text)  # counted, so decided first
         if problem is None and counter and "calm_speed" in idea:
@@ -151,6 +156,45 @@ class Ideas:
             return (f"its ranks sent {per:.1f} bytes a particle and step (at most {most:g} may: "
                     f"the halo and the rounds' messages; every particle sent to one rank and "
                     f"back is about 75). {idea['hint']}"), text
+        return None, text
+
+    def work_outside_mpi(self, idea, run, text):
+        """(problem or None, text): the CPU time each rank spent in its steps outside MPI calls,
+        sampled by the kit's MPI layer (a profiling timer; kit/mpi marks every MPI call of the
+        stage, waits and tests included), against the rubric's `share` and `max_share`. MPI's
+        waits spin, so a rank that waits in MPI_Barrier while rank 0 steps every particle uses
+        as much CPU time as rank 0 (work_shared() cannot tell them apart): here it did no work."""
+        try:
+            report = json.loads(run.read_output("report.json") or "")
+            work = [float(x) for x in report["rank_work_seconds"]]
+            waiting = [float(x) for x in report["rank_mpi_seconds"]]
+        except (ValueError, KeyError, TypeError):
+            return "its run left no report of the work of its ranks", text
+        total = sum(work)
+        shown = ", ".join(f"{x:.3f}" for x in work)
+        text += f"; CPU seconds of its ranks' steps outside MPI calls: {shown}"
+        if len(work) != idea["ranks"]:
+            return (f"its run reported the work of {len(work)} ranks, not {idea['ranks']}. "
+                    f"{idea['hint']}"), text
+        # The sampling rings on SIGPROF: a program that stops the timer or the signal reports
+        # no work at all, while /proc shows its ranks' CPU time (the solution: about 60% of it
+        # sampled in its steps, the rest reading, scattering, printing)
+        used = sum(getattr(run, "cpu", {}).values())
+        if total + sum(waiting) < 0.2 * used and used >= idea["min_cpu_seconds"]:
+            return (f"the kit's sampling of its ranks' work saw {total + sum(waiting):.3f} s of "
+                    f"the {used:.2f} s of CPU time its ranks used: the profiling timer or its "
+                    f"signal (SIGPROF) was changed. {idea['hint']}"), text
+        if total < idea["min_work_seconds"]:
+            return None, text + " (too little to judge: not held against it)"
+        low, high = min(work), max(work)
+        if low < idea["share"] * total or high > idea.get("max_share", 1.0) * total:
+            which = work.index(low if low < idea["share"] * total else high)
+            return (f"rank {which} did {100 * work[which] / total:.0f}% of the work of the "
+                    f"steps (each rank at least {100 * idea['share']:.0f}%, at most "
+                    f"{100 * idea.get('max_share', 1.0):.0f}%: CPU time outside MPI calls, "
+                    f"sampled by the kit; a rank waiting in an MPI call does no work, even "
+                    f"when the wait spins). CPU seconds of its ranks' steps outside MPI calls: "
+                    f"{shown}. {idea['hint']}"), text
         return None, text
 
     def work_shared(self, idea, run, text):

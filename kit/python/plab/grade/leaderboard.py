@@ -8,9 +8,11 @@ The rubric's `performance.relative` chooses how the performance points are given
   "reference"   (the default) the median time against the kit's reference's, measured in the same
                 sandbox run after run: full points up to `full_up_to_ratio`, none from
                 `zero_at_ratio`, linear in log(ratio) between (`fraction`);
-  "class_best"  the same bands, against the class's best time (with --class);
+  "class_best"  the same bands, against the class's best (with --class);
   "curve"       by rank in the class (with --class): the fastest gets full points, the k-th of n
-                (k from 1) gets (n - k + 1) / n of them; equal times share a rank.
+                (k from 1) gets (n - k + 1) / n of them; equal values share a rank.
+The class is compared by each submission's time over the reference's timed in its own grading
+(class_measures()), not by the raw times, which the machine's load of the moment moves.
 A submission graded alone is always scored against the reference; `plab grade --class` then
 scores the class's performance tests again from the times in their results.json.
 """
@@ -39,13 +41,45 @@ def fraction(ratio, full, zero):
     return min(1.0, max(0.0, 1 - math.log(max(ratio, full) / full) / math.log(zero / full)))
 
 
-def times(data):
-    """{stage key: measured seconds} of a results.json's leaderboard."""
+RATIO = ": time / reference"
+
+
+def ratio_entry(key, ratio):
+    """results.json's leaderboard entry of a stage's median time over the kit's reference's,
+    measured in the same grading, run after run (lower is better)."""
+    return {"name": f"{key}{RATIO}", "value": round(ratio, 4), "order": "asc"}
+
+
+def _values(data, suffix):
     out = {}
     for e in data.get("leaderboard", []):
         name = str(e.get("name", ""))
-        if name.endswith(": time (s)") and isinstance(e.get("value"), (int, float)):
-            out[name[:-len(": time (s)")]] = float(e["value"])
+        if name.endswith(suffix) and isinstance(e.get("value"), (int, float)):
+            out[name[:-len(suffix)]] = float(e["value"])
+    return out
+
+
+def times(data):
+    """{stage key: measured seconds} of a results.json's leaderboard."""
+    return _values(data, ": time (s)")
+
+
+def ratios(data):
+    """{stage key: measured time over the reference's} of a results.json's leaderboard."""
+    return _values(data, RATIO)
+
+
+def class_measures(graded):
+    """{stage key: ({student: value}, unit)}: what a class is ranked by, per stage. The ratio to
+    the reference timed in the same grading, where every student's results.json has one: a
+    machine busier for one student than another slows the reference alike, so the ratio is
+    steadier than the time (the same code graded twice a minute apart: 1.085 and 1.442 s).
+    Otherwise (results.json from before the ratio) the times."""
+    out = {}
+    for key in sorted({k for data in graded.values() for k in times(data)}):
+        by_ratio = {s: ratios(d)[key] for s, d in graded.items() if key in ratios(d)}
+        by_time = {s: times(d)[key] for s, d in graded.items() if key in times(d)}
+        out[key] = (by_ratio, "x") if len(by_ratio) == len(by_time) else (by_time, "s")
     return out
 
 
@@ -61,8 +95,8 @@ def check_mode(perf):
 
 
 def class_fractions(by_student, perf):
-    """{student: share of the points} of one stage, from {student: seconds}, under the rubric's
-    relative mode (class_best or curve)."""
+    """{student: share of the points} of one stage, from {student: time or ratio to the
+    reference} (lower is better), under the rubric's relative mode (class_best or curve)."""
     mode = check_mode(perf)
     if not by_student:
         return {}
@@ -84,23 +118,20 @@ def rescore(graded, perf):
     changed = set()
     if check_mode(perf) == "reference":
         return {"changed": changed}
-    per_stage = {}
-    for student, data in graded.items():
-        for key, seconds in times(data).items():
-            per_stage.setdefault(key, {})[student] = seconds
-    for key, by_student in per_stage.items():
+    for key, (by_student, unit) in class_measures(graded).items():
         shares = class_fractions(by_student, perf)
         ranked = sorted(by_student.values())
+        what = "the time over the reference's" if unit == "x" else "the time"
         for student, share in shares.items():
             for t in graded[student].get("tests", []):
                 if t.get("name") != f"{key}: performance":
                     continue
                 rank = 1 + sum(u < by_student[student] for u in ranked)
                 base = t["output"].split(CLASS_NOTE)[0]
-                t["output"] = (f"{base}{CLASS_NOTE} ({perf['relative']}): {by_student[student]:.3f}"
-                               f" s, rank {rank} of {len(ranked)}, the class's best "
-                               f"{ranked[0]:.3f} s: {perf['points'] * share:.2f} of "
-                               f"{t['max_score']:g} points")
+                t["output"] = (f"{base}{CLASS_NOTE} ({perf['relative']}, by {what}): "
+                               f"{by_student[student]:.3f} {unit}, rank {rank} of {len(ranked)}, "
+                               f"the class's best {ranked[0]:.3f} {unit}: "
+                               f"{perf['points'] * share:.2f} of {t['max_score']:g} points")
                 t["score"] = round(perf["points"] * share, 3)
                 t["status"] = "passed" if share >= 0.999 else "failed"
                 changed.add(student)
@@ -119,31 +150,35 @@ def write_results(path, data):
 
 def write_page(path, by_name, perf):
     """The class's leaderboard page: per stage, the graded submissions ranked by the grader's
-    measured time, under their anonymous names; one self-contained file (inline style, no
-    script, nothing fetched)."""
-    stages = sorted({k for data in by_name.values() for k in times(data)})
+    measured time over the reference's (class_measures()), under their anonymous names; one
+    self-contained file (inline style, no script, nothing fetched)."""
+    measures = class_measures(by_name)
     mode = perf.get("relative", "reference")
     parts = ["<h1>Leaderboard</h1>",
              "<p>The median wall time of each correct submission's timed runs, measured by the "
              f"grader in its sandbox ({perf['runs']} runs on a hidden scene of N = "
-             f"{perf['scene']['n']}, {perf['scene']['steps']} steps); a program's own printed "
+             f"{perf['scene']['n']}, {perf['scene']['steps']} steps), and that time over the "
+             "kit's reference's, timed run after run in the same grading: the rank follows the "
+             "ratio, which a busier machine changes less than the time. A program's own printed "
              "times play no part. Names are anonymous. Performance points: "
              + {"reference": "against the kit's reference time", "class_best":
                 "against the class's best time", "curve": "by rank in the class"}.get(mode, mode)
              + ".</p>"]
-    if not stages:
+    if not measures:
         parts.append("<p>No submission reached a performance run.</p>")
-    for key in stages:
-        rows = sorted((times(d)[key], name, d) for name, d in by_name.items() if key in times(d))
+    for key, (by_name_value, _) in measures.items():
+        rows = sorted((value, name, by_name[name]) for name, value in by_name_value.items())
         parts.append(f"<h2>Stage {html.escape(key)}</h2><table><tr><th>rank</th><th>name</th>"
-                     "<th>time (s)</th><th>points</th></tr>")
-        for seconds, name, data in rows:
-            rank = 1 + sum(s < seconds for s, _, _ in rows)
+                     "<th>time / reference</th><th>time (s)</th><th>points</th></tr>")
+        for value, name, data in rows:
+            rank = 1 + sum(v < value for v, _, _ in rows)
             test = next((t for t in data.get("tests", [])
                          if t.get("name") == f"{key}: performance"), {})
             points = (f"{test['score']:g} / {test['max_score']:g}" if "score" in test else "")
-            parts.append(f"<tr><td>{rank}</td><td>{html.escape(name)}</td><td>{seconds:.3f}</td>"
-                         f"<td>{points}</td></tr>")
+            ratio = ratios(data).get(key)
+            parts.append(f"<tr><td>{rank}</td><td>{html.escape(name)}</td><td>"
+                         + (f"{ratio:.3f}" if ratio is not None else "") +
+                         f"</td><td>{times(data)[key]:.3f}</td><td>{points}</td></tr>")
         parts.append("</table>")
     style = ("body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}"
              "td,th{border:1px solid #999;padding:0.2em 0.6em;text-align:right}")

@@ -93,6 +93,9 @@ class Performance:
             text += (f". The rubric scores these points against the class ({perf['relative']}): "
                      "plab grade --class gives them again from every student's time")
         # The leaderboard holds the time the grader measured, never one the program printed
+        # and its ratio to the reference's, timed run after run in the same grading (what a
+        # class is ranked by: steadier than the time when the machine's load changes)
         self.results.leaderboard.append(leaderboard.entry(st.key, mm))
+        self.results.leaderboard.append(leaderboard.ratio_entry(st.key, ratio))
         self.results.add(test, perf["points"] * fraction, perf["points"], fraction >= 0.999, text,
                          False, sum(mine))
