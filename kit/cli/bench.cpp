@@ -130,7 +130,7 @@ void add_bench(CLI::App& app) {
         const std::string id = two_digits(raw);
         const std::string program = require_stage(id, impl);
         for (const std::string& schedule : a->schedules) {
-          double one_thread = 0;
+          double one_thread = 0, one_thread_steps = 0;
           for (const int threads : a->threads) {
             std::vector<double> t, steps_t;
             nlohmann::json last;
@@ -159,7 +159,12 @@ void add_bench(CLI::App& app) {
             const std::string device = last.at("device").get<std::string>();
             const std::string timer = last.at("timer").get<std::string>();
             const bool gpu = device != "cpu";
-            if (threads == a->threads.front()) one_thread = median;
+            if (threads == a->threads.front()) {
+              one_thread = median;
+              one_thread_steps = step_median;
+            }
+            // A stage without OpenMP loops (02, 07, 08) has no schedule to show
+            const bool scheduled = last.value("openmp", true) && !gpu;
             const double spread = (t.back() - t.front()) / median;
             if (a->runs > 1 && spread > kNoisy) {
               char what[128];
@@ -173,7 +178,8 @@ void add_bench(CLI::App& app) {
             std::printf("%-5s %6lld %5lld %7s %-11s %10.3f %8.1f%% %8s %10.4f %9.4f  %s (%s)\n",
                         id.c_str(), n, a->steps,
                         gpu && !by_ranks ? "-" : std::to_string(threads).c_str(),
-                        gpu ? "-" : schedule.c_str(), median, 100 * spread, speedup, step_median,
+                        scheduled ? schedule.c_str() : "-", median, 100 * spread, speedup,
+                        step_median,
                         a->steps ? 1e3 * step_median / a->steps : 0.0, device.c_str(),
                         timer.c_str());
             // The memory floor: the state read and written once a step, at the bandwidth the
@@ -200,10 +206,12 @@ void add_bench(CLI::App& app) {
             const double bytes = last.value("bytes_sent", 0.0);
             const double comm = last.value("comm_seconds", 0.0);
             const double steps = a->steps ? static_cast<double>(a->steps) : 1.0;
-            if (by_ranks)
+            if (by_ranks)  // mpirun's start-up is in the whole-process speedup: in steps too
               std::printf("      %.3g bytes sent per step, %.0f%% of the time in steps in "
-                          "exchanges (the busiest rank)\n",
-                          bytes / steps, step_median > 0 ? 100 * comm / step_median : 0.0);
+                          "exchanges (the busiest rank); speedup in steps %.2f over %d rank(s)\n",
+                          bytes / steps, step_median > 0 ? 100 * comm / step_median : 0.0,
+                          step_median > 0 ? one_thread_steps / step_median : 0.0,
+                          a->threads.front());
             std::fflush(stdout);
             char row[512];
             std::snprintf(row, sizeof row,

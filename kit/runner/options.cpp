@@ -92,7 +92,8 @@ void add_options(CLI::App& app, Options& o) {
                     "switches: 05's graph, streams, branchless)")
       ->type_name("A,B");
   stage->add_option("--sweep-alpha", o.stage.sweep_alpha,
-                    "stage 06's GPU grid: slabs per sqrt(N) v/L (0: the measured best)");
+                    "stage 06's grid (the engine's CPU path too): slabs per sqrt(N) v/L (0: the measured "
+                    "best)");
 }
 
 void finish_options(Options& o) {

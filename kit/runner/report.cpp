@@ -29,7 +29,8 @@ void report(const Options& o, const RunStats& stats) {
     const nlohmann::json j = {
         {"stage", info.id},               {"impl", info.impl},
         {"n", stats.particles},           {"steps", stats.steps},
-        {"threads", threads},       {"device", stats.device},
+        {"threads", threads},       {"openmp", info.openmp},
+        {"device", stats.device},
         {"timer", stats.timer},           {"step_seconds", stats.step_seconds},
         {"device_bytes", stats.device_bytes}, {"bandwidth", stats.bandwidth},
         {"total_seconds", stats.total_seconds},

@@ -95,7 +95,7 @@ struct StageOptions {
                                   //!< 06's engine)
   std::vector<std::string> off;   //!< `--off a,b`: the stage's changes to turn off, to measure
                                   //!< what each buys (stage 05: graph, streams, branchless)
-  double sweep_alpha = 0;         //!< `--sweep-alpha A`: stage 06's GPU grid, slabs per
+  double sweep_alpha = 0;         //!< `--sweep-alpha A`: stage 06's grid (GPU; the engine's CPU path too), slabs per
                                   //!< sqrt(N) v/L (0: the stage's measured best)
 
   /// Whether `change` is turned off.

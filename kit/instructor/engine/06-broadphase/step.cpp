@@ -293,6 +293,10 @@ __attribute__((target("avx2"), flatten)) void search_avx2(
 }
 #endif
 
+/// The grid's slabs per sqrt(N) v_cut / L in this run: kAlpha, or StageOptions::sweep_alpha when
+/// the run gives one (to measure; the grid changes, the bits do not). Set once by make_stepper().
+double alpha_in_use = kAlpha;
+
 /// The vectors the pair test uses in this run: the widest the CPU has, or narrower ones when
 /// the run asks (StageOptions::simd `portable` or `avx2`: the tests run every path the machine has
 /// and compare their bits). Set once by make_stepper(), before any step.
@@ -443,7 +447,8 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
         unordered |= m.unordered;
         scratch.insert(scratch.end(), m.sample.begin(), m.sample.end());
       }
-      g = sweep::choose_from_sample(box, active, max2, unordered, scratch, kQuantile, kAlpha);
+      g = sweep::choose_from_sample(box, active, max2, unordered, scratch, kQuantile,
+                                     alpha_in_use);
       const bool alone = whole_slabs(n, g, threads);
       s.reserve(n, g, threads);
       for (Mine& m : mine) {
@@ -534,6 +539,7 @@ void step_float(const Box& box, ParticlesOf<float>& p) { step_in(box, p); }
 /// it, otherwise step() on the CPU with the vectors `options.simd` asks for (or step_float()).
 std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions& options) {
   isa_in_use = lanes::choose_isa(options.simd);
+  alpha_in_use = options.sweep_alpha > 0 ? options.sweep_alpha : kAlpha;
   return cpu_stage(box, p, options, {step, step_float, make_gpu_stepper});
 }
 
