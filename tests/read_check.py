@@ -81,7 +81,7 @@ print("malformed scene, output and events files: exit 1 with FILE:LINE: expected
 actual = scratch / "actual.out"
 actual.write_text(golden.read_text().replace("\n5 1 ", "\n5 1 9", 1))
 d = json.loads(run("diff", "--json", golden, actual).stdout)
-assert not d["equal"] and d["first"]["step"] == "5" and d["first"]["particle"] == "1", d["first"]
+assert not d["equal"] and d["first"]["step"] == 5 and d["first"]["particle"] == 1, d["first"]
 wrong = [m["step"] for m in d["steps"] if not m["equal"]]
 assert wrong == [5] and len(d["steps"]) == 101, wrong
 assert d["text"] == run("diff", golden, actual).stdout.strip()

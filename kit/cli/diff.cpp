@@ -13,9 +13,10 @@ void add_diff(CLI::App& app) {
   c->add_option("files", *files, "EXPECTED ACTUAL")->required()->expected(2)
       ->check(CLI::ExistingFile);
   c->add_flag("--json", *json,
-              "print JSON instead: equal, text (the report above), first (line, step, particle, "
-              "field, expected, actual, differing_lines; null when equal) and steps (for every "
-              "step EXPECTED prints, whether ACTUAL prints the same lines for it)");
+              "print JSON instead: equal, text (the report above), first (line, step and "
+              "particle as numbers or null, field, expected and actual as the printed text, "
+              "differing_lines; null when equal) and steps (for every step EXPECTED prints, "
+              "whether ACTUAL prints the same lines for it)");
   c->callback([files, json] {
     const std::string expected = read_file((*files)[0]);
     const std::string actual = read_file((*files)[1]);
@@ -29,8 +30,17 @@ void add_diff(CLI::App& app) {
     out["equal"] = !d;
     out["text"] = d ? d->describe() : "equal";
     out["first"] = nullptr;
+    // A step or particle is a number where the line's word is one (a garbled line's is not:
+    // null); the values stay text, the exact decimals the outputs print
+    const auto number = [](const std::string& word) -> nlohmann::ordered_json {
+      if (word.empty() || word.size() > 18 ||
+          word.find_first_not_of("0123456789") != std::string::npos)
+        return nullptr;
+      return std::stoll(word);
+    };
     if (d)
-      out["first"] = {{"line", d->line}, {"step", d->step}, {"particle", d->particle},
+      out["first"] = {{"line", d->line}, {"step", number(d->step)},
+                      {"particle", number(d->particle)},
                       {"field", d->field}, {"expected", d->expected}, {"actual", d->actual},
                       {"differing_lines", d->differing_lines}};
     out["steps"] = nlohmann::ordered_json::array();

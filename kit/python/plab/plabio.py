@@ -122,8 +122,9 @@ class Plab:
         return out
 
     def diff(self, expected, actual):
-        """`plab diff --json`: {equal, text (plab diff's report), first (line, step, particle,
-        field, expected, actual, differing_lines; None when equal), steps: [{step, equal}] (for
+        """`plab diff --json`: {equal, text (plab diff's report), first (line; step and particle,
+        ints or None where the line's word is not a number; field; expected and actual, the
+        printed text; differing_lines; None when equal), steps: [{step, equal}] (for
         every step the expected output prints, whether the actual prints it the same)}."""
         done, argv = self._run("diff", "--json", expected, actual)
         if done.returncode not in (0, 1):

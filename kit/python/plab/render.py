@@ -162,11 +162,11 @@ def what_to_draw(plab, a, scratch):
         else:
             print(d["text"])
             f = d["first"]
-            step = int(f["step"])
+            step = f["step"] if f["step"] is not None else 0  # a garbled line: from the start
             if steps is None:  # a few steps before, and the next one (to show its collisions)
                 steps = f"{max(0, step - 8)}:{step + 1 if step < scene['steps'] else step}"
-            if f["particle"] != "":
-                mark = (step, int(f["particle"]),
+            if f["particle"] is not None:
+                mark = (step, f["particle"],
                         f"first difference: step {step}, particle {f['particle']}, {f['field']}: "
                         f"expected {f['expected']}, got {f['actual']}")
         return (list(a.diff), [f"expected: {a.diff[0]}", f"actual: {a.diff[1]}"], None,

@@ -2,7 +2,6 @@
 run (with its diagnosis: where it first differs and what the reference did there)."""
 import os
 import pathlib
-import re
 import shutil
 import subprocess
 import tempfile
@@ -109,8 +108,8 @@ class Run:
         lines = [diff["text"]]
         first = diff["first"] or {}
         reference = self.solution(st.reference)
-        if re.fullmatch(r"\d+", first.get("step", "")) and re.fullmatch(r"\d+", first.get("particle", "")):
-            k, i = int(first["step"]), int(first["particle"])
+        if isinstance(first.get("step"), int) and isinstance(first.get("particle"), int):
+            k, i = first["step"], first["particle"]
             before = velocities(self.kit_programs, work / "expected.out", k - 1, i) if k >= 1 else None
             after = velocities(self.kit_programs, work / "actual.out", k, i) if before else None
             if before and after:
