@@ -15,6 +15,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <stdexcept>
 #include <utility>
 
 namespace plab::dist {
@@ -198,6 +199,22 @@ void scatter(const Ranks& r, const Particles* all, Local& s) {
   s.owned = s.size();
 }
 
+/// Ends the run when this rank owns a particle of another rank's slab (mpi_stage()'s check at
+/// every gather; the instructor's engine, whose ranks own blocks, skips it).
+void check_owners(const Ranks& r, const Local& s) {
+  for (int k = 0; k < s.owned; ++k) {
+    const int q = r.owner_of(s.p.x[k]);
+    if (q == r.rank) continue;
+    char text[512];
+    std::snprintf(text, sizeof text,
+                  "stage 08: rank %d owns particle %d, whose centre (x = %.8f) lies in rank %d's "
+                  "slab [%.8f, %.8f): at the end of a step each rank owns exactly the particles "
+                  "of its own slab (exercise 3, migration: leaving() hands the others to their "
+                  "owners)", r.rank, s.id[k], s.p.x[k], q, r.slab_lo(q), r.slab_hi(q));
+    throw std::runtime_error(text);
+  }
+}
+
 /// Gathers every rank's owned particles into `all` on rank 0, in index order.
 void gather(const Ranks& r, const Local& s, Particles* all_on_0) {
   std::vector<Record> mine;
@@ -229,6 +246,7 @@ void gather(const Ranks& r, const Local& s, Particles* all_on_0) {
 /// One run's state on any rank: what the commands act on.
 struct Run {
   Box box;                   //!< the box and radius
+  bool slabs = true;         //!< each rank must own its slab's particles (mpi_stage())
   Local s;                   //!< this rank's particles
   Stepper::Traffic traffic;  //!< on rank 0, after kTraffic: every rank's messages
 };
@@ -241,9 +259,10 @@ void act(int command, const Ranks& r, Run& run, Particles* all) {
       sampled.work_ns = 0;
       sampled.waiting_ns = 0;
       start_sampling();
-      double head[3] = {run.box.L, run.box.r, the_ranks.gpu ? 1.0 : 0.0};
-      PMPI_Bcast(head, 3, MPI_DOUBLE, 0, r.comm);
+      double head[4] = {run.box.L, run.box.r, the_ranks.gpu ? 1.0 : 0.0, run.slabs ? 1.0 : 0.0};
+      PMPI_Bcast(head, 4, MPI_DOUBLE, 0, r.comm);
       run.box = {head[0], head[1]};
+      run.slabs = head[3] != 0;
       the_ranks.L = run.box.L;
       the_ranks.gpu = head[2] != 0;
       scatter(r, all, run.s);
@@ -255,6 +274,7 @@ void act(int command, const Ranks& r, Run& run, Particles* all) {
       sampled.in_step = 0;
       break;
     case kRead:
+      if (run.slabs) check_owners(r, run.s);
       gather(r, run.s, all);
       break;
     case kTraffic: {  // the sum of the bytes, the most seconds, on rank 0
@@ -279,9 +299,10 @@ void act(int command, const Ranks& r, Run& run, Particles* all) {
 /// Rank 0's view of the run: each call tells the other ranks to do the same.
 class DistStepper final : public Stepper {
  public:
-  DistStepper(const Box& box, Particles& p, std::string gpu)
+  DistStepper(const Box& box, Particles& p, std::string gpu, bool slabs)
       : r_(start_mpi()), gpu_(std::move(gpu)) {
     run_.box = box;
+    run_.slabs = slabs;
     the_ranks.gpu = !gpu_.empty();
     command(kStart, &p);
   }
@@ -353,7 +374,13 @@ int serve(DistStepFn step) {
 std::unique_ptr<Stepper> mpi_stage(const Box& box, Particles& p, DistStepFn step,
                                    const std::string& gpu) {
   the_step = step;
-  return std::make_unique<DistStepper>(box, p, gpu);
+  return std::make_unique<DistStepper>(box, p, gpu, true);
+}
+
+std::unique_ptr<Stepper> mpi_stage_any_cut(const Box& box, Particles& p, DistStepFn step,
+                                           const std::string& gpu) {
+  the_step = step;
+  return std::make_unique<DistStepper>(box, p, gpu, false);
 }
 
 }  // namespace plab::dist

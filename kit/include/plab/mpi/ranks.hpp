@@ -95,6 +95,15 @@ using DistStepFn = void (*)(const Box& box, const Ranks& r, Local& s);
 std::unique_ptr<Stepper> mpi_stage(const Box& box, Particles& p, DistStepFn step,
                                    const std::string& gpu = "");
 
+/// mpi_stage() for the instructor's engine (kit/instructor/engine/08-mpi), whose ranks own the
+/// particles of blocks of the box, not the kit's slabs: the gather of the output then takes each
+/// rank's particles wherever they are. mpi_stage() instead checks, at every gather, that each
+/// rank owns exactly the particles whose centres lie in its slab (Ranks::owner_of()): a stage
+/// whose rank 0 took every particle over would otherwise step them all alone with no message
+/// a step. plab grade refuses a stage's code that calls this one.
+std::unique_ptr<Stepper> mpi_stage_any_cut(const Box& box, Particles& p, DistStepFn step,
+                                           const std::string& gpu = "");
+
 /// Stage 08's plab::stage_worker(): starts MPI; returns -1 on rank 0 (which goes on as the
 /// runner), and on every other rank serves rank 0's runs, stepping with `step`, until rank 0
 /// ends, then returns its exit status (0).

@@ -766,7 +766,7 @@ int stage_worker() {
 std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions& options) {
   dist::isa_in_use = lanes::choose_isa(options.simd);
   if (auto gpu = make_gpu_stepper(box, p, options)) return gpu;
-  return dist::mpi_stage(box, p, dist::step);
+  return dist::mpi_stage_any_cut(box, p, dist::step);  // its ranks own blocks, not slabs
 }
 
 }  // namespace plab

@@ -41,6 +41,9 @@ RULES = [
      "library's own (and the kit's measurement of it); give your function another name", False),
     (re.compile(r"cupti\w*$"), "U",
      "calls {name}: CUPTI is how the kit traces the GPU's work, not for a stage", False),
+    (re.compile(r".*mpi_stage_any_cut"), "U",
+     "calls the instructor's engine's driver (mpi_stage_any_cut), which does not check that each "
+     "rank owns its slab's particles: call plab::dist::mpi_stage()", False),
     (re.compile(r"(dlopen|dlsym|dlvsym|dlmopen)$"), "U",
      "calls {name}: looking functions up by name passes by the kit's measurements; call them "
      "by name in the code", True),
