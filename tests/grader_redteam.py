@@ -636,13 +636,7 @@ void step(const Box& box, const Ranks& r, Local& s) {
   for (int k = 0; k < s.owned; ++k) out[0].push_back(s.record(k));
   Local all;
   migrate(r, out, all);
-  if (r.rank == 0) {
-    Ranks one = r;
-    one.comm = MPI_COMM_SELF;
-    one.ranks = 1;
-    real_step(box, one, all);
-  }
-  for (int k = 0; k < all.owned; ++k) back[r.owner_of(all.p.x[k])].push_back(all.record(k));
+""" + ALONE_08 + """  for (int k = 0; k < all.owned; ++k) back[r.owner_of(all.p.x[k])].push_back(all.record(k));
   Local mine;
   migrate(r, back, mine);
   s = std::move(mine);
@@ -973,6 +967,15 @@ LINEAR_07 = """    const int k = at_[e.i];
     put(m, top);
 """
 
+# Stage 08's cheats: rank 0 steps `all` alone, in a world of one rank (the solution's step).
+ALONE_08 = """  if (r.rank == 0) {
+    Ranks one = r;
+    one.comm = MPI_COMM_SELF;
+    one.ranks = 1;
+    real_step(box, one, all);
+  }
+"""
+
 # Stage 08: every particle moves to rank 0 once (the first step's migration: a few bytes a
 # particle and step over the scene), which steps them all alone from then on, while the other
 # ranks wait for it in MPI_Barrier, whose wait spins: as much CPU time as rank 0's, and nothing
@@ -986,13 +989,7 @@ void step(const Box& box, const Ranks& r, Local& s) {
     else out[0].push_back(s.record(k));
   }
   migrate(r, out, all);
-  if (r.rank == 0) {
-    Ranks one = r;
-    one.comm = MPI_COMM_SELF;
-    one.ranks = 1;
-    real_step(box, one, all);
-  }
-  s = std::move(all);
+""" + ALONE_08 + """  s = std::move(all);
   MPI_Barrier(r.comm);
 }
 }  // namespace plab::dist
@@ -1161,22 +1158,16 @@ def case_rounds():
     if text is not None:
         step.write_text(text)
         gradings.append((name, "07", False))
-    name = "redteam-rounds-gather-08"
-    shutil.rmtree(scratch / name, ignore_errors=True)
-    if patched(name, "08", "solutions/08-mpi", [(
-            "void step(const Box& box, const Ranks& r, Local& s) {",
-            "void real_step(const Box& box, const Ranks& r, Local& s) {"),
-            ("}  // namespace plab::dist\n", GATHER_08)],
-            "stage 08's solution no longer has the shape the gather patch needs"):
-        gradings.append((name, "08-ranks3", False))
-    name = "redteam-rounds-barrier-08"
-    shutil.rmtree(scratch / name, ignore_errors=True)
-    if patched(name, "08", "solutions/08-mpi", [(
-            "void step(const Box& box, const Ranks& r, Local& s) {",
-            "void real_step(const Box& box, const Ranks& r, Local& s) {"),
-            ("}  // namespace plab::dist\n", WAIT_08)],
-            "stage 08's solution no longer has the shape the barrier patch needs"):
-        gradings.append((name, "08-ranks3", False))
+    # Stage 08 whose rank 0 steps everything: the solution's step renamed, and a step around it
+    for cheat, step in (("gather", GATHER_08), ("barrier", WAIT_08)):
+        name = f"redteam-rounds-{cheat}-08"
+        shutil.rmtree(scratch / name, ignore_errors=True)
+        if patched(name, "08", "solutions/08-mpi", [(
+                "void step(const Box& box, const Ranks& r, Local& s) {",
+                "void real_step(const Box& box, const Ranks& r, Local& s) {"),
+                ("}  // namespace plab::dist\n", step)],
+                f"stage 08's solution no longer has the shape the {cheat} patch needs"):
+            gradings.append((name, "08-ranks3", False))
     for name, key, honest in gradings:
         tests, doc, _ = grade(name, scratch / name, key, "--no-races")
         sid = key[:2]
