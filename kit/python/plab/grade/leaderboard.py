@@ -75,10 +75,12 @@ def class_measures(graded):
     machine busier for one student than another slows the reference alike, so the ratio is
     steadier than the time (the same code graded twice a minute apart: 1.085 and 1.442 s).
     Otherwise (results.json from before the ratio) the times."""
+    timed = {s: times(d) for s, d in graded.items()}
+    rated = {s: ratios(d) for s, d in graded.items()}
     out = {}
-    for key in sorted({k for data in graded.values() for k in times(data)}):
-        by_ratio = {s: ratios(d)[key] for s, d in graded.items() if key in ratios(d)}
-        by_time = {s: times(d)[key] for s, d in graded.items() if key in times(d)}
+    for key in sorted({k for t in timed.values() for k in t}):
+        by_ratio = {s: r[key] for s, r in rated.items() if key in r}
+        by_time = {s: t[key] for s, t in timed.items() if key in t}
         out[key] = (by_ratio, "x") if len(by_ratio) == len(by_time) else (by_time, "s")
     return out
 
