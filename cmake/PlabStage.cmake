@@ -5,6 +5,9 @@
 # a stage, linked with plab::instructor). What the stage is comes from the folder's stage.json
 # (docs/ARCHITECTURE.md lists its keys):
 #   sources       the stage's sources (they define plab::make_stepper(), see stage.hpp)
+#   kit_sources   the kit's sources compiled into the stage, paths from the project's root
+#                 (stage 08: kit/mpi/stage_entry.cpp, its entry points; its sources then write
+#                 only plab::dist::step())
 #   cuda_sources  a CPU stage's GPU path, compiled when nvcc is found (else the kit's stand-in
 #                 kit/src/no_gpu_path.cpp: the stage runs on the CPU)
 #   needs_gpu     a CUDA stage: skipped without nvcc
@@ -78,6 +81,7 @@ function(plab_add_stage)
   endif()
   plab_stage_json(${dir} sources sources)
   plab_stage_json(${dir} cuda_sources cuda_sources)
+  plab_stage_json(${dir} kit_sources kit_sources)
   plab_stage_json(${dir} needs_gpu needs_gpu FALSE)
   plab_stage_json(${dir} needs_openmp needs_openmp FALSE)
   plab_stage_json(${dir} model model stepped)
@@ -132,6 +136,9 @@ function(plab_add_stage)
 
   set(lib plab_stage_${id}_${impl})
   add_library(${lib} STATIC ${sources} ${info_cpp})
+  foreach(given IN LISTS kit_sources)
+    target_sources(${lib} PRIVATE ${PROJECT_SOURCE_DIR}/${given})
+  endforeach()
   target_link_libraries(${lib} PUBLIC plab::kit)
   if(impl STREQUAL "engine")
     target_link_libraries(${lib} PUBLIC plab::instructor)  # the answers' headers it may use

@@ -35,7 +35,9 @@ and, measured by the grader outside the student's code (each must score nothing)
                   scene's rounds), 07 with a linear scan for the next event, 08 whose rank 0 steps
                   everything through gathers and scatters (bytes counted in every MPI call), 08
                   whose rank 0 takes every particle once and steps them alone while the others
-                  spin in MPI_Barrier (the work outside MPI calls, sampled by the kit); and
+                  spin in MPI_Barrier (the work outside MPI calls, sampled by the kit), 08
+                  whose every rank gathers every particle once and steps them all itself,
+                  keeping its slab's (even shares; the work in all, against the solution's); and
                   03 as one parallel region with dynamic and guided loops, which keeps its points
   ties            02 whose heap orders events by time only loses the hidden-ties scene
   shortcuts       the one-step answers (next-state), a stage 02 that skips the work on the timed
@@ -564,11 +566,30 @@ def case_oracle():
     print("     call-oracle: " + " ".join(said.splitlines()[:2])[:150])
 
 
+def without_refused_calls():
+    """rubric.json without its entries' `refuse_calls`: stage 08's before-main (which opens files
+    and starts processes) then runs, so that the sandbox alone is what stops it."""
+    rubric = json.loads((kit / "kit/grade/rubric.json").read_text())
+    for conf in rubric["stages"].values():
+        conf.pop("refuse_calls", None)
+    path = scratch / "rubric-without-refused-calls.json"
+    path.write_text(json.dumps(rubric))
+    return path
+
+
 def case_mpi():
-    """Stage 08: every rank under mpirun in the sandbox."""
-    tests, doc, _ = grade("redteam-mpi", submission("redteam-mpi", {"08": "before-main"}), "08")
+    """Stage 08: every rank under mpirun in the sandbox (the rubric's refused calls left out, so
+    that the sandbox is what is tested; with them, the grader refuses before-main's code before
+    it runs: the stage's build says so)."""
+    tests, doc, _ = grade("redteam-mpi", submission("redteam-mpi", {"08": "before-main"}), "08",
+                          "--rubric", str(without_refused_calls()))
     scored_nothing("mpi", tests, "08", "before-main")
     print("     before-main said: " + first_output(tests, "08")[-150:])
+    tests, doc, _ = grade("redteam-mpi-refused", submission("redteam-mpi-refused",
+                                                             {"08": "before-main"}), "08")
+    said = next((t["output"] for t in correctness(tests, "08").values()), "")
+    check("mpi", "is refused" in said and "opens no file" in said,
+          f"stage 08's before-main refused for its calls before it runs: {said[:300]!r}")
     procs, files = leftovers()
     check("before-main", not procs, f"nothing left running after grading (processes {procs})")
 
@@ -580,6 +601,7 @@ def case_control():
     rubric = json.loads((kit / "kit/grade/rubric.json").read_text())
     for conf in rubric["stages"].values():
         conf.pop("idea", None)
+        conf.pop("refuse_calls", None)
     no_ideas = scratch / "rubric-without-ideas.json"
     no_ideas.write_text(json.dumps(rubric))
     tests, doc, _ = grade("redteam-control", submission("redteam-control", {
@@ -995,6 +1017,53 @@ void step(const Box& box, const Ranks& r, Local& s) {
 }  // namespace plab::dist
 """
 
+# Stage 08: every rank gathers every particle once (MPI_Allgatherv: a few bytes a particle and
+# step over the scene) and from then on steps them all itself, in a world of one rank, keeping
+# those of its own slab: each rank's share of the work even, the owners right, R times the work.
+# The gather is made again whenever a rank holds other particles than it kept (the one-step
+# test starts each step afresh).
+REDUNDANT_08 = """
+Local everything_08;
+std::vector<Record> kept_08;
+void step(const Box& box, const Ranks& r, Local& s) {
+  std::vector<Record> mine;
+  for (int k = 0; k < s.owned; ++k) mine.push_back(s.record(k));
+  int fresh = mine.size() != kept_08.size() ||
+              std::memcmp(mine.data(), kept_08.data(), mine.size() * sizeof(Record)) != 0;
+  int any = 0;
+  MPI_Allreduce(&fresh, &any, 1, MPI_INT, MPI_LOR, r.comm);
+  if (any) {
+    int bytes = static_cast<int>(mine.size() * sizeof(Record)), total = 0;
+    std::vector<int> counts(r.ranks), at(r.ranks);
+    MPI_Allgather(&bytes, 1, MPI_INT, counts.data(), 1, MPI_INT, r.comm);
+    for (int q = 0; q < r.ranks; ++q) {
+      at[q] = total;
+      total += counts[q];
+    }
+    std::vector<Record> all(total / sizeof(Record)), by_id(all.size());
+    MPI_Allgatherv(mine.data(), bytes, MPI_BYTE, all.data(), counts.data(), at.data(), MPI_BYTE,
+                   r.comm);
+    for (const Record& rec : all) by_id[rec.id] = rec;
+    everything_08 = Local{};
+    for (const Record& rec : by_id) everything_08.push(rec);
+    everything_08.owned = everything_08.size();
+  }
+  Ranks one = r;
+  one.comm = MPI_COMM_SELF;
+  one.rank = 0;
+  one.ranks = 1;
+  real_step(box, one, everything_08);
+  kept_08.clear();
+  for (int k = 0; k < everything_08.owned; ++k)
+    if (r.owner_of(everything_08.p.x[k]) == r.rank) kept_08.push_back(everything_08.record(k));
+  Local next;
+  for (const Record& rec : kept_08) next.push(rec);
+  next.owned = next.size();
+  s = std::move(next);
+}
+}  // namespace plab::dist
+"""
+
 # Stage 08: every particle gathered on rank 0 (MPI_Gather(v)), stepped there alone, and
 # scattered back to its owner (MPI_Scatter(v)): rooted collectives only.
 GATHER_08 = """
@@ -1159,13 +1228,15 @@ def case_rounds():
         step.write_text(text)
         gradings.append((name, "07", False))
     # Stage 08 whose rank 0 steps everything: the solution's step renamed, and a step around it
-    for cheat, step in (("gather", GATHER_08), ("barrier", WAIT_08)):
+    for cheat, step in (("gather", GATHER_08), ("barrier", WAIT_08),
+                        ("redundant", REDUNDANT_08)):
         name = f"redteam-rounds-{cheat}-08"
         shutil.rmtree(scratch / name, ignore_errors=True)
         if patched(name, "08", "solutions/08-mpi", [(
                 "void step(const Box& box, const Ranks& r, Local& s) {",
                 "void real_step(const Box& box, const Ranks& r, Local& s) {"),
-                ("}  // namespace plab::dist\n", step)],
+                ("}  // namespace plab::dist\n", step),
+                ("#include <vector>\n", "#include <cstring>\n#include <vector>\n")],
                 f"stage 08's solution no longer has the shape the {cheat} patch needs"):
             gradings.append((name, "08-ranks3", False))
     for name, key, honest in gradings:

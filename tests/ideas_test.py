@@ -3,7 +3,8 @@
 bytes the kit's MPI layer counted, against the rubric's most, and none at all (ranks that never
 worked together: rank 0 stepping alone while the others idle or spin); and each rank's work
 outside MPI calls, sampled by the kit, against the rubric's shares (rank 0 stepping everything
-while the others spin in an MPI wait).
+while the others spin in an MPI wait) and, in all, against the kit's solution's (every rank
+stepping every particle; ranks burning CPU outside MPI while rank 0 steps everything).
 
   ideas_test.py   (PYTHONPATH=kit/python: CTest sets it)
 """
@@ -13,7 +14,8 @@ import unittest
 from plab.grade.ideas import Ideas
 
 IDEA = {"scene": {"n": 1000, "steps": 10}, "max_bytes_per_particle_step": 20, "ranks": 3,
-        "min_work_seconds": 0.05, "min_cpu_seconds": 0.4, "share": 0.1, "max_share": 0.55,
+        "min_work_seconds": 0.05, "min_cpu_seconds": 0.4, "share": 0.1, "max_share": 0.45,
+        "max_work_multiple": 1.75,
         "hint": "each rank must step its own slab"}
 
 
@@ -54,10 +56,10 @@ class BytesSent(unittest.TestCase):
         self.assertIn("left no report", problem)
 
 
-def work(seconds, waiting=None, cpu=None):
+def work(seconds, waiting=None, cpu=None, own=0.78):
     report = json.dumps({"rank_work_seconds": seconds,
                          "rank_mpi_seconds": waiting or [0.05] * len(seconds)})
-    return Ideas.work_outside_mpi(None, IDEA, Run(report, cpu), "ran")
+    return Ideas.work_outside_mpi(None, IDEA, Run(report, cpu), "ran", own)
 
 
 class WorkOutsideMpi(unittest.TestCase):
@@ -73,6 +75,25 @@ class WorkOutsideMpi(unittest.TestCase):
     def test_one_rank_doing_most_fails(self):
         problem, _ = work([0.6, 0.2, 0.2])
         self.assertIn("rank 0 did 60% of the work", problem)
+
+    def test_every_rank_stepping_everything_fails(self):
+        # even shares, but each rank steps all the particles: 3 times the solution's work
+        problem, _ = work([0.80, 0.79, 0.81])
+        self.assertIn("3.1 times the kit's solution's 0.780 s", problem)
+
+    def test_ranks_burning_cpu_beside_one_that_steps_all_fail(self):
+        # rank 0 steps everything; the others spin outside MPI just enough for their shares
+        problem, _ = work([0.78, 0.48, 0.48])  # rank 0's share 45%: the most allowed
+        self.assertIn("2.2 times the kit's solution's", problem)
+
+    def test_a_slower_honest_stage_passes(self):
+        problem, text = work([0.45, 0.40, 0.42])  # 1.6 times the solution's work in all
+        self.assertIsNone(problem)
+        self.assertIn("in all 1.270; the kit's solution's 0.780", text)
+
+    def test_without_the_solution_s_work_only_the_shares_count(self):
+        problem, _ = work([0.80, 0.79, 0.81], own=None)
+        self.assertIsNone(problem)
 
     def test_too_little_is_not_held_against(self):
         problem, text = work([0.03, 0.0, 0.0])

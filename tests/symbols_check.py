@@ -59,6 +59,30 @@ MPI_CASES = [
      'int f() { return MPI_Comm_spawn(0, 0, 1, 0, 0, 0, 0, 0); }', "calls MPI_Comm_spawn"),
 ]
 
+# Stage 08's groups of refused calls (rubric.json's refuse_calls: files, signals, threads).
+GROUPS = ("files", "signals", "threads")
+GROUP_CASES = [
+    ("debug output on stderr", "step.cpp.o", '#include <cstdio>\nvoid f(int k) { std::fprintf(stderr, "%d\\n", k); }', None),
+    ("a file written through std::ofstream", "step.cpp.o",
+     '#include <fstream>\nvoid f() { std::ofstream("/plab/out/report.json") << "{}"; }', "opens no file"),
+    ("fopen", "step.cpp.o", '#include <cstdio>\nvoid f() { std::fclose(std::fopen("x", "w")); }', "calls fopen"),
+    ("a file every rank maps", "step.cpp.o",
+     '#include <fcntl.h>\n#include <sys/mman.h>\nvoid* f() { return mmap(0, 4096, PROT_READ, MAP_SHARED, open("/tmp/x", O_RDWR), 0); }',
+     "maps no memory"),
+    ("a raw system call", "step.cpp.o", '#include <unistd.h>\nlong f() { return syscall(39); }', "calls syscall"),
+    ("SIGPROF ignored", "step.cpp.o", '#include <csignal>\nvoid f() { std::signal(SIGPROF, SIG_IGN); }', "changes no signal"),
+    ("the profiling timer stopped", "step.cpp.o",
+     '#include <sys/time.h>\nint f() { itimerval t{}; return setitimer(ITIMER_PROF, &t, nullptr); }', "calls setitimer"),
+    ("a thread that steps beside an MPI wait", "step.cpp.o",
+     '#include <thread>\nvoid f() { std::thread t([] {}); t.join(); }', "one thread of one process"),
+    ("pthread_create", "step.cpp.o",
+     '#include <pthread.h>\nint f() { pthread_t t; return pthread_create(&t, nullptr, [](void*) -> void* { return nullptr; }, nullptr); }',
+     "calls pthread_create"),
+    ("fork", "step.cpp.o", '#include <unistd.h>\nint f() { return fork(); }', "calls fork"),
+    ("the kit's entry points (kit/mpi/stage_entry.cpp) are the kit's", "stage_entry.cpp.o",
+     '#include <fstream>\nvoid f() { std::ofstream("x") << 1; }', None),
+]
+
 
 def library(work, member, source):
     """A stage library holding one object named `member`, compiled from `source`."""
@@ -89,6 +113,16 @@ try:
         print(f"{'ok  ' if ok else 'FAIL'} MPI: {name}: {said or 'let through'}")
         if not ok:
             failures.append(f"MPI: {name}")
+    for name, member, source, expected in GROUP_CASES:
+        said = symbols.check(library(work, member, source), kit_mpi, GROUPS)
+        ok = not said if expected is None else any(expected in s for s in said)
+        print(f"{'ok  ' if ok else 'FAIL'} stage 08's refused calls: {name}: {said or 'let through'}")
+        if not ok:
+            failures.append(f"refused calls: {name}")
+    said = symbols.check(library(work, "step.cpp.o", '#include <thread>\nvoid f() { std::thread t([] {}); t.join(); }'))
+    print(f"{'ok  ' if not said else 'FAIL'} a thread where no group is refused: {said or 'let through'}")
+    if said:
+        failures.append("a thread refused without refuse_calls")
     missing = symbols.check(work / "libplab_stage_98_student.a")
     if not (missing and "was not built" in missing[0]):
         failures.append(f"a missing library: {missing}")
@@ -96,7 +130,9 @@ try:
         libs = sorted(pathlib.Path(sys.argv[1]).glob("*/*/libplab_stage_*.a"))
         mpi = pathlib.Path(sys.argv[1]) / "kit" / "libplab_mpi.a"
         for lib in libs:
-            said = symbols.check(lib, mpi if "_08_" in lib.name and mpi.is_file() else None)
+            on_mpi = "_08_" in lib.name and mpi.is_file()
+            said = symbols.check(lib, mpi if on_mpi else None,
+                                 GROUPS if on_mpi and "_engine" not in lib.name else ())
             # stage 08's engine (never graded) owns blocks, not slabs: its driver is refused
             if lib.name == "libplab_stage_08_engine.a":
                 if not said or any("mpi_stage_any_cut" not in s for s in said):
@@ -111,4 +147,4 @@ finally:
     shutil.rmtree(work, ignore_errors=True)
 if failures:
     sys.exit("symbols check FAILED: " + "; ".join(failures))
-print(f"{len(CASES) + len(MPI_CASES)} objects judged as expected")
+print(f"{len(CASES) + len(MPI_CASES) + len(GROUP_CASES) + 1} objects judged as expected")

@@ -6,7 +6,8 @@
 //
 // =================================================================================================
 //  GOAL   One step of model.md on R ranks, each holding only its slab's particles. You write
-//         the messages; local.hpp gives what a rank does on its own.
+//         the messages; local.hpp gives what a rank does on its own, and the kit's driver
+//         (kit/mpi/stage_entry.cpp) calls step() below on every rank, every step.
 //         1. the halo: the fastest speed over every rank (MPI_Allreduce), then copies of the
 //            particles within reach of each other rank's slab (MPI_Sendrecv, rank by rank);
 //         2. the rounds across ranks: each round, the ghosts' values from their owners
@@ -148,15 +149,3 @@ void step(const Box& box, const Ranks& r, Local& s) {
 
 }  // namespace plab::dist
 
-namespace plab {
-
-/// Stage 08's first call on every rank (stage.hpp): the kit's MPI driver (plab/mpi/ranks.hpp)
-/// serves rank 0's run with this stage's step on every other rank.
-int stage_worker() { return dist::serve(dist::step); }
-
-/// Stage 08's entry point (stage.hpp), on rank 0: the kit's MPI driver with this stage's step.
-std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions&) {
-  return dist::mpi_stage(box, p, dist::step);
-}
-
-}  // namespace plab

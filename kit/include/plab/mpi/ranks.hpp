@@ -104,6 +104,12 @@ std::unique_ptr<Stepper> mpi_stage(const Box& box, Particles& p, DistStepFn step
 std::unique_ptr<Stepper> mpi_stage_any_cut(const Box& box, Particles& p, DistStepFn step,
                                            const std::string& gpu = "");
 
+/// The stage's step on this rank, which its step.cpp defines: the kit's entry points
+/// (kit/mpi/stage_entry.cpp, a stage's `kit_sources`) hand it to mpi_stage() and serve(), so
+/// that the driver a stage runs under, and what it reports of the ranks' bytes and work, is the
+/// kit's.
+void step(const Box& box, const Ranks& r, Local& s);
+
 /// Stage 08's plab::stage_worker(): starts MPI; returns -1 on rank 0 (which goes on as the
 /// runner), and on every other rank serves rank 0's runs, stepping with `step`, until rank 0
 /// ends, then returns its exit status (0).

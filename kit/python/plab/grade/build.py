@@ -35,6 +35,19 @@ class Build:
             return False
 
     # -- building --------------------------------------------------------------------------------
+    def refused_calls(self, sid):
+        """The groups of calls (symbols.CALL_GROUPS) that the rubric's entries of stage folder
+        `sid` refuse in its code (`refuse_calls`)."""
+        groups = []
+        for key, conf in self.rubric["stages"].items():
+            if conf.get("folder", key) == sid:
+                groups += [g for g in conf.get("refuse_calls", []) if g not in groups]
+        unknown = [g for g in groups if g not in symbols.CALL_GROUPS]
+        if unknown:
+            raise ValueError(f"rubric: stage {sid}'s refuse_calls names {unknown}, not one of "
+                             f"{sorted(symbols.CALL_GROUPS)}")
+        return groups
+
     def build(self, stages, found):
         """Builds each stage's program from the submission's sources and the kit's own CMake, kit
         and runner, in the sandbox (the compiler sees the system, the kit's public part and the
@@ -114,7 +127,8 @@ class Build:
             # that goes around the libraries the kit measures through is refused (symbols.py).
             mpi = build / "kit" / "libplab_mpi.a"  # built from the kit's sources for stage 08
             refused = (symbols.check(build / "stages" / folders[sid] / f"libplab_stage_{sid}_student.a",
-                                     mpi if self.stage_uses_mpi(sid) else None)
+                                     mpi if self.stage_uses_mpi(sid) else None,
+                                     self.refused_calls(sid))
                        if b.rc == 0 and not b.reason else [])
             if refused:
                 built[sid] = ("it is refused, its compiled code goes around what the kit measures "

@@ -4,7 +4,9 @@ fast."""
 import json
 import os
 import pathlib
+import shutil
 import subprocess
+import tempfile
 import time
 
 from plab.grade.rounds_count import RoundsCount
@@ -30,8 +32,11 @@ class Ideas:
           ranks:   the stage under mpirun on `ranks` processes: it sent at most
                    `max_bytes_per_particle_step` and more than none (counted by the kit's MPI
                    layer), every rank did `share` of the steps' work outside MPI calls (sampled
-                   by the kit's MPI layer: `min_work_seconds`) and used `share` of the ranks' CPU
-                   time (read from /proc), so rank 0 does not step everything.
+                   by the kit's MPI layer: `min_work_seconds`), the ranks' work in all was at most
+                   `max_work_multiple` times the kit's solution's on the same scene and ranks
+                   (ranks that each step every particle, or burn CPU while one steps them all),
+                   and they used `share` of the ranks' CPU time (read from /proc), so rank 0
+                   does not step everything.
         Both watched kinds also take `max_share`: the most that one thread or rank may use."""
         idea = st.idea
         test = f"{st.sid}: idea ({idea['what']})"
@@ -40,8 +45,10 @@ class Ideas:
             self.idea_failed[st.sid] = unbuilt(st.sid, program, 1)
             return
         scene, what = self.idea_scene(st, folder)
-        expected, own_seconds = self.own_run(st, scene, idea.get("threads", 1), folder / "idea.out")
         kind = idea["kind"]
+        own_report = folder / "idea-own-report.json" if kind == "ranks" else None
+        expected, own_seconds = self.own_run(st, scene, idea.get("threads", 1), folder / "idea.out",
+                                             idea.get("ranks", 1) if own_report else 1, own_report)
         limit = max(idea.get("seconds", 0), idea.get("multiple", 0) * own_seconds)
         threads = str(idea.get("threads", st.threads))
         env = dict(st.env, OMP_WAIT_POLICY="passive") if kind == "threads" else st.env
@@ -63,7 +70,7 @@ class Ideas:
         if problem is None and kind == "ranks" and "max_bytes_per_particle_step" in idea:
             problem, text = self.bytes_sent(idea, run, text)  # counted, so decided first
         if problem is None and kind == "ranks" and "min_work_seconds" in idea:
-            problem, text = self.work_outside_mpi(idea, run, text)  # sampled by the kit
+            problem, text = self.work_outside_mpi(idea, run, text, own_work(own_report))
         if problem is None and counter:
             problem, text = counter.check(idea, run, text)  # counted, so decided first
         if problem is None and counter and "calm_speed" in idea:
@@ -74,13 +81,20 @@ class Ideas:
             self.idea_failed[st.sid] = f"the idea test of stage {st.sid} failed: {problem}"
         self.results.add(test, 0, 0, problem is None, problem or text, False, run.seconds)
 
-    def own_run(self, st, scene, threads, out):
+    def own_run(self, st, scene, threads, out, ranks=1, report=None):
         """(output, seconds) of the stage's own solution on `scene` (the same bits as the
-        reference, and the speed a limit is set from), written to `out`."""
+        reference, and the speed a limit is set from), written to `out`; on `ranks` processes
+        under mpirun, writing the kit's report of the run to `report`, when ranks > 1."""
+        argv = [self.solution(st.sid), scene, "--quiet", "--threads", str(threads), "--out", out]
+        env = dict(os.environ, **st.env)
+        if ranks > 1:
+            argv = [shutil.which("mpirun") or "mpirun", "--quiet", "--oversubscribe", "-np",
+                    str(ranks), *argv, "--report", report]
+            if os.geteuid() == 0:  # OpenMPI refuses root unless told twice (containers, CI)
+                env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+            env["TMPDIR"] = tempfile.mkdtemp(prefix="mpi-", dir=self.private)  # its session files
         start = time.time()
-        r = subprocess.run([self.solution(st.sid), scene, "--quiet", "--threads", str(threads),
-                            "--out", out], capture_output=True, text=True,
-                           env=dict(os.environ, **st.env))
+        r = subprocess.run(argv, capture_output=True, text=True, env=env)
         seconds = time.time() - start
         if r.returncode != 0:
             raise RuntimeError(f"the kit's solution of stage {st.sid} failed on {scene}: {r.stderr}")
@@ -158,12 +172,17 @@ class Ideas:
                     f"back is about 75). {idea['hint']}"), text
         return None, text
 
-    def work_outside_mpi(self, idea, run, text):
+    def work_outside_mpi(self, idea, run, text, own=None):
         """(problem or None, text): the CPU time each rank spent in its steps outside MPI calls,
         sampled by the kit's MPI layer (a profiling timer; kit/mpi marks every MPI call of the
         stage, waits and tests included), against the rubric's `share` and `max_share`. MPI's
         waits spin, so a rank that waits in MPI_Barrier while rank 0 steps every particle uses
-        as much CPU time as rank 0 (work_shared() cannot tell them apart): here it did no work."""
+        as much CPU time as rank 0 (work_shared() cannot tell them apart): here it did no work.
+        `own`: the same sum of the kit's solution on the same scene and ranks; the ranks' work in
+        all may be at most `max_work_multiple` times it. The stepping is the kit's (local.hpp),
+        so an honest stage does about the solution's work; ranks that each step every particle
+        do R times it, and ranks that burn CPU outside MPI (so that their shares look even) while
+        one steps everything, at least 1 / max_share times it."""
         try:
             report = json.loads(run.read_output("report.json") or "")
             work = [float(x) for x in report["rank_work_seconds"]]
@@ -173,6 +192,8 @@ class Ideas:
         total = sum(work)
         shown = ", ".join(f"{x:.3f}" for x in work)
         text += f"; CPU seconds of its ranks' steps outside MPI calls: {shown}"
+        if own:
+            text += f" (in all {total:.3f}; the kit's solution's {own:.3f})"
         if len(work) != idea["ranks"]:
             return (f"its run reported the work of {len(work)} ranks, not {idea['ranks']}. "
                     f"{idea['hint']}"), text
@@ -186,6 +207,14 @@ class Ideas:
                     f"signal (SIGPROF) was changed. {idea['hint']}"), text
         if total < idea["min_work_seconds"]:
             return None, text + " (too little to judge: not held against it)"
+        most = idea.get("max_work_multiple")
+        if most and own and total > most * own:
+            return (f"its ranks did {total:.3f} s of work outside MPI calls in all, "
+                    f"{total / own:.1f} times the kit's solution's {own:.3f} s on the same scene "
+                    f"and ranks (at most {most:g} times: the stepping is the kit's, so a rank that "
+                    f"steps its own slab does its share of the solution's work; ranks that each "
+                    f"step every particle, or burn CPU while one steps them all, do more). CPU "
+                    f"seconds of its ranks' steps outside MPI calls: {shown}. {idea['hint']}"), text
         low, high = min(work), max(work)
         if low < idea["share"] * total or high > idea.get("max_share", 1.0) * total:
             which = work.index(low if low < idea["share"] * total else high)
@@ -229,3 +258,13 @@ class Ideas:
                     f"{100 * most:.0f}% may). CPU seconds of its {who}: {shown} (total "
                     f"{total:.2f}). {idea['hint']}"), text
         return None, text
+
+
+def own_work(report):
+    """The work outside MPI calls in all of the kit's solution's run that wrote `report` (the
+    sum of its rank_work_seconds)."""
+    try:
+        return sum(float(x) for x in json.loads(pathlib.Path(report).read_text())["rank_work_seconds"])
+    except (OSError, TypeError, ValueError, KeyError) as e:
+        raise RuntimeError(f"the kit's solution left no report of its ranks' work ({report}): "
+                           f"{e}") from None

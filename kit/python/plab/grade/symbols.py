@@ -24,6 +24,12 @@ counts as not compiling, with the reason):
     compiled against the MPI C API only (OMPI_SKIP_MPICXX), so its objects name exactly the calls
     it makes.
 
+A stage entry of rubric.json may also name groups of calls its code may not make at all
+(`refuse_calls`, CALL_GROUPS): stage 08's ranks, whose work the kit samples and whose messages
+it counts, open no files and map no memory (which would move particles between ranks past the
+count, or change the kit's report), change no signal or timer (the sampling's SIGPROF), and
+start no thread or process (work beside a rank's MPI wait).
+
 The names are read from the symbol tables the compiler wrote, so a macro or a wrapper in the
 source does not hide them. What stays open is said in handouts/instructors.md.
 """
@@ -50,6 +56,31 @@ RULES = [
 ]
 GLOBAL = set("TWDBRVGSiu")  # nm -P types of a global symbol the object defines
 
+# Calls a stage's code may be refused by group (a rubric entry's `refuse_calls`): (pattern of the
+# called symbol's name, as nm prints it, mangled; the reason)
+CALL_GROUPS = {
+    "files": (re.compile(
+        r"(open|open64|openat|openat64|creat|creat64|fopen|fopen64|freopen|freopen64|fdopen|"
+        r"mmap|mmap64|shm_open|memfd_create|shmget|shmat|mkstemp|mkstemp64|mkostemp|tmpfile|"
+        r"tmpfile64|truncate|ftruncate|rename|unlink|syscall)$"
+        r"|.*(basic_ofstream|basic_ifstream|basic_fstream|basic_filebuf|St10filesystem).*"),
+        "calls {name}: a rank's step gets its particles from the kit and gives them back to it, "
+        "and opens no file and maps no memory of its own (files and shared memory would move "
+        "particles between ranks past the kit's count of the bytes they send); print to stderr "
+        "to debug"),
+    "signals": (re.compile(
+        r"(signal|sigaction|sigprocmask|pthread_sigmask|sigset|sysv_signal|__sysv_signal|"
+        r"bsd_signal|setitimer|timer_create|timer_settime|timer_delete|alarm|ualarm)$"),
+        "calls {name}: the kit samples where each rank's CPU time goes with a profiling timer "
+        "(SIGPROF); a stage changes no signal and no timer"),
+    "threads": (re.compile(
+        r"(pthread_create|fork|vfork|clone|clone3|execve|execv|execvp|execvpe|execl|execlp|"
+        r"execle|posix_spawn|posix_spawnp|system|popen|GOMP_\w+)$"
+        r"|.*St6thread15_M_start_thread.*"),
+        "calls {name}: each rank is one thread of one process (the kit samples its CPU time as "
+        "work or as time in MPI calls: another thread's work would look like a wait)"),
+}
+
 # MPI calls that move no data of the stage from one rank to another (or only receive what another
 # rank's counted call sent): a stage may call them though kit/mpi does not count them.
 NO_DATA = set("""
@@ -69,11 +100,14 @@ MPI_Topo_test MPI_Status_set_elements MPI_Status_set_cancelled
 NO_DATA_PREFIXES = ("MPI_Type_", "MPI_Group_", "MPI_Info_", "MPI_Errhandler_")
 
 
-def problems(nm_lines, mpi_kit=None):
+def problems(nm_lines, mpi_kit=None, refuse_calls=()):
     """The reasons to refuse, from `nm -A -P` lines ('ARCHIVE[MEMBER]: NAME TYPE ...'), one per
     (object, symbol), in order. `mpi_kit`: the MPI functions kit/mpi defines (counted or refused),
-    for a stage on MPI; None for the others."""
+    for a stage on MPI; None for the others. `refuse_calls`: CALL_GROUPS' names whose calls are
+    refused."""
     found = []
+    groups = [(g, *CALL_GROUPS[g]) for g in refuse_calls]
+    said = set()  # (source, group): one reason each, naming the first such call
     for line in nm_lines:
         head, _, rest = line.partition(": ")
         fields = rest.split()
@@ -81,27 +115,43 @@ def problems(nm_lines, mpi_kit=None):
             continue
         name, kind = fields[0], fields[1]
         member = head[head.find("[") + 1:-1] if head.endswith("]") else head
-        if member.startswith("stage_info.cpp") or member.startswith("no_gpu_path.cpp"):
+        if member.startswith(("stage_info.cpp", "no_gpu_path.cpp", "stage_entry.cpp")):
             continue  # the kit's own objects in the stage's library
+        source = member[:-2] if member.endswith(".o") else member  # step.cpp.o: step.cpp
+        group = next((g for g in groups if kind == "U" and g[1].match(name)), None)
+        if group is not None:
+            if (source, group[0]) not in said:
+                said.add((source, group[0]))
+                found.append(f"{source} " + group[2].format(name=demangled(name)))
+            continue
         for pattern, want, reason, not_cuda in RULES:
             if not pattern.match(name) or (kind == "U" if want == "D" else kind != "U"):
                 continue
             if (want == "D" and kind not in GLOBAL) or (not_cuda and member.endswith(".cu.o")):
                 continue  # a local symbol replaces nothing; CUDA's start-up code calls dlsym
             plain = name[1:] if name.startswith("PMPI_") else name
-            source = member[:-2] if member.endswith(".o") else member  # step.cpp.o: step.cpp
             found.append(f"{source} " + reason.format(name=name, plain=plain))
             break
         else:
             if (mpi_kit is not None and kind == "U" and name.startswith("MPI_")
                     and name not in mpi_kit and name not in NO_DATA
                     and not name.startswith(NO_DATA_PREFIXES)):
-                source = member[:-2] if member.endswith(".o") else member
                 found.append(f"{source} calls {name}, which the kit does not count: it could move "
                              f"data between ranks past the count of the bytes they send. Use the "
                              f"point-to-point messages or the collectives the kit counts "
                              f"(handouts/08-mpi.md)")
     return list(dict.fromkeys(found))
+
+
+def demangled(name):
+    """A C++ symbol's name as the source reads it (c++filt), or `name` itself."""
+    if not name.startswith("_Z"):
+        return name
+    try:
+        done = subprocess.run(["c++filt", name], capture_output=True, text=True, timeout=10)
+    except (OSError, subprocess.TimeoutExpired):
+        return name
+    return done.stdout.strip() or name
 
 
 def symbol_lines(archive, seconds=60):
@@ -118,11 +168,11 @@ def symbol_lines(archive, seconds=60):
     return done.stdout.splitlines()
 
 
-def check(archive, mpi_library=None):
+def check(archive, mpi_library=None, refuse_calls=()):
     """The reasons to refuse the stage whose library is `archive` (its objects only: the kit's
     libraries are linked later), or [] when there is none; a list of one line when the archive
     cannot be read. `mpi_library`: kit/mpi's library, for a stage on MPI (the MPI functions it
-    defines are the ones counted or refused)."""
+    defines are the ones counted or refused); `refuse_calls`: CALL_GROUPS' names."""
     lines = symbol_lines(archive)
     if isinstance(lines, str):
         return [lines]
@@ -133,4 +183,4 @@ def check(archive, mpi_library=None):
             return [f"the kit's MPI layer could not be read: {kit_lines}"]
         mpi_kit = {f[0] for f in (ln.partition(": ")[2].split() for ln in kit_lines)
                    if len(f) >= 2 and f[0].startswith("MPI_") and f[1] in GLOBAL}
-    return problems(lines, mpi_kit)
+    return problems(lines, mpi_kit, refuse_calls)
