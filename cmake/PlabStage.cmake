@@ -5,9 +5,9 @@
 # a stage, linked with plab::instructor). What the stage is comes from the folder's stage.json
 # (docs/ARCHITECTURE.md lists its keys):
 #   sources       the stage's sources (they define plab::make_stepper(), see stage.hpp)
-#   kit_sources   the kit's sources compiled into the stage, paths from the project's root
-#                 (stage 08: kit/mpi/stage_entry.cpp, its entry points; its sources then write
-#                 only plab::dist::step())
+#   kit_sources   the kit's sources compiled into every program linked with the stage, paths
+#                 from the project's root (stage 08: kit/mpi/stage_entry.cpp, its entry points;
+#                 its sources then write only plab::dist::step())
 #   cuda_sources  a CPU stage's GPU path, compiled when nvcc is found (else the kit's stand-in
 #                 kit/src/no_gpu_path.cpp: the stage runs on the CPU)
 #   needs_gpu     a CUDA stage: skipped without nvcc
@@ -136,8 +136,12 @@ function(plab_add_stage)
 
   set(lib plab_stage_${id}_${impl})
   add_library(${lib} STATIC ${sources} ${info_cpp})
+  # The kit's sources of the stage go into every program linked with it, as objects of its own
+  # (INTERFACE), not into the stage's archive: the linker then always takes them, and a stage
+  # that defines their functions again (stage 08's make_stepper()) fails to link rather than
+  # having its own definition picked from the archive instead of the kit's.
   foreach(given IN LISTS kit_sources)
-    target_sources(${lib} PRIVATE ${PROJECT_SOURCE_DIR}/${given})
+    target_sources(${lib} INTERFACE ${PROJECT_SOURCE_DIR}/${given})
   endforeach()
   target_link_libraries(${lib} PUBLIC plab::kit)
   if(impl STREQUAL "engine")

@@ -37,7 +37,9 @@ and, measured by the grader outside the student's code (each must score nothing)
                   whose rank 0 takes every particle once and steps them alone while the others
                   spin in MPI_Barrier (the work outside MPI calls, sampled by the kit), 08
                   whose every rank gathers every particle once and steps them all itself,
-                  keeping its slab's (even shares; the work in all, against the solution's); and
+                  keeping its slab's (even shares; the work in all, against the solution's), 08
+                  that steps its slab on the idea test's scene only and gathers on rank 0
+                  elsewhere (its random-1000 and random-2000 must earn nothing); and
                   03 as one parallel region with dynamic and guided loops, which keeps its points
   ties            02 whose heap orders events by time only loses the hidden-ties scene
   shortcuts       the one-step answers (next-state), a stage 02 that skips the work on the timed
@@ -1112,6 +1114,26 @@ void step(const Box& box, const Ranks& r, Local& s) {
 """
 
 
+# Stage 08 that recognises the idea test's scene (the largest: 10^5 particles) and steps its slab
+# there only, gathering every particle on rank 0 everywhere else (GATHER_08): its idea test
+# passes; the correctness scenes large enough to judge (random-1000, random-2000) must not.
+LARGEST_08 = GATHER_08.replace("void step(", "void gather_step(").replace(
+    "}  // namespace plab::dist\n", """
+void step(const Box& box, const Ranks& r, Local& s) {
+  static int n = -1;  // the scene's particles, counted once over the ranks
+  if (n < 0) {
+    int mine = s.owned;
+    MPI_Allreduce(&mine, &n, 1, MPI_INT, MPI_SUM, r.comm);
+  }
+  if (n >= 50000)
+    real_step(box, r, s);
+  else
+    gather_step(box, r, s);
+}
+}  // namespace plab::dist
+""")
+
+
 def stage_folder(root, sid, source):
     """A copy of the kit's folder `source` as the submission's stage `sid`; its step.cpp path."""
     dest = root / "stages" / FOLDERS[sid]
@@ -1255,6 +1277,26 @@ def case_rounds():
         else:
             check("rounds", idea is not None and idea["status"] == "failed" and got == 0,
                   f"{name} scored {got} of {most} on correctness; its idea test: {said!r}")
+    # Stage 08 that steps its slab on the idea test's scene only: its idea test passes there, but
+    # the scenes where the kit can judge the ranks' work (random-1000, random-2000) catch the
+    # gathers on rank 0, and the whole folder then scores nothing, as when the idea test fails
+    name = "redteam-rounds-largest-08"
+    shutil.rmtree(scratch / name, ignore_errors=True)
+    if patched(name, "08", "solutions/08-mpi", [(
+            "void step(const Box& box, const Ranks& r, Local& s) {",
+            "void real_step(const Box& box, const Ranks& r, Local& s) {"),
+            ("}  // namespace plab::dist\n", LARGEST_08)],
+            "stage 08's solution no longer has the shape the largest-scene patch needs"):
+        tests, doc, _ = grade(name, scratch / name, "08-ranks3", "--no-races")
+        idea = next((t for n, t in tests.items() if n.startswith("08: idea")), {})
+        mine = correctness(tests, "08-ranks3")
+        got = sum(t["score"] for t in mine.values())
+        caught = [n for n, t in mine.items() if n.endswith(("random-1000", "random-2000"))
+                  and "of the work of the steps" in t["output"]]
+        check("rounds", idea.get("status") == "failed" and "on a correctness scene" in
+              idea.get("output", "") and got == 0 and caught,
+              f"{name} scored {got} on correctness (must be 0); random-1000, random-2000 caught: "
+              f"{caught}; its idea test: {idea.get('output', 'none')[:300]!r}")
 
 
 def case_ties():

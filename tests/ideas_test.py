@@ -4,17 +4,21 @@ bytes the kit's MPI layer counted, against the rubric's most, and none at all (r
 worked together: rank 0 stepping alone while the others idle or spin); and each rank's work
 outside MPI calls, sampled by the kit, against the rubric's shares (rank 0 stepping everything
 while the others spin in an MPI wait) and, in all, against the kit's solution's (every rank
-stepping every particle; ranks burning CPU outside MPI while rank 0 steps everything).
+stepping every particle; ranks burning CPU outside MPI while rank 0 steps everything); and the
+same on the correctness scenes large enough to judge (ranks_work(): a stage that steps its slab
+only on the idea test's scene).
 
   ideas_test.py   (PYTHONPATH=kit/python: CTest sets it)
 """
 import json
+import pathlib
+import tempfile
 import unittest
 
 from plab.grade.ideas import Ideas
 
 IDEA = {"scene": {"n": 1000, "steps": 10}, "max_bytes_per_particle_step": 20, "ranks": 3,
-        "min_work_seconds": 0.05, "min_cpu_seconds": 0.4, "share": 0.1, "max_share": 0.45,
+        "min_work_seconds": 0.05, "min_cpu_seconds": 0.4, "share": 0.1, "max_share": 0.55, "max_work_share": 0.45,
         "max_work_multiple": 1.75,
         "hint": "each rank must step its own slab"}
 
@@ -114,6 +118,58 @@ class WorkOutsideMpi(unittest.TestCase):
     def test_no_report_fails(self):
         problem, _ = Ideas.work_outside_mpi(None, IDEA, Run(json.dumps({"bytes_sent": 1.0})), "ran")
         self.assertIn("left no report of the work", problem)
+
+
+class Graded(Ideas):
+    """The grader's part that ranks_work() uses: the rubric, and the kit's solution's run (here
+    one that writes a report of `own` seconds of work in all)."""
+
+    def __init__(self, own):
+        self.rubric = {"correctness": {"ranks_work": {"min_work_seconds": 0.5, "share": 0.1,
+                                                      "max_work_multiple": 1.75}}}
+        self.own = own
+        self.solution_runs = 0
+
+    def own_run(self, st, scene, threads, out, ranks=1, report=None):
+        self.solution_runs += 1
+        pathlib.Path(report).write_text(json.dumps({"rank_work_seconds": [self.own / ranks] * ranks}))
+        return "", 0.0
+
+
+class Stage:
+    ranks, threads = 3, "1"
+
+
+def ranks_work(seconds, own=2.4):
+    grader = Graded(own)
+    with tempfile.TemporaryDirectory() as folder:
+        said = grader.ranks_work(Stage(), Run(json.dumps({"rank_work_seconds": seconds})),
+                                 "scene.in", pathlib.Path(folder) / "ranks-random-2000")
+    return said, grader.solution_runs
+
+
+class RanksWork(unittest.TestCase):
+    """A correctness run on several ranks whose output is right (ranks_work())."""
+
+    def test_the_solution_s_shares_pass(self):
+        self.assertEqual(ranks_work([0.82, 0.84, 0.80]), (None, 1))  # random-2000, 3 ranks
+
+    def test_a_small_scene_is_not_judged_nor_the_solution_run(self):
+        self.assertEqual(ranks_work([0.01, 0.0, 0.0]), (None, 0))
+
+    def test_rank_0_stepping_everything_fails(self):
+        said, runs = ranks_work([2.4, 0.001, 0.0])  # a gather on rank 0 off the idea scene
+        self.assertIn("rank 2 of 3 did 0% of the work of the steps", said)
+        self.assertEqual(runs, 0)
+
+    def test_ranks_burning_cpu_beside_rank_0_fail(self):
+        said, _ = ranks_work([2.4, 1.0, 1.0])  # the same, the others spinning outside MPI
+        self.assertIn("1.8 times the kit's solution's 2.400 s on this scene and 3 ranks", said)
+
+    def test_no_report_fails(self):
+        grader = Graded(2.4)
+        said = grader.ranks_work(Stage(), Run(""), "scene.in", pathlib.Path("unused"))
+        self.assertIn("left no report of the work of its ranks", said)
 
 
 if __name__ == "__main__":

@@ -19,7 +19,9 @@
 ///     }
 ///
 /// A CUDA stage returns its own Stepper, which keeps the state on the GPU between steps; the exact
-/// event-driven stage 07 returns one that keeps its continuous-time state. The runner
+/// event-driven stage 07 returns one that keeps its continuous-time state. Stage 08 writes only
+/// plab::dist::step(): the kit's kit/mpi/stage_entry.cpp (its `kit_sources`) defines its
+/// make_stepper() and stage_worker(). The runner
 /// (`plab-run-NN-IMPL`) and the stage tests are compiled once and linked with each stage's
 /// library; they read what the stage is from plab::stage_info(), which CMake writes from the
 /// stage's `stage.json`. The kit's driver does everything else: reading the scene, printing,
@@ -107,7 +109,8 @@ struct StageOptions {
   static StageOptions from_environment();
 };
 
-/// Starts a run of this stage from `p` with `options`: every stage defines it.
+/// Starts a run of this stage from `p` with `options`: every stage defines it (stage 08 through
+/// the kit's kit/mpi/stage_entry.cpp).
 /// \param box     the box and radius
 /// \param p       the initial state; a CPU stage advances it in place, a GPU stage copies it
 /// \param options what the run asked for

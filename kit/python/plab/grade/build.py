@@ -141,7 +141,12 @@ class Build:
                 built[sid] = mine
             else:
                 log = pathlib.Path(b.stdout).read_text(errors="replace") + b.stderr
-                errors = [ln for ln in log.splitlines() if "error" in ln.lower()]
+                errors = [ln for ln in log.splitlines() if "error" in ln.lower() or
+                          "multiple definition" in ln or "undefined reference" in ln]
                 text = b.reason or "\n".join((errors or log.splitlines()[-25:])[:25])
+                if "multiple definition of `plab::" in log and self.stage_uses_mpi(sid):
+                    text = ("its step.cpp defines what the kit's kit/mpi/stage_entry.cpp defines "
+                            "(make_stepper(), stage_worker()): stage 08 writes plab::dist::step() "
+                            "only; delete the others\n" + text)
                 built[sid] = "it does not compile:\n" + text.replace("/plab/src/", "")
         return built

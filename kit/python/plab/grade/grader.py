@@ -142,6 +142,7 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
                 self.idea_test(idea, program, folder)
         tests = self.public_tests(st) + self.hidden_tests(st, folder)
         all_right, any_right = True, False
+        faked = None  # a run on several ranks with the right text whose ranks did not share
         for name, scene, expected, points, hidden, how in tests:
             test = f"{st.key}: {'hidden' if hidden else 'public'} {name}"
             if isinstance(program, str) or stopped:
@@ -152,9 +153,14 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
             budget = max(limits["min_seconds"],
                          limits["time_multiple"] * self.ref_seconds(st, scene))
             cap = max(limits["output_min_mb"] * 2**20, limits["output_multiple"] * len(expected))
+            report = ["--report", "/plab/out/report.json"] if st.ranks > 1 else []
             run = self.run_program(program, scene, ["--quiet", "--threads", st.threads, "--out",
-                                                    "/plab/out/out.txt"], budget, cap, st)
+                                                    "/plab/out/out.txt", *report], budget, cap, st)
             verdict = self.verdict(st, run, scene, expected, how)
+            if verdict is None and st.ranks > 1:  # the right text: did every rank step its slab?
+                verdict = self.ranks_work(st, run, scene, folder / f"ranks-{name}")
+                if verdict:  # the idea faked off its test's scene: the folder's points go
+                    faked = faked or f"on {name}: {verdict}"
             if run.reason and "time limit" in run.reason:
                 stopped = f"an earlier test of stage {st.key} ran out of time ({name})"
             self.add_correctness(st, test, points if verdict is None else 0, points,
@@ -162,6 +168,8 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
                                  hidden, run.seconds)
             all_right &= verdict is None
             any_right |= verdict is None
+        if faked:
+            self.void_folder(st, faked)
         all_right &= self.one_step(st, program, stopped, folder)
         correct = (all_right and not stopped and not self.idea_failed.get(st.sid)
                    and not self.idea_failed.get(st.key))
@@ -169,6 +177,23 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
             self.race_check(st, program, folder, correct, any_right)
         if st.conf.get("performance"):
             self.performance(st, program, correct)
+
+    def void_folder(self, st, why):
+        """Stage folder st.sid fails its idea after all (`why`: a correctness scene on several
+        ranks, Ideas.ranks_work()): every result of the folder so far counts 0, its idea test
+        says why, and later results count 0 too (idea_failed), as when the idea test fails."""
+        failed = f"the idea test of stage {st.sid} failed on a correctness scene {why}"
+        self.idea_failed[st.sid] = failed
+        for t in self.results.tests:
+            if t["name"].split(":")[0].split("-")[0] != st.sid:
+                continue
+            if t["name"].startswith(f"{st.sid}: idea"):
+                t["status"] = "failed"
+                t["output"] = f"{failed}\n(on its own scene: {t['output']})"
+            elif t["score"]:
+                t["output"] = f"counts 0 (it would earn {t['score']:g}): {failed}\n{t['output']}"
+                t["score"], t["status"] = 0, "failed"
+        self.results.write()
 
     # -- the whole grading -----------------------------------------------------------------------
     def entries(self, ids):

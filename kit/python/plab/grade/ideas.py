@@ -216,15 +216,55 @@ class Ideas:
                     f"step every particle, or burn CPU while one steps them all, do more). CPU "
                     f"seconds of its ranks' steps outside MPI calls: {shown}. {idea['hint']}"), text
         low, high = min(work), max(work)
-        if low < idea["share"] * total or high > idea.get("max_share", 1.0) * total:
+        most_share = idea.get("max_work_share", idea.get("max_share", 1.0))
+        if low < idea["share"] * total or high > most_share * total:
             which = work.index(low if low < idea["share"] * total else high)
             return (f"rank {which} did {100 * work[which] / total:.0f}% of the work of the "
                     f"steps (each rank at least {100 * idea['share']:.0f}%, at most "
-                    f"{100 * idea.get('max_share', 1.0):.0f}%: CPU time outside MPI calls, "
+                    f"{100 * most_share:.0f}%: CPU time outside MPI calls, "
                     f"sampled by the kit; a rank waiting in an MPI call does no work, even "
                     f"when the wait spins). CPU seconds of its ranks' steps outside MPI calls: "
                     f"{shown}. {idea['hint']}"), text
         return None, text
+
+    def ranks_work(self, st, run, scene, stem):
+        """None, or why a run on several ranks that printed the reference's text still fails
+        (rubric.json's correctness.ranks_work): once its ranks' sampled work outside MPI calls
+        reaches `min_work_seconds` (the scenes of a thousand particles and more), every rank
+        must have done `share` of it and all of them at most `max_work_multiple` times the kit's
+        solution's on the same scene and ranks (run now, `stem`.out and `stem`.json). So a stage
+        that steps its own slab only on the idea test's scene, and gathers every particle on
+        rank 0 elsewhere, loses those scenes."""
+        conf = self.rubric["correctness"].get("ranks_work")
+        if not conf:
+            return None
+        try:
+            work = [float(x) for x in
+                    json.loads(run.read_output("report.json") or "")["rank_work_seconds"]]
+        except (ValueError, KeyError, TypeError):
+            return "the output is right, but its run left no report of the work of its ranks"
+        total = sum(work)
+        if total < conf["min_work_seconds"]:
+            return None  # too little to judge
+        shown = ", ".join(f"{x:.3f}" for x in work)
+        low = min(work)
+        if low < conf["share"] * total:
+            return (f"the output is right, but rank {work.index(low)} of {st.ranks} did "
+                    f"{100 * low / total:.0f}% of the work of the steps (each rank at least "
+                    f"{100 * conf['share']:.0f}%: CPU time outside MPI calls, sampled by the "
+                    f"kit). CPU seconds of its ranks' steps outside MPI calls: {shown}. Every "
+                    f"rank steps the particles of its own slab, on every scene")
+        stem.parent.mkdir(parents=True, exist_ok=True)
+        report = stem.with_suffix(".json")
+        self.own_run(st, scene, st.threads, stem.with_suffix(".out"), st.ranks, report)
+        own = own_work(report)
+        if own > 0 and total > conf["max_work_multiple"] * own:
+            return (f"the output is right, but its ranks did {total:.3f} s of work outside MPI "
+                    f"calls in all, {total / own:.1f} times the kit's solution's {own:.3f} s on "
+                    f"this scene and {st.ranks} ranks (at most {conf['max_work_multiple']:g} "
+                    f"times). CPU seconds of its ranks' steps outside MPI calls: {shown}. Every "
+                    f"rank steps the particles of its own slab, on every scene")
+        return None
 
     def work_shared(self, idea, run, text):
         """(problem or None, text) of a watched run: who did the work, threads or ranks."""
