@@ -1293,7 +1293,7 @@ def case_rounds():
         got = sum(t["score"] for t in mine.values())
         caught = [n for n, t in mine.items() if n.endswith(("random-1000", "random-2000"))
                   and "of the work of the steps" in t["output"]]
-        check("rounds", idea.get("status") == "failed" and "on a correctness scene" in
+        check("rounds", idea.get("status") == "failed" and "on the correctness scene" in
               idea.get("output", "") and got == 0 and caught,
               f"{name} scored {got} on correctness (must be 0); random-1000, random-2000 caught: "
               f"{caught}; its idea test: {idea.get('output', 'none')[:300]!r}")

@@ -157,10 +157,11 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
             run = self.run_program(program, scene, ["--quiet", "--threads", st.threads, "--out",
                                                     "/plab/out/out.txt", *report], budget, cap, st)
             verdict = self.verdict(st, run, scene, expected, how)
-            if verdict is None and st.ranks > 1:  # the right text: did every rank step its slab?
+            if verdict is None and st.ranks > 1 and not self.idea_failed.get(st.sid):
+                # the right text (and the idea test passed): did every rank step its slab?
                 verdict = self.ranks_work(st, run, scene, folder / f"ranks-{name}")
                 if verdict:  # the idea faked off its test's scene: the folder's points go
-                    faked = faked or f"on {name}: {verdict}"
+                    faked = faked or f"{name}: {verdict}"
             if run.reason and "time limit" in run.reason:
                 stopped = f"an earlier test of stage {st.key} ran out of time ({name})"
             self.add_correctness(st, test, points if verdict is None else 0, points,
@@ -182,7 +183,7 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
         """Stage folder st.sid fails its idea after all (`why`: a correctness scene on several
         ranks, Ideas.ranks_work()): every result of the folder so far counts 0, its idea test
         says why, and later results count 0 too (idea_failed), as when the idea test fails."""
-        failed = f"the idea test of stage {st.sid} failed on a correctness scene {why}"
+        failed = f"the idea test of stage {st.sid} failed on the correctness scene {why}"
         self.idea_failed[st.sid] = failed
         for t in self.results.tests:
             if t["name"].split(":")[0].split("-")[0] != st.sid:
