@@ -16,10 +16,11 @@ import tempfile
 import unittest
 
 from plab.grade.ideas import Ideas
+from plab.grade.run import launcher_crashed
 
 IDEA = {"scene": {"n": 1000, "steps": 10}, "max_bytes_per_particle_step": 20, "ranks": 3,
         "min_work_seconds": 0.05, "min_cpu_seconds": 0.4, "share": 0.1, "max_share": 0.55, "max_work_share": 0.45,
-        "max_work_multiple": 1.75,
+        "min_work_multiple": 0.5, "max_work_multiple": 1.75,
         "hint": "each rank must step its own slab"}
 
 
@@ -90,6 +91,12 @@ class WorkOutsideMpi(unittest.TestCase):
         problem, _ = work([0.78, 0.48, 0.48])  # rank 0's share 45%: the most allowed
         self.assertIn("2.2 times the kit's solution's", problem)
 
+    def test_work_hidden_inside_mpi_calls_fails(self):
+        # every rank steps everything inside a reduction's own operation (time in MPI): the
+        # work outside MPI calls falls below the solution's (a red-team helper's, 0.344 s)
+        problem, _ = work([0.080, 0.136, 0.128], [2.5, 2.4, 2.4], own=0.902)
+        self.assertIn("0.38 times the kit's solution's 0.902 s", problem)
+
     def test_a_slower_honest_stage_passes(self):
         problem, text = work([0.45, 0.40, 0.42])  # 1.6 times the solution's work in all
         self.assertIsNone(problem)
@@ -134,6 +141,22 @@ class Graded(Ideas):
         self.solution_runs += 1
         pathlib.Path(report).write_text(json.dumps({"rank_work_seconds": [self.own / ranks] * ranks}))
         return "", 0.0
+
+
+class LauncherCrash(unittest.TestCase):
+    """mpirun's own crash in its forwarding of stdin (Open MPI 4.1) is told from a rank's."""
+
+    class Crashed:
+        def __init__(self, stderr):
+            self.reason, self.stderr = "crashed with signal 11 (SIGSEGV)", stderr
+
+    def test_mpirun_s_stdin_handler(self):
+        self.assertTrue(launcher_crashed(self.Crashed(
+            "[vm:05350] [ 1] /usr/lib/x86_64-linux-gnu/openmpi/lib/openmpi3/mca_iof_hnp.so"
+            "(orte_iof_hnp_read_local_handler+0x2d6)[0x7f4d81c89366]")))
+
+    def test_a_rank_s_crash_is_the_stage_s(self):
+        self.assertFalse(launcher_crashed(self.Crashed("[vm:1] [ 1] /plab/stage(+0x13b9)")))
 
 
 class Stage:

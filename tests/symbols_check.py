@@ -55,6 +55,12 @@ MPI_CASES = [
      'int f() { return MPI_Ialltoallw(0, 0, 0, 0, 0, 0, 0, 0, 0, 0); }', "calls MPI_Ialltoallw, which the kit does not count"),
     ("a neighbourhood collective", 'extern "C" int MPI_Neighbor_allgatherv(const void*, int, int, void*, const int*, const int*, int, int);\n'
      'int f() { return MPI_Neighbor_allgatherv(0, 0, 0, 0, 0, 0, 0, 0); }', "calls MPI_Neighbor_allgatherv"),
+    ("a reduction of its own (its code would run inside MPI_Allreduce)", 'extern "C" int MPI_Op_create(void (*)(void*, void*, int*, int*), int, int*);\n'
+     'void sum(void*, void*, int*, int*) {}\nint f(int* op) { return MPI_Op_create(sum, 1, op); }', "calls MPI_Op_create: MPI would run a function of the stage's own"),
+    ("a datatype attribute's callbacks", 'extern "C" int MPI_Type_create_keyval(void*, void*, int*, void*);\n'
+     'int f(int* k) { return MPI_Type_create_keyval(0, 0, k, 0); }', "calls MPI_Type_create_keyval"),
+    ("the default error handling set", 'extern "C" int MPI_Comm_set_errhandler(int, int);\n'
+     'int f() { return MPI_Comm_set_errhandler(0, 0); }', None),
     ("new processes", 'extern "C" int MPI_Comm_spawn(const char*, char**, int, int, int, int, int*, int*);\n'
      'int f() { return MPI_Comm_spawn(0, 0, 1, 0, 0, 0, 0, 0); }', "calls MPI_Comm_spawn"),
 ]

@@ -207,6 +207,14 @@ class Ideas:
                     f"signal (SIGPROF) was changed. {idea['hint']}"), text
         if total < idea["min_work_seconds"]:
             return None, text + " (too little to judge: not held against it)"
+        least = idea.get("min_work_multiple")
+        if least and own and total < least * own:
+            return (f"its ranks did {total:.3f} s of work outside MPI calls in all, "
+                    f"{total / own:.2f} times the kit's solution's {own:.3f} s on the same scene "
+                    f"and ranks (at least {least:g} times: the stepping is the kit's, so ranks "
+                    f"that step their slabs do about the solution's work; less means work done "
+                    f"where the kit counts time in MPI). CPU seconds of its ranks' steps outside "
+                    f"MPI calls: {shown}. {idea['hint']}"), text
         most = idea.get("max_work_multiple")
         if most and own and total > most * own:
             return (f"its ranks did {total:.3f} s of work outside MPI calls in all, "

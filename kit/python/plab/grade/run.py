@@ -33,6 +33,11 @@ def velocities(plab, path, step, i):
     return blocks[0]["vx"][i], blocks[0]["vy"][i]
 
 
+def launcher_crashed(run):
+    """Whether mpirun itself (not a rank) crashed in its forwarding of stdin: its backtrace."""
+    return bool(run.reason and "signal" in run.reason and "mca_iof" in (run.stderr or ""))
+
+
 class Run:
     """Running and judging one run: a mixin of Grader (plab.grade.grader)."""
 
@@ -55,10 +60,19 @@ class Run:
         if ranks > 1:  # every rank in the same sandbox, under the same limits
             argv = [shutil.which("mpirun") or "mpirun", "--quiet", "--oversubscribe", "-np",
                     str(ranks), *argv]
-        log = pathlib.Path(tempfile.mkdtemp(prefix="log-", dir=self.private))
-        return self.sandbox.run(argv, ro, {"/plab/out": out}, "/plab/out", seconds, cap,
-                                gpu=st.gpu, env=env or st.env, log_dir=log, stdin_text=stdin_text,
-                                memory=memory, watch=watch)
+        for attempt in range(3):
+            log = pathlib.Path(tempfile.mkdtemp(prefix="log-", dir=self.private))
+            run = self.sandbox.run(argv, ro, {"/plab/out": out}, "/plab/out", seconds, cap,
+                                   gpu=st.gpu, env=env or st.env, log_dir=log,
+                                   stdin_text=stdin_text, memory=memory, watch=watch)
+            if not (ranks > 1 and launcher_crashed(run)):
+                break
+            # Open MPI 4.1's mpirun itself crashes now and then while it forwards a pipe on stdin
+            # to rank 0 (orte_iof_hnp_read_local_handler: 3 runs in 30 of the one-step test,
+            # the kit's own solution): not the stage's doing, so the run is made again.
+            shutil.rmtree(out, ignore_errors=True)
+            out = self.sandbox.writable_dir(run_dir, "out-")
+        return run
 
     # -- the reference's outputs, a run's verdict ---------------------------------------------------
     def expected_for(self, st, scene, out):

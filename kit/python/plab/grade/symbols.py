@@ -20,7 +20,10 @@ counts as not compiling, with the reason):
     its own MPI_Send, MPI_Alltoallv, ... which count the bytes, and MPI_Win_create, ... which
     stop the run) and that is not in NO_DATA, the calls that move no data of the stage between
     ranks (ranks and sizes, waits and tests, receives, barriers, datatypes, communicators):
-    MPI_Ialltoallw, MPI_Neighbor_allgatherv or MPI_Comm_spawn, say, are refused. Stage 08 is
+    MPI_Ialltoallw, MPI_Neighbor_allgatherv or MPI_Comm_spawn, say, are refused; and, on MPI,
+    calls that hand MPI a function of the stage's own to run inside a later MPI call (a
+    reduction's MPI_Op_create, error handlers, attribute keyvals, generalized requests:
+    CALLBACKS), where the kit counts the CPU time as time in MPI, not as work. Stage 08 is
     compiled against the MPI C API only (OMPI_SKIP_MPICXX), so its objects name exactly the calls
     it makes.
 
@@ -92,12 +95,19 @@ MPI_Comm_get_name MPI_Comm_set_errhandler MPI_Comm_get_errhandler MPI_Comm_test_
 MPI_Recv MPI_Irecv MPI_Mrecv MPI_Imrecv MPI_Probe MPI_Iprobe MPI_Mprobe MPI_Improbe MPI_Get_count
 MPI_Get_elements MPI_Get_elements_x MPI_Wait MPI_Waitall MPI_Waitany MPI_Waitsome MPI_Test
 MPI_Testall MPI_Testany MPI_Testsome MPI_Test_cancelled MPI_Request_free MPI_Request_get_status
-MPI_Cancel MPI_Barrier MPI_Ibarrier MPI_Op_create MPI_Op_free MPI_Op_commutative MPI_Get_address
+MPI_Cancel MPI_Barrier MPI_Ibarrier MPI_Op_free MPI_Op_commutative MPI_Get_address
 MPI_Pack MPI_Unpack MPI_Pack_size MPI_Alloc_mem MPI_Free_mem MPI_Dims_create MPI_Cart_create
 MPI_Cart_coords MPI_Cart_rank MPI_Cart_shift MPI_Cart_get MPI_Cartdim_get MPI_Cart_sub
 MPI_Topo_test MPI_Status_set_elements MPI_Status_set_cancelled
 """.split())
 NO_DATA_PREFIXES = ("MPI_Type_", "MPI_Group_", "MPI_Info_", "MPI_Errhandler_")
+
+# MPI calls that hand the library a function of the stage's own, which MPI then runs inside a
+# later call (a reduction's operation, an error handler, an attribute's copy or delete, a
+# generalized request's query): kit/mpi counts the CPU time spent inside its calls as time in
+# MPI, so work done there would pass for waiting. A stage on MPI may not make them.
+CALLBACKS = re.compile(r"MPI_(Op_create|\w*_create_errhandler|Errhandler_create|\w*_create_keyval|"
+                       r"Keyval_create|Grequest_start|Register_datarep)$")
 
 
 def problems(nm_lines, mpi_kit=None, refuse_calls=()):
@@ -133,7 +143,12 @@ def problems(nm_lines, mpi_kit=None, refuse_calls=()):
             found.append(f"{source} " + reason.format(name=name, plain=plain))
             break
         else:
-            if (mpi_kit is not None and kind == "U" and name.startswith("MPI_")
+            if mpi_kit is not None and kind == "U" and CALLBACKS.match(name):
+                found.append(f"{source} calls {name}: MPI would run a function of the stage's "
+                             f"own inside its calls, where the kit counts the CPU time as time in "
+                             f"MPI, not as work. Use MPI's predefined operations (MPI_MAX, "
+                             f"MPI_MIN, MPI_SUM, MPI_LOR, ...) and its default error handling")
+            elif (mpi_kit is not None and kind == "U" and name.startswith("MPI_")
                     and name not in mpi_kit and name not in NO_DATA
                     and not name.startswith(NO_DATA_PREFIXES)):
                 found.append(f"{source} calls {name}, which the kit does not count: it could move "
