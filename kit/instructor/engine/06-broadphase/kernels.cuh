@@ -36,7 +36,17 @@ struct Flags {
   int fast;              //!< fast entries the pass's search listed for a team search (the solution's
                          //!< find_fast_pairs)
   int rows;              //!< finish_small: events given a row so far this step
+  int crowded;           //!< find_pairs_banded: a block's entries did not fit its shared memory
+                         //!< (the host goes back to the counting sort and redoes the step)
+  /// The largest squared speed of step s's state (start_step() of step s writes slot s % 2 and
+  /// clears the other), as the bits of a double (non-negative doubles order as their bits):
+  /// how far find_pairs_banded()'s fastest entry reaches.
+  unsigned long long vmax2[2];
 };
+
+/// Whether the steps are stopped until the host looks: the list had no room for a step's pairs
+/// (`overflow`) or a band's entries did not fit its block (`crowded`).
+__device__ inline bool stopped(const Flags* f) { return f->overflow || f->crowded; }
 
 /// The grid of the batch and the slabs of one pass of the counting sort, as the kernels see it.
 /// A pass sorts and searches slabs [first, first + slabs) together: slab k's cells are buckets
@@ -87,6 +97,16 @@ __global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d,
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   for (int b = i; b < buckets; b += gridDim.x * blockDim.x) a.start[b] = 0;
   if (i == 0 && buckets > 0) a.flags->fast = 0;
+  // The largest squared speed, a warp's at a time (find_pairs_banded()'s reach).
+  const long long s = a.flags->steps_done;
+  if (i == 0) a.flags->vmax2[(s + 1) % 2] = 0;
+  unsigned long long v2 = 0;
+  if (i < p.n) v2 = __double_as_longlong(p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i]);
+  for (int step = 16; step > 0; step >>= 1) {
+    const unsigned long long o = __shfl_down_sync(0xffffffffu, v2, step);
+    v2 = o > v2 ? o : v2;
+  }
+  if (threadIdx.x % 32 == 0 && v2 != 0) atomicMax(&a.flags->vmax2[s % 2], v2);
   if (i >= p.n) return;
   a.wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
   a.last[i] = sweep::last_slab(sweep::path_end(a.wall[i]), d.g);
@@ -158,15 +178,20 @@ __device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, in
 /// The pair of entries e and f that passed sweep::close_in_slab() in slab k (e's particle i):
 /// model.md's pair time, unless slab k - 1 found them already (a pair filed twice is harmless to
 /// the rounds, but it takes room), filed when the pair comes before both particles' walls.
-__device__ inline void file_pair(const ParticlesView& p, const Box& box, const StepArrays& a,
-                                 const DeviceGrid& d, int i, int k, int f) {
-  const int j = particle_of(a, p.n, f);
+__device__ inline void file_pair_of(const ParticlesView& p, const Box& box, const StepArrays& a,
+                                    const DeviceGrid& d, int i, int k, int j) {
   if (k > 0 && close_in_slab_at(p, i, j, k - 1, d)) return;  // found in slab k - 1
   const int lo = i < j ? i : j, hi = i < j ? j : i;
   const double t = model::pair_time(p.x[lo], p.y[lo], p.vx[lo], p.vy[lo], p.x[hi], p.y[hi],
                                     p.vx[hi], p.vy[hi], box.r);
   if (model::in_step(t) && model::before_walls(t, a.wall[lo], a.wall[hi]))
     a.slots.file(lo, hi, t, &a.flags->pairs);
+}
+
+/// file_pair_of() for the particle of entry `f` of the pass.
+__device__ inline void file_pair(const ParticlesView& p, const Box& box, const StepArrays& a,
+                                 const DeviceGrid& d, int i, int k, int f) {
+  file_pair_of(p, box, a, d, i, k, particle_of(a, p.n, f));
 }
 
 /// Entry e against entries [from, to) of its slab: the pairs that pass sweep::close_in_slab() go
@@ -231,7 +256,7 @@ __global__ void __launch_bounds__(kSearchThreads, kBlocksOf<S>)
     find_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d, bool list_fast) {
   namespace cg = cooperative_groups;
   const int e = blockIdx.x * blockDim.x + threadIdx.x;
-  if (e >= a.start[d.slabs * d.cells] || a.flags->overflow) return;
+  if (e >= a.start[d.slabs * d.cells] || stopped(a.flags)) return;
   const Entry me = a.entry[e];
   const sweep::Search q = sweep::search_of(me.vx, me.vy, d.g);
   if (q.fast) {  // one atomic for the fast threads of the warp
@@ -276,7 +301,7 @@ __global__ void __launch_bounds__(kSearchThreads, 4)
     find_pairs_balanced(ParticlesView p, Box box, StepArrays a, DeviceGrid d, bool list_fast) {
   namespace cg = cooperative_groups;
   __shared__ LaneRuns lanes[kSearchThreads];
-  if (a.flags->overflow) return;  // the same for every thread: written before this kernel
+  if (stopped(a.flags)) return;  // the same for every thread: written before this kernel
   const int lane = static_cast<int>(threadIdx.x % 32);
   LaneRuns* warp = lanes + (threadIdx.x - lane);  // this warp's lanes
   const int e = blockIdx.x * blockDim.x + threadIdx.x;
@@ -341,7 +366,7 @@ __global__ void __launch_bounds__(kSearchThreads, kBlocksOf<S>)
     find_fast_pairs(ParticlesView p, Box box, StepArrays a, DeviceGrid d, bool listed) {
   const int t = blockIdx.x * blockDim.x + threadIdx.x;
   const int lane = t % kFastTeam, teams = gridDim.x * blockDim.x / kFastTeam;
-  if (a.flags->overflow) return;
+  if (stopped(a.flags)) return;
   const int m = listed ? a.flags->fast : a.start[d.slabs * d.cells], columns = d.g.columns;
   for (int q = t / kFastTeam; q < m; q += teams) {
     const int e = listed ? a.rank[q] : q;
@@ -359,6 +384,323 @@ __global__ void __launch_bounds__(kSearchThreads, kBlocksOf<S>)
   }
 }
 
+constexpr int kBandThreads = 1024;  //!< threads per block of find_pairs_banded()
+constexpr int kWideMost = 128;      //!< entries a band may search over the whole slab
+constexpr int kBandLoads = 4;       //!< particles a thread of find_pairs_banded() reads at a time
+constexpr int kHitMost = 2048;      //!< pairs a block of find_pairs_banded() lists to file at once
+/// Shared memory find_pairs_banded() takes a kept entry: its midpoint position and velocity
+/// (32), its particle (4), while it is sorted its particle and cell again (8), and its first
+/// test and its runs, packed (4 + 8).
+constexpr int kBandEntryBytes = 56;
+
+/// The runs of entries an entry of find_pairs_banded() tests (those of find_pairs() or
+/// find_fast_pairs()): a slow one, run 0 its row after it and run 1 the next row; a fast one, a
+/// run for each row y, y + 1, ..., y + count - 1; columns x0 to x1 in each.
+struct BandRuns {
+  int e;       //!< the entry
+  int y;       //!< its first run's row (of the rows the block keeps)
+  int x0, x1;  //!< the columns within its reach
+  int count;   //!< runs (0 when `wide`)
+  bool fast;   //!< a fast entry
+  bool wide;   //!< a fast entry whose reach leaves the rows kept: it searches the whole slab
+};
+
+/// What find_pairs_banded() keeps in shared memory: its entries in cell order, one array per
+/// field, and where each kept cell starts.
+struct BandEntries {
+  const double *x, *y, *vx, *vy;  //!< midpoint position and velocity
+  const int* start;               //!< kept cell c holds entries [start[c], start[c + 1])
+  int columns;                    //!< the grid's columns
+  int lo, hi;                     //!< the rows kept, [lo, hi)
+};
+
+/// The runs entry `e` searches.
+__device__ inline BandRuns band_runs(const BandEntries& s, const sweep::Grid& g, int e) {
+  BandRuns b{};
+  b.e = e;
+  const sweep::Search q = sweep::search_of(s.vx[e], s.vy[e], g);
+  sweep::columns_within(s.x[e], q.d, g, b.x0, b.x1);
+  b.fast = q.fast;
+  if (!q.fast) {  // its row after it, then the next row
+    b.y = sweep::row_of(s.y[e], g) - s.lo;
+    b.count = b.y + s.lo + 1 < g.rows ? 2 : 1;
+    return b;
+  }
+  int y0, y1;
+  sweep::rows_within(s.y[e], q.d, g, y0, y1);
+  b.wide = y0 < s.lo || y1 >= s.hi;
+  b.y = y0 - s.lo;
+  b.count = b.wide ? 0 : y1 - y0 + 1;
+  return b;
+}
+
+/// `b` in two ints, for shared memory: columns in 16 bits, the first row in 16 (signed), the runs
+/// in 13 (sweep::choose_for() gives at most sqrt(N) rows and 4 sqrt(N) columns, and the bands
+/// take N < 2^15: 181 rows, 724 columns).
+__device__ inline int2 pack_runs(const BandRuns& b) {
+  return make_int2(b.x0 | (b.x1 << 16), (b.y & 0xffff) | (b.count << 16) |
+                                            (b.fast ? 1 << 30 : 0) | (b.wide ? 1 << 29 : 0));
+}
+
+/// The runs of entry `e`, packed by pack_runs().
+__device__ inline BandRuns unpack_runs(int2 v, int e) {
+  BandRuns b;
+  b.e = e;
+  b.x0 = v.x & 0xffff;
+  b.x1 = (v.x >> 16) & 0xffff;
+  b.y = static_cast<short>(v.y & 0xffff);  // (a fast entry's first row may lie below lo)
+  b.count = (v.y >> 16) & 0x1fff;
+  b.fast = (v.y >> 30) & 1;
+  b.wide = (v.y >> 29) & 1;
+  return b;
+}
+
+/// Run `r` of `b`: entries [from, to).
+__device__ inline void band_run(const BandEntries& s, const BandRuns& b, int r, int& from,
+                                int& to) {
+  const int y = b.y + r;  // (a slow entry's run 1 is the next row)
+  from = (!b.fast && r == 0) ? b.e + 1 : s.start[y * s.columns + b.x0];
+  to = max(from, s.start[y * s.columns + b.x1 + 1]);
+}
+
+/// The rows [lo, hi) a band of rows [r0, r1) keeps in its block: its own, `halo` rows below,
+/// and `halo` (at least one, the next row of a slow entry's search) above.
+__device__ inline void band_rows_kept(int r0, int r1, int halo, int rows, int& lo, int& hi) {
+  lo = max(0, r0 - halo);
+  hi = min(rows, r1 + max(halo, 1));
+}
+
+/// The pair search of a small scene without the counting sort over the grid: a block for each
+/// (band of `band` rows, slab k) (grid: bands x slabs) reads every particle, keeps those whose
+/// midpoint in slab k lies in its rows or within the fastest particle's reach of them (the
+/// halo: start_step()'s `vmax2`), sorts them by cell in shared memory (a counting sort: shared
+/// atomics, a block scan), and searches its own rows' entries exactly as find_pairs() and
+/// find_fast_pairs() search the same entries of the pass's sort (the same runs: the cells are
+/// the grid's, restricted to the rows kept), so the same pairs are filed. A fast entry whose
+/// reach leaves the rows kept (a speed past `vmax2`'s, or not a number) is tested by the whole
+/// block against every particle of the slab (a pair filed twice is harmless). The block's tests
+/// are shared evenly by its threads (each entry's runs and test count, a block scan, then each
+/// thread a stretch of consecutive tests), and the pairs that pass are filed together at the
+/// end (filing waits on device memory: one wait for all). When the kept entries outgrow
+/// `shared_bytes`, more than kWideMost entries reach past the rows kept, or more than kHitMost
+/// pairs pass, the block stops the steps (`crowded`); the host then sorts over the grid again.
+/// One kernel where the pass has five (bin_count, the scan, bin_scatter, the two searches), and
+/// no array of entries in device memory. `halo_most` caps the halo (the grid's rows; fewer only
+/// to test the whole-slab search).
+__global__ void __launch_bounds__(kBandThreads, 1)
+    find_pairs_banded(ParticlesView p, Box box, StepArrays a, DeviceGrid d, int band,
+                      int shared_bytes, int halo_most) {
+  using Scan = cub::BlockScan<int, kBandThreads>;
+  extern __shared__ __align__(16) unsigned char pool[];
+  __shared__ typename Scan::TempStorage temp;
+  __shared__ int kept, wides, hits;
+  __shared__ int wide[kWideMost];
+  __shared__ int2 hit[kHitMost];
+  Flags* f = a.flags;
+  if (stopped(f)) return;  // the same for every thread: written before this kernel
+  const sweep::Grid& g = d.g;
+  const int k = blockIdx.y, columns = g.columns;
+  const int r0 = blockIdx.x * band, r1 = min(g.rows, r0 + band);
+  // The halo: rows within the fastest particle's reach (sweep::search_of() of a fast one).
+  const double vmax = sqrt(__longlong_as_double(f->vmax2[f->steps_done % 2]));
+  const double rows_out = ceil((g.reach + g.margin + g.half * (2 * vmax)) * (1 + 1e-9) *
+                               g.inv_cell) + 1;
+  const int most = min(g.rows, halo_most);
+  const int halo = rows_out < most ? static_cast<int>(rows_out) : most;  // (not a number too)
+  int lo, hi;
+  band_rows_kept(r0, r1, halo, g.rows, lo, hi);
+  const int cells = (hi - lo) * columns;
+  // Shared memory: each kept cell's start and cursor, then the entries.
+  int* start = reinterpret_cast<int*>(pool);
+  int* cursor = start + cells + 1;
+  const long long used = (2LL * cells + 1) * 4 / 16 * 16 + 16;
+  const long long room = (shared_bytes - used - 4) / kBandEntryBytes;
+  if (room < 1) {
+    if (threadIdx.x == 0) atomicExch(&f->crowded, 1);
+    return;
+  }
+  const int cap = static_cast<int>(room);
+  double* ex = reinterpret_cast<double*>(pool + used);
+  double* ey = ex + cap;
+  double* evx = ey + cap;
+  double* evy = evx + cap;
+  int2* packed = reinterpret_cast<int2*>(evy + cap);  // each own entry's runs (pack_runs())
+  int* id = reinterpret_cast<int*>(packed + cap);
+  int* kept_id = id + cap;
+  int* kept_cell = kept_id + cap;
+  int* before = kept_cell + cap;  // cap + 1: each own entry's first test in the block's tests
+
+  for (int c = threadIdx.x; c < cells; c += blockDim.x) start[c] = 0;
+  if (threadIdx.x == 0) kept = wides = hits = 0;
+  __syncthreads();
+  // Count: the particles of slab k whose midpoint row is kept (bucket_of()'s arithmetic),
+  // kBandLoads particles a thread at a time (their loads in flight together: the block reads
+  // every particle, and one at a time would wait for each).
+  const double tm = sweep::slab_mid(k, g);
+  for (int i0 = threadIdx.x; i0 < p.n; i0 += kBandLoads * kBandThreads) {
+    int last[kBandLoads], row[kBandLoads];
+    double x[kBandLoads], y[kBandLoads], vx[kBandLoads], vy[kBandLoads];
+#pragma unroll
+    for (int u = 0; u < kBandLoads; ++u) {  // what says whether it is kept: y, vy, its last slab
+      const int i = i0 + u * kBandThreads;
+      last[u] = i < p.n ? a.last[i] : -1;
+      if (i < p.n) {
+        y[u] = p.y[i];
+        vy[u] = p.vy[i];
+      }
+    }
+#pragma unroll
+    for (int u = 0; u < kBandLoads; ++u) {
+      row[u] = last[u] < k ? -1 : sweep::row_of(y[u] + tm * vy[u], g);
+      if (row[u] < lo || row[u] >= hi) row[u] = -1;
+    }
+#pragma unroll
+    for (int u = 0; u < kBandLoads; ++u) {  // x and vx of those kept only
+      const int i = i0 + u * kBandThreads;
+      if (row[u] >= 0) {
+        x[u] = p.x[i];
+        vx[u] = p.vx[i];
+      }
+    }
+#pragma unroll
+    for (int u = 0; u < kBandLoads; ++u) {
+      if (row[u] < 0) continue;
+      const int c = (row[u] - lo) * columns + sweep::column_of(x[u] + tm * vx[u], g);
+      atomicAdd(&start[c], 1);
+      const int q = atomicAdd(&kept, 1);
+      if (q < cap) {
+        kept_id[q] = i0 + u * kBandThreads;
+        kept_cell[q] = c;
+      }
+    }
+  }
+  __syncthreads();
+  const int m = kept;
+  if (m > cap) {
+    if (threadIdx.x == 0) atomicExch(&f->crowded, 1);
+    return;
+  }
+  // Each cell's start: a block scan over runs of cells, one run a thread.
+  const int per = (cells + kBandThreads - 1) / kBandThreads;
+  const int c0 = min(cells, static_cast<int>(threadIdx.x) * per), c1 = min(cells, c0 + per);
+  int sum = 0;
+  for (int c = c0; c < c1; ++c) sum += start[c];
+  int at = 0;
+  Scan(temp).ExclusiveSum(sum, at);
+  for (int c = c0; c < c1; ++c) {
+    const int count = start[c];
+    start[c] = cursor[c] = at;
+    at += count;
+  }
+  if (threadIdx.x == 0) start[cells] = m;
+  __syncthreads();
+  // Scatter: each kept particle to its cell, with what the search reads.
+  for (int q = threadIdx.x; q < m; q += blockDim.x) {
+    const int i = kept_id[q], e = atomicAdd(&cursor[kept_cell[q]], 1);
+    ex[e] = p.x[i] + tm * p.vx[i];
+    ey[e] = p.y[i] + tm * p.vy[i];
+    evx[e] = p.vx[i];
+    evy[e] = p.vy[i];
+    id[e] = i;
+  }
+  __syncthreads();
+  // Search: each entry of the band's own rows over the same runs as find_pairs() (slow) and
+  // find_fast_pairs() (fast), the block's tests shared evenly by its threads: each entry's test
+  // count, a block scan of them, then each thread a run of consecutive tests (as
+  // find_pairs_balanced() shares a warp's). A pair that passes is listed, and the block files
+  // the list together afterwards (filing waits on device memory: one wait for all, not one each).
+  const int own0 = start[(r0 - lo) * columns], owned = start[(r1 - lo) * columns] - own0;
+  const BandEntries kept_entries{ex, ey, evx, evy, start, columns, lo, hi};
+  const int per_thread = (owned + kBandThreads - 1) / kBandThreads;
+  const int j0 = min(owned, static_cast<int>(threadIdx.x) * per_thread);
+  const int j1 = min(owned, j0 + per_thread);
+  int tests = 0;
+  for (int j = j0; j < j1; ++j) {  // each entry's tests, kept in `before` for now
+    const BandRuns b = band_runs(kept_entries, g, own0 + j);
+    if (b.wide) {  // reaches past the rows kept: the whole slab, below
+      const int w = atomicAdd(&wides, 1);
+      if (w < kWideMost) wide[w] = b.e;
+    }
+    packed[j] = pack_runs(b);
+    int count = 0;
+    for (int r = 0; r < b.count; ++r) {
+      int from, to;
+      band_run(kept_entries, b, r, from, to);
+      count += to - from;
+    }
+    before[j] = count;
+    tests += count;
+  }
+  int first = 0, total = 0;
+  Scan(temp).ExclusiveSum(tests, first, total);
+  for (int j = j0; j < j1; ++j) {  // each entry's first test
+    const int count = before[j];
+    before[j] = first;
+    first += count;
+  }
+  if (threadIdx.x == 0) before[owned] = total;
+  __syncthreads();
+  const int share = (total + kBandThreads - 1) / kBandThreads;
+  const int t0 = min(total, static_cast<int>(threadIdx.x) * share), t1 = min(total, t0 + share);
+  if (t0 < t1) {
+    int j = 0, above = owned;  // the entry of test t0: the last j with before[j] <= t0
+    while (above - j > 1) {
+      const int mid = (j + above) / 2;
+      if (before[mid] <= t0) j = mid; else above = mid;
+    }
+    BandRuns b = unpack_runs(packed[j], own0 + j);
+    int r = 0, from = 0, to = 0, skip = t0 - before[j];
+    band_run(kept_entries, b, r, from, to);
+    while (skip >= to - from) {  // the run of test t0 (the entry has tests past it)
+      skip -= to - from;
+      band_run(kept_entries, b, ++r, from, to);
+    }
+    int o = from + skip;
+    double x = ex[b.e], y = ey[b.e], vx = evx[b.e], vy = evy[b.e];
+    for (int t = t0; t < t1; ++t) {
+      while (o >= to) {  // the next run, or the next entry's first
+        if (++r < b.count) {
+          band_run(kept_entries, b, r, from, to);
+        } else {
+          do ++j; while (before[j + 1] == before[j]);  // (entries without tests)
+          b = unpack_runs(packed[j], own0 + j);
+          r = 0;
+          band_run(kept_entries, b, r, from, to);
+          x = ex[b.e], y = ey[b.e], vx = evx[b.e], vy = evy[b.e];
+        }
+        o = from;
+      }
+      if (o != b.e && sweep::close_in_slab(x - ex[o], y - ey[o], vx - evx[o], vy - evy[o], g)) {
+        const int h = atomicAdd(&hits, 1);
+        if (h < kHitMost) hit[h] = make_int2(b.e, o);
+      }
+      ++o;
+    }
+  }
+  __syncthreads();
+  if (hits > kHitMost) {  // (the pairs of a band are a few dozen)
+    if (threadIdx.x == 0) atomicExch(&f->crowded, 1);
+    return;
+  }
+  for (int h = threadIdx.x; h < hits; h += kBandThreads)
+    file_pair_of(p, box, a, d, id[hit[h].x], k, id[hit[h].y]);
+  __syncthreads();
+  const int w = wides;
+  if (w > kWideMost) {
+    if (threadIdx.x == 0) atomicExch(&f->crowded, 1);
+    return;
+  }
+  for (int u = 0; u < w; ++u) {  // every particle of slab k, the block's threads together
+    const int e = wide[u], i = id[e];
+    for (int j = threadIdx.x; j < p.n; j += blockDim.x) {
+      if (j == i || a.last[j] < k) continue;
+      if (sweep::close_in_slab(ex[e] - (p.x[j] + tm * p.vx[j]), ey[e] - (p.y[j] + tm * p.vy[j]),
+                               evx[e] - p.vx[j], evy[e] - p.vy[j], g))
+        file_pair_of(p, box, a, d, i, k, j);
+    }
+  }
+}
+
 /// After the passes: lays the filed pairs into each particle's row (CompactView::place(), once
 /// `end` is the exclusive scan of the counts); when the list had no room for them all, stops
 /// the batch instead (`overflow` = the pairs the step needs; the host grows the list).
@@ -369,7 +711,7 @@ __global__ void place_pairs(StepArrays a) {
     if (q == 0) atomicMax(&a.flags->overflow, filed);
     return;
   }
-  if (q < filed && !a.flags->overflow) a.slots.place(q);
+  if (q < filed && !stopped(a.flags)) a.slots.place(q);
 }
 
 /// Before the rounds, on the whole GPU: each particle's start (cuda::start_one(): decided at once
@@ -377,14 +719,14 @@ __global__ void place_pairs(StepArrays a) {
 /// `flags->contested`).
 __global__ void start_rounds(int n, StepArrays a) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n || a.flags->overflow) return;
+  if (i >= n || stopped(a.flags)) return;
   if (start_one(i, a) > 0) a.contested[atomicAdd(&a.flags->contested, 1)] = i;
 }
 
 /// Every round of the step in one block over the particles start_rounds listed (stage 05's
 /// rounds, from the kit: cuda::rounds_block()); nothing when the step was stopped.
 __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) {
-  if (a.flags->overflow) return;
+  if (stopped(a.flags)) return;
   cuda::rounds_block(n, a.flags->contested, a);
 }
 
@@ -411,7 +753,7 @@ __global__ void __launch_bounds__(kFinishThreads)
   const int i = blockIdx.x * blockDim.x + threadIdx.x;  // this thread's particle, if i < n
   // Every block decides alike: `overflow` only ever rises, and the list's length is final.
   const int filed = f->pairs;
-  if (f->overflow || filed > a.slots.capacity) {
+  if (stopped(f) || filed > a.slots.capacity) {
     if (i == 0 && filed > a.slots.capacity) atomicMax(&f->overflow, filed);
     return;
   }
@@ -452,7 +794,7 @@ __global__ void resolve_grid(int n, StepArrays a) {
   Flags* f = a.flags;
   const int stride = gridDim.x * blockDim.x;
   const int me = blockIdx.x * blockDim.x + threadIdx.x;
-  if (f->overflow) return;  // written before this kernel: every block returns alike
+  if (stopped(f)) return;  // written before this kernel: every block returns alike
   const int m = f->contested;
   const Event none = model::pair_event_key(model::never(), n, n);
   for (int round = 0;; ++round) {
@@ -474,7 +816,7 @@ __global__ void resolve_grid(int n, StepArrays a) {
 /// nothing when the step was skipped.
 __global__ void apply(ParticlesView p, Box box, StepArrays a) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= p.n || a.flags->overflow) return;
+  if (i >= p.n || stopped(a.flags)) return;
   apply_planned<true>(p, a.partner, a.ptime, i, box.L, box.r);
 }
 

@@ -121,6 +121,32 @@ inline void find_pairs_beside(const cuda::ParticlesView& p, const Box& box,
   PLAB_CUDA_CHECK_LAUNCH("find_fast_pairs");
 }
 
+/// Bytes of dynamic shared memory find_pairs_banded() takes on this GPU: all a block may have
+/// (the opt-in limit) less its static shared memory; the kernel is allowed that much.
+inline int banded_shared_bytes() {
+  int device = 0, optin = 0;
+  PLAB_CUDA_CHECK(cudaGetDevice(&device));
+  PLAB_CUDA_CHECK(
+      cudaDeviceGetAttribute(&optin, cudaDevAttrMaxSharedMemoryPerBlockOptin, device));
+  cudaFuncAttributes attributes{};
+  PLAB_CUDA_CHECK(cudaFuncGetAttributes(&attributes, kernels::find_pairs_banded));
+  const int bytes = optin - static_cast<int>(attributes.sharedSizeBytes);
+  PLAB_CUDA_CHECK(cudaFuncSetAttribute(kernels::find_pairs_banded,
+                                       cudaFuncAttributeMaxDynamicSharedMemorySize, bytes));
+  return bytes;
+}
+
+/// The pair search of every slab without the counting sort: `bands` blocks of `band` rows a slab
+/// (kernels::find_pairs_banded()), `shared_bytes` of shared memory each, a halo of at most
+/// `halo_most` rows.
+inline void find_pairs_banded(const cuda::ParticlesView& p, const Box& box,
+                              const kernels::StepArrays& a, const kernels::DeviceGrid& d, int band,
+                              int bands, int shared_bytes, int halo_most, cudaStream_t s) {
+  kernels::find_pairs_banded<<<dim3(bands, d.g.slabs), kernels::kBandThreads, shared_bytes, s>>>(
+      p, box, a, d, band, shared_bytes, halo_most);
+  PLAB_CUDA_CHECK_LAUNCH("find_pairs_banded");
+}
+
 /// One thread per pair the list can hold.
 inline void place_pairs(const kernels::StepArrays& a, cudaStream_t s) {
   kernels::place_pairs<<<blocks(a.slots.capacity), kThreads, 0, s>>>(a);

@@ -13,11 +13,15 @@
 //         kGridResolveFrom particles, everything after the passes is one cooperative kernel,
 //         finish_small, with grid barriers between its phases). The grid is chosen on the
 //         host from the first state; particles that get faster than v_cut search wider, so it
-//         stays exact for any speed. A step with more pairs than the list holds stops the batch
-//         on the device, and the host redoes it with a longer list.
+//         stays exact for any speed. Small scenes (below kBandedBelow, where a band's entries
+//         fit a block's shared memory) skip the passes: one kernel, find_pairs_banded, sorts
+//         and searches every slab's bands of rows in shared memory. A step with more pairs than
+//         the list holds (or a band that outgrew its block) stops the batch on the device, and
+//         the host redoes it with a longer list (or with the passes).
 //  READ   handouts/engine.md    TEST   ./plab test --impl engine --stage 06 (on a GPU machine)
 // =================================================================================================
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <memory>
 #include <string>
@@ -50,6 +54,16 @@ bool separate_asked() {
 bool beside_off() {
   const char* v = std::getenv("PLAB_ENGINE_BESIDE");
   return v && std::string(v) == "off";
+}
+
+/// What PLAB_ENGINE_BANDED asks of a small scene's search in bands (find_pairs_banded()): `off`,
+/// the counting sort over the grid and its searches instead (to measure the difference);
+/// `narrow`, a halo of one row (so that fast entries search the whole slab: to test that path);
+/// `cramped`, 1 KB of shared memory a block (so that the first step stops and the host goes back
+/// to the sort: to test that path); anything else, or unset: the bands where they fit.
+std::string banded_asked() {
+  const char* v = std::getenv("PLAB_ENGINE_BANDED");
+  return v ? v : "";
 }
 
 /// The pair search's shape for `n` particles: PLAB_ENGINE_SEARCH=batched, lean or balanced when it
@@ -135,6 +149,21 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   /// The kernels of one step.
   void queue_kernels() {
     const auto a = arrays();
+    if (banded_) {  // no sort over the grid: every slab's bands in one kernel
+      kernels::DeviceGrid all = grid_;
+      all.first = 0;
+      all.slabs = grid_.g.slabs;
+      launch::start_step(p_.view(), box_, a, all, 0, main_);
+      launch::find_pairs_banded(p_.view(), box_, a, all, band_, bands_, shared_bytes_,
+                                banded_asked() == "narrow" ? 1 : grid_.g.rows, main_);
+    } else {
+      queue_passes(a);
+    }
+    queue_finish(a);
+  }
+
+  /// The counting sort over the grid and the pair search, a pass of per_pass_ slabs at a time.
+  void queue_passes(const kernels::StepArrays& a) {
     // A step of one pass (small scenes): start_step clears what the pass would clear itself.
     const bool one_pass = per_pass_ >= grid_.g.slabs;
     launch::start_step(p_.view(), box_, a, grid_, one_pass ? grid_.g.slabs * grid_.cells + 1 : 0,
@@ -159,6 +188,10 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
         launch::find_pairs(p_.view(), box_, a, pass, one_pass, search_, main_);
       }
     }
+  }
+
+  /// Everything after the pair search: the rows, the rounds and apply.
+  void queue_finish(const kernels::StepArrays& a) {
     if (finish_small_) {  // the scan, place_pairs, start_rounds, the rounds and apply in one
       launch::finish_small(p_.view(), box_, a, main_);
       return;
@@ -177,11 +210,18 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   void catch_up() override {
     for (;;) {
       const kernels::Flags f = flags_.read(main_);
-      if (f.steps_done == asked_ || f.overflow == 0) return;
-      slots_.grow(2 * f.overflow, main_);
-      lay_out();  // the rows are as long as the list (phases_ is allocated again)
-      stale_ = true;  // the recorded graph holds the old list's and phases' addresses
-      flags_.clear(&kernels::Flags::overflow, main_);  // the stop
+      if (f.steps_done == asked_ || (f.overflow == 0 && f.crowded == 0)) return;
+      if (f.crowded) {  // a band's entries did not fit its block: sort over the grid from now on
+        banded_ = false;
+        stale_ = true;
+        flags_.clear(&kernels::Flags::crowded, main_);
+      }
+      if (f.overflow) {
+        slots_.grow(2 * f.overflow, main_);
+        lay_out();  // the rows are as long as the list (phases_ is allocated again)
+        stale_ = true;  // the recorded graph holds the old list's and phases' addresses
+        flags_.clear(&kernels::Flags::overflow, main_);  // the stop
+      }
       for (long long s = f.steps_done; s < asked_; ++s) queue_step();
       timer_.stop(main_);
     }
@@ -202,10 +242,46 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     per_pass_ = (grid_.g.slabs + passes - 1) / passes;
     beside_ = passes == 1 && static_cast<long long>(n_) * per_pass_ < launch::kSmallPass &&
               n_ < kBesideBelow && !beside_off();
+    choose_bands(p);
     const int size = per_pass_ * grid_.cells + 1;
     temp_.resize(std::max(cuda::exclusive_scan_bytes(size), cuda::exclusive_scan_bytes(n_)));
     lay_out();
     stale_ = true;
+  }
+
+  /// Whether a small scene searches in bands (find_pairs_banded()), and how: the rows of a slab
+  /// split among the GPU's multiprocessors (a block each, every slab's blocks at once); taken
+  /// when the entries a block keeps, with the halo of the first state's fastest particle, fit
+  /// in two thirds of its shared memory.
+  void choose_bands(const Particles& p) {
+    banded_ = false;
+    const std::string asked = banded_asked();
+    if (n_ == 0 || n_ >= kBandedBelow || asked == "off") return;
+    const sweep::Grid& g = grid_.g;
+    if (!(g.cell < HUGE_VAL)) return;  // one cell: no geometry to trust
+    int device = 0, sms = 0;
+    PLAB_CUDA_CHECK(cudaGetDevice(&device));
+    PLAB_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
+    shared_bytes_ = launch::banded_shared_bytes();
+    const int per_slab = std::max(1, sms / g.slabs);  // blocks a slab
+    band_ = (g.rows + per_slab - 1) / per_slab;
+    bands_ = (g.rows + band_ - 1) / band_;
+    if (asked == "cramped") {
+      shared_bytes_ = 1024;
+      banded_ = true;
+      return;
+    }
+    double vmax2 = 0;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      vmax2 = std::max(vmax2, p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i]);
+    const double out = std::ceil((g.reach + g.margin + g.half * (2 * std::sqrt(vmax2))) *
+                                 (1 + 1e-9) * g.inv_cell) + 1;
+    if (!(out < HUGE_VAL)) return;
+    const int halo = static_cast<int>(std::min<double>(out, g.rows));
+    const int rows_kept = std::min(g.rows, band_ + halo + std::max(halo, 1));
+    const double cells_bytes = 8.0 * rows_kept * g.columns + 32;
+    const double entries = static_cast<double>(n_) * rows_kept / g.rows;
+    banded_ = cells_bytes + entries * kernels::kBandEntryBytes < shared_bytes_ * 2.0 / 3.0;
   }
 
   /// Lays the two phases' arrays over one allocation (see `phases_`): the passes' (bucket
@@ -264,6 +340,8 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   };
 
   static constexpr long long kCheckEvery = 32;  //!< steps between two looks at the flags
+  /// Below this N a step may search in bands (choose_bands()).
+  static constexpr int kBandedBelow = 1 << 15;
   static constexpr int kGridResolveFrom = 50000;  //!< from this N the rounds use the whole GPU
   /// From this N to kGridResolveFrom, finish_small() after the passes. Measured on an H100
   /// (2026-11-25, S = 500, the report's box): 3-4% slower than the separate kernels at
@@ -308,6 +386,10 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   /// A step of one small pass searches its fast entries on side_ beside the slow ones
   /// (launch::find_pairs_beside()), unless PLAB_ENGINE_BESIDE=off asks otherwise (to compare).
   bool beside_ = false;
+  /// A small scene searches in bands of band_ rows, bands_ a slab, with shared_bytes_ of shared
+  /// memory a block (choose_bands()), unless PLAB_ENGINE_BANDED=off asks otherwise (to compare).
+  bool banded_ = false;
+  int band_ = 1, bands_ = 1, shared_bytes_ = 0;
   cuda::Stream side_;
   /// An event without timing: where side_ starts (the pass sorted) and where main_ waits for it.
   struct Mark {
