@@ -36,16 +36,21 @@ struct Flags {
   int fast;              //!< fast entries the pass's search listed for a team search (the solution's
                          //!< find_fast_pairs)
   int rows;              //!< finish_small: events given a row so far this step
-  int crowded;           //!< find_pairs_banded: a block's entries did not fit its shared memory
-                         //!< (the host goes back to the counting sort and redoes the step)
+  int crowded;           //!< kCrowdedBands: find_pairs_banded's entries did not fit a block's
+                         //!< shared memory (the host goes back to the counting sort);
+                         //!< kCrowdedFinish: finish_block's pairs did not fit (the host goes
+                         //!< back to finish_small or the separate kernels); the step is redone
   /// The largest squared speed of step s's state (start_step() of step s writes slot s % 2 and
   /// clears the other), as the bits of a double (non-negative doubles order as their bits):
   /// how far find_pairs_banded()'s fastest entry reaches.
   unsigned long long vmax2[2];
 };
 
+constexpr int kCrowdedBands = 1;   //!< Flags::crowded: the bands' search did not fit
+constexpr int kCrowdedFinish = 2;  //!< Flags::crowded: finish_block() did not fit
+
 /// Whether the steps are stopped until the host looks: the list had no room for a step's pairs
-/// (`overflow`) or a band's entries did not fit its block (`crowded`).
+/// (`overflow`) or a small scene's kernel did not fit its block's shared memory (`crowded`).
 __device__ inline bool stopped(const Flags* f) { return f->overflow || f->crowded; }
 
 /// The grid of the batch and the slabs of one pass of the counting sort, as the kernels see it.
@@ -516,7 +521,7 @@ __global__ void __launch_bounds__(kBandThreads, 1)
   const long long used = (2LL * cells + 1) * 4 / 16 * 16 + 16;
   const long long room = (shared_bytes - used - 4) / kBandEntryBytes;
   if (room < 1) {
-    if (threadIdx.x == 0) atomicExch(&f->crowded, 1);
+    if (threadIdx.x == 0) atomicOr(&f->crowded, kCrowdedBands);
     return;
   }
   const int cap = static_cast<int>(room);
@@ -577,7 +582,7 @@ __global__ void __launch_bounds__(kBandThreads, 1)
   __syncthreads();
   const int m = kept;
   if (m > cap) {
-    if (threadIdx.x == 0) atomicExch(&f->crowded, 1);
+    if (threadIdx.x == 0) atomicOr(&f->crowded, kCrowdedBands);
     return;
   }
   // Each cell's start: a block scan over runs of cells, one run a thread.
@@ -679,7 +684,7 @@ __global__ void __launch_bounds__(kBandThreads, 1)
   }
   __syncthreads();
   if (hits > kHitMost) {  // (the pairs of a band are a few dozen)
-    if (threadIdx.x == 0) atomicExch(&f->crowded, 1);
+    if (threadIdx.x == 0) atomicOr(&f->crowded, kCrowdedBands);
     return;
   }
   for (int h = threadIdx.x; h < hits; h += kBandThreads)
@@ -687,7 +692,7 @@ __global__ void __launch_bounds__(kBandThreads, 1)
   __syncthreads();
   const int w = wides;
   if (w > kWideMost) {
-    if (threadIdx.x == 0) atomicExch(&f->crowded, 1);
+    if (threadIdx.x == 0) atomicOr(&f->crowded, kCrowdedBands);
     return;
   }
   for (int u = 0; u < w; ++u) {  // every particle of slab k, the block's threads together
@@ -784,6 +789,80 @@ __global__ void __launch_bounds__(kFinishThreads)
   }
   if (i == 0) f->steps_done += 1;
   if (i < n) apply_planned<true>(p, a.partner, a.ptime, i, box.L, box.r);  // apply()
+}
+
+constexpr int kBlockFinishThreads = 1024;  //!< threads of finish_block()'s one block
+
+/// The step's arrays as finish_block() gives them to the rounds (cuda/rounds.cuh reads them by
+/// name): the candidates (counts, rows, the list) and the resolved flags in shared memory, the
+/// rest in device memory.
+struct BlockArrays {
+  double* wall;    //!< StepArrays::wall
+  Slots slots;     //!< the candidates, in shared memory
+  Event* best;     //!< StepArrays::best
+  char* resolved;  //!< in shared memory
+  int* contested;  //!< StepArrays::contested
+  int* partner;    //!< StepArrays::partner
+  double* ptime;   //!< StepArrays::ptime
+  Flags* flags;    //!< StepArrays::flags
+};
+
+/// Shared memory finish_block() needs for `n` particles and `pairs` filed pairs: each
+/// particle's count, row end and flag (9 bytes), each pair (16) and its two events' rows (8).
+__host__ __device__ inline long long finish_block_bytes(int n, int pairs) {
+  return 9LL * n + 24LL * pairs + 64;
+}
+
+/// Everything of a small scene's step after the pair search but apply, in one block, with the
+/// candidates in shared memory: each particle's row of events (a block scan of the counts) and
+/// start_rounds(), place_pairs(), and the rounds (cuda::rounds_block(): block barriers instead of
+/// finish_small()'s grid barriers, and the candidates read from shared memory instead of device
+/// memory). The same rounds over the same candidates: the same plan. apply() follows on the
+/// whole GPU. Nothing when the step was stopped; stops it as place_pairs() does when the list
+/// had no room, and (`crowded`, kCrowdedFinish) when the filed pairs do not fit `shared_bytes`.
+__global__ void __launch_bounds__(kBlockFinishThreads, 1)
+    finish_block(int n, StepArrays a, int shared_bytes) {
+  using Scan = cub::BlockScan<int, kBlockFinishThreads>;
+  extern __shared__ __align__(16) unsigned char pool[];
+  __shared__ typename Scan::TempStorage temp;
+  __shared__ int contested;
+  Flags* f = a.flags;
+  const int filed = f->pairs;
+  if (stopped(f) || filed > a.slots.capacity) {
+    if (threadIdx.x == 0 && filed > a.slots.capacity) atomicMax(&f->overflow, filed);
+    return;
+  }
+  if (finish_block_bytes(n, filed) > shared_bytes) {
+    if (threadIdx.x == 0) atomicOr(&f->crowded, kCrowdedFinish);
+    return;
+  }
+  cuda::Pair* list = reinterpret_cast<cuda::Pair*>(pool);
+  int* count = reinterpret_cast<int*>(list + filed);
+  int* end = count + n;
+  int* row = end + n;
+  char* resolved = reinterpret_cast<char*>(row + 2LL * filed);
+  const BlockArrays s{a.wall,      Slots{count, end, list, filed, row}, a.best, resolved,
+                      a.contested, a.partner, a.ptime, f};
+  if (threadIdx.x == 0) contested = 0;
+  for (int i = threadIdx.x; i < n; i += kBlockFinishThreads) count[i] = a.slots.count[i];
+  for (int q = threadIdx.x; q < filed; q += kBlockFinishThreads) list[q] = a.slots.list[q];
+  __syncthreads();
+  // Each particle's row: an exclusive scan of the counts, a stretch of particles a thread.
+  const int per = (n + kBlockFinishThreads - 1) / kBlockFinishThreads;
+  const int i0 = min(n, static_cast<int>(threadIdx.x) * per), i1 = min(n, i0 + per);
+  int sum = 0;
+  for (int i = i0; i < i1; ++i) sum += count[i];
+  int at = 0;
+  Scan(temp).ExclusiveSum(sum, at);
+  for (int i = i0; i < i1; ++i) {
+    end[i] = at;
+    at += count[i];
+    if (start_one(i, s) > 0) a.contested[atomicAdd(&contested, 1)] = i;  // start_rounds()
+  }
+  __syncthreads();
+  for (int q = threadIdx.x; q < filed; q += kBlockFinishThreads) s.slots.place(q);
+  __syncthreads();
+  cuda::rounds_block(n, contested, s);
 }
 
 /// resolve() for large N: the same rounds over the whole grid (a cooperative launch, every block

@@ -121,18 +121,20 @@ inline void find_pairs_beside(const cuda::ParticlesView& p, const Box& box,
   PLAB_CUDA_CHECK_LAUNCH("find_fast_pairs");
 }
 
-/// Bytes of dynamic shared memory find_pairs_banded() takes on this GPU: all a block may have
-/// (the opt-in limit) less its static shared memory; the kernel is allowed that much.
-inline int banded_shared_bytes() {
+/// Bytes of dynamic shared memory `kernel` (find_pairs_banded(), finish_block()) takes on this
+/// GPU: all a block may have (the opt-in limit) less its static shared memory; the kernel is
+/// allowed that much.
+template <class Kernel>
+inline int all_shared_bytes(Kernel* kernel) {
   int device = 0, optin = 0;
   PLAB_CUDA_CHECK(cudaGetDevice(&device));
   PLAB_CUDA_CHECK(
       cudaDeviceGetAttribute(&optin, cudaDevAttrMaxSharedMemoryPerBlockOptin, device));
   cudaFuncAttributes attributes{};
-  PLAB_CUDA_CHECK(cudaFuncGetAttributes(&attributes, kernels::find_pairs_banded));
+  PLAB_CUDA_CHECK(cudaFuncGetAttributes(&attributes, kernel));
   const int bytes = optin - static_cast<int>(attributes.sharedSizeBytes);
-  PLAB_CUDA_CHECK(cudaFuncSetAttribute(kernels::find_pairs_banded,
-                                       cudaFuncAttributeMaxDynamicSharedMemorySize, bytes));
+  PLAB_CUDA_CHECK(
+      cudaFuncSetAttribute(kernel, cudaFuncAttributeMaxDynamicSharedMemorySize, bytes));
   return bytes;
 }
 
@@ -145,6 +147,13 @@ inline void find_pairs_banded(const cuda::ParticlesView& p, const Box& box,
   kernels::find_pairs_banded<<<dim3(bands, d.g.slabs), kernels::kBandThreads, shared_bytes, s>>>(
       p, box, a, d, band, shared_bytes, halo_most);
   PLAB_CUDA_CHECK_LAUNCH("find_pairs_banded");
+}
+
+/// The rows, start_rounds() and the rounds of a small scene in one block with `shared_bytes` of
+/// shared memory (kernels::finish_block()); apply() follows.
+inline void finish_block(int n, const kernels::StepArrays& a, int shared_bytes, cudaStream_t s) {
+  kernels::finish_block<<<1, kernels::kBlockFinishThreads, shared_bytes, s>>>(n, a, shared_bytes);
+  PLAB_CUDA_CHECK_LAUNCH("finish_block");
 }
 
 /// One thread per pair the list can hold.

@@ -17,7 +17,8 @@
 //         fit a block's shared memory) skip the passes: one kernel, find_pairs_banded, sorts
 //         and searches every slab's bands of rows in shared memory. A step with more pairs than
 //         the list holds (or a band that outgrew its block) stops the batch on the device, and
-//         the host redoes it with a longer list (or with the passes).
+//         the host redoes it with a longer list (or with the passes). Below kFinishSmallFrom,
+//         one block (finish_block) does the rows and the rounds in shared memory, then apply.
 //  READ   handouts/engine.md    TEST   ./plab test --impl engine --stage 06 (on a GPU machine)
 // =================================================================================================
 #include <algorithm>
@@ -43,7 +44,7 @@ constexpr long long kEntriesPerPass = 1 << 20;
 
 /// Whether PLAB_ENGINE_KERNELS=separate asks small scenes for the separate kernels after the
 /// passes (scan, place_pairs, start_rounds, the one-block resolve, apply) instead of
-/// finish_small: to measure the difference.
+/// finish_small or finish_block: to measure the difference.
 bool separate_asked() {
   const char* v = std::getenv("PLAB_ENGINE_KERNELS");
   return v && std::string(v) == "separate";
@@ -59,8 +60,9 @@ bool beside_off() {
 /// What PLAB_ENGINE_BANDED asks of a small scene's search in bands (find_pairs_banded()): `off`,
 /// the counting sort over the grid and its searches instead (to measure the difference);
 /// `narrow`, a halo of one row (so that fast entries search the whole slab: to test that path);
-/// `cramped`, 1 KB of shared memory a block (so that the first step stops and the host goes back
-/// to the sort: to test that path); anything else, or unset: the bands where they fit.
+/// `cramped`, 1 KB of shared memory a block, for finish_block() too (so that the first step stops
+/// and the host goes back to the sort and the separate kernels: to test that path); anything
+/// else, or unset: the bands where they fit.
 std::string banded_asked() {
   const char* v = std::getenv("PLAB_ENGINE_BANDED");
   return v ? v : "";
@@ -119,10 +121,12 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
         wall_(n_), last_(n_), slots_(n_, n_ / 4 + 1024) {  // the list grown as needed
     bandwidth_ = measure_bandwidth(main_);
     set_grid(p);
-    if (n_ >= kGridResolveFrom)
+    if (n_ >= kGridResolveFrom) {
       grid_blocks_ = launch::resolve_grid_blocks();
-    else
+    } else {
       finish_small_ = n_ >= kFinishSmallFrom && !separate_asked() && launch::finish_small_fits(n_);
+      choose_finish_block();
+    }
     sync();
   }
 
@@ -192,6 +196,11 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
 
   /// Everything after the pair search: the rows, the rounds and apply.
   void queue_finish(const kernels::StepArrays& a) {
+    if (finish_block_) {  // the rows and the rounds in one block, then apply on the whole GPU
+      launch::finish_block(n_, a, finish_bytes_, main_);
+      launch::apply(p_.view(), box_, a, main_);
+      return;
+    }
     if (finish_small_) {  // the scan, place_pairs, start_rounds, the rounds and apply in one
       launch::finish_small(p_.view(), box_, a, main_);
       return;
@@ -211,8 +220,9 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     for (;;) {
       const kernels::Flags f = flags_.read(main_);
       if (f.steps_done == asked_ || (f.overflow == 0 && f.crowded == 0)) return;
-      if (f.crowded) {  // a band's entries did not fit its block: sort over the grid from now on
-        banded_ = false;
+      if (f.crowded) {  // a small scene's kernel did not fit its block: the general ones from now
+        if (f.crowded & kernels::kCrowdedBands) banded_ = false;  // the sort over the grid
+        if (f.crowded & kernels::kCrowdedFinish) finish_block_ = false;
         stale_ = true;
         flags_.clear(&kernels::Flags::crowded, main_);
       }
@@ -262,7 +272,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     int device = 0, sms = 0;
     PLAB_CUDA_CHECK(cudaGetDevice(&device));
     PLAB_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
-    shared_bytes_ = launch::banded_shared_bytes();
+    shared_bytes_ = launch::all_shared_bytes(kernels::find_pairs_banded);
     const int per_slab = std::max(1, sms / g.slabs);  // blocks a slab
     band_ = (g.rows + per_slab - 1) / per_slab;
     bands_ = (g.rows + band_ - 1) / band_;
@@ -282,6 +292,23 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     const double cells_bytes = 8.0 * rows_kept * g.columns + 32;
     const double entries = static_cast<double>(n_) * rows_kept / g.rows;
     banded_ = cells_bytes + entries * kernels::kBandEntryBytes < shared_bytes_ * 2.0 / 3.0;
+  }
+
+  /// Whether the rows and rounds of a scene below kFinishSmallFrom run in one block
+  /// (finish_block()) instead of the separate kernels: when its shared memory holds them for the
+  /// list's first length, unless PLAB_ENGINE_KERNELS=separate asks for those (to compare);
+  /// PLAB_ENGINE_BANDED=cramped gives it 1 KB, so that the first step stops and the host goes
+  /// back to them (to test that path).
+  void choose_finish_block() {
+    finish_block_ = false;
+    if (n_ == 0 || n_ >= kFinishSmallFrom || separate_asked()) return;
+    finish_bytes_ = launch::all_shared_bytes(kernels::finish_block);
+    if (banded_asked() == "cramped") {
+      finish_bytes_ = 1024;
+      finish_block_ = true;
+      return;
+    }
+    finish_block_ = kernels::finish_block_bytes(n_, slots_.capacity()) <= finish_bytes_;
   }
 
   /// Lays the two phases' arrays over one allocation (see `phases_`): the passes' (bucket
@@ -346,7 +373,11 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   /// From this N to kGridResolveFrom, finish_small() after the passes. Measured on an H100
   /// (2026-11-25, S = 500, the report's box): 3-4% slower than the separate kernels at
   /// N = 1000, 2000 and 4000, 10% faster at 10^4 and 45% at 4 x 10^4; the crossing, about 5000,
-  /// is interpolated.
+  /// is interpolated. Below it, finish_block() where it fits: measured on an H200 (2026-11-28,
+  /// S = 500, the report's box, the bands' search, medians of 5, ms a step, one block / the
+  /// kernels it replaced or above 5000 finish_small()): N = 1000 0.0248 / 0.0299, 4000 0.0402 /
+  /// 0.0424, 10^4 0.0954 / 0.0671, 1.2 x 10^4 0.1407 / 0.0954 (one SM's rounds, each round's
+  /// loads from device memory one after another, lose to the whole GPU's).
   static constexpr int kFinishSmallFrom = 5000;
   /// From this N the pair search is balanced rather than batched (kernels::Search). Measured on
   /// an H200 (2026-11-27, ms a step, medians of 5 runs, 3 at 10^6; batched or lean / balanced): N = 4000
@@ -381,6 +412,10 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   /// Small scenes: finish_small() after the passes, unless PLAB_ENGINE_KERNELS=separate asks
   /// for the separate kernels (to compare) or the GPU cannot hold its blocks at once.
   bool finish_small_ = false;
+  /// Scenes below kFinishSmallFrom: finish_block() with finish_bytes_ of shared memory, and
+  /// apply(), after the search (choose_finish_block()), instead of the separate kernels.
+  bool finish_block_ = false;
+  int finish_bytes_ = 0;
   /// The pair search's shape (search_shape()).
   kernels::Search search_ = search_shape(n_, kBalancedSearchFrom);
   /// A step of one small pass searches its fast entries on side_ beside the slow ones
