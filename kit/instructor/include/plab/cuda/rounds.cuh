@@ -50,18 +50,36 @@ __device__ inline int start_one(int i, const Arrays& a) {
   return c;
 }
 
+/// Events choose_one() reads at a time: their loads (the event, then its partner's flag) are in
+/// flight together instead of one event after another.
+constexpr int kChooseBatch = 4;
+
 /// A round's first half for unresolved particle `i`: `a.best[i]` = its earliest event among its
 /// wall (when in the step) and its pairs with unresolved partners, or `none`
-/// (`model::pair_event_key(model::never(), n, n)`) when it has neither.
+/// (`model::pair_event_key(model::never(), n, n)`) when it has neither. The events are read
+/// kChooseBatch at a time; the order in which they are compared does not matter (key_less() is a
+/// strict total order, and a pair filed twice gives the same key twice).
 template <class Arrays>
 __device__ inline void choose_one(int i, const Arrays& a, const model::Event& none) {
   model::Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
-  for (int s = 0; s < a.slots.count[i]; ++s) {
-    const int o = a.slots.other_at(i, s);
-    if (a.resolved[o]) continue;
-    const model::Event e =
-        model::pair_event_key(a.slots.time_at(i, s), i < o ? i : o, i < o ? o : i);
-    if (model::key_less(e, b)) b = e;
+  const int count = a.slots.count[i];
+  for (int s0 = 0; s0 < count; s0 += kChooseBatch) {
+    int o[kChooseBatch];
+    double t[kChooseBatch];
+    bool open[kChooseBatch];
+#pragma unroll
+    for (int u = 0; u < kChooseBatch; ++u) {
+      o[u] = s0 + u < count ? a.slots.other_at(i, s0 + u) : i;
+      t[u] = s0 + u < count ? a.slots.time_at(i, s0 + u) : 0;
+    }
+#pragma unroll
+    for (int u = 0; u < kChooseBatch; ++u) open[u] = s0 + u < count && !a.resolved[o[u]];
+#pragma unroll
+    for (int u = 0; u < kChooseBatch; ++u) {
+      if (!open[u]) continue;
+      const model::Event e = model::pair_event_key(t[u], i < o[u] ? i : o[u], i < o[u] ? o[u] : i);
+      if (model::key_less(e, b)) b = e;
+    }
   }
   a.best[i] = b;
 }
