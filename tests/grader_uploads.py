@@ -5,6 +5,8 @@ grader, long):
 - one stage's files uploaded flat are graded as the stage their banner names, with no --stages;
 - a zip of the kit folder is unpacked and graded;
 - an upload with no stage in it gets a three-line message naming what was found, never a build log;
+  flat files whose banners were taken out are told how to re-upload them (a student cannot pass
+  --stages; the message says an instructor can);
 - a stage the rubric does not know is a clear error, and results.json says so (never empty);
 - the hidden seed is in the summary and in results.json's extra_data, not in what students see,
   and `--seed S` replays the same hidden scenes;
@@ -100,6 +102,17 @@ def case_refusals():
     check("junk", done.returncode != 0 and 0 < len(message.splitlines()) <= 3
           and "notes.txt" in message and "expected:" in message and "cmake" not in message.lower(),
           f"a three-line message naming what was found: {message!r}")
+    nameless = scratch / "no-banner-upload"  # one stage's files flat, their banners taken out
+    nameless.mkdir(parents=True)
+    text = (kit / "solutions" / "01-naive" / "step.cpp").read_text()
+    (nameless / "step.cpp").write_text("\n".join(l for l in text.splitlines() if "\\file" not in l))
+    doc, tests, done, _ = grade("no-banner", nameless)
+    message = tests.get("not graded", {}).get("output", "")
+    check("no banner", done.returncode != 0 and "step.cpp" in message
+          and "stages/NN-name/ folder" in message and "banner" in message
+          and "instructor" in message,
+          f"flat files that name no stage: what a student can do, then the instructor's "
+          f"--stages: {message!r}")
     doc, tests, done, _ = grade("unknown", junk, "--stages", "09")
     message = tests.get("not graded", {}).get("output", "")
     check("unknown stage", done.returncode != 0 and "no stage 09" in message and doc["tests"],

@@ -157,8 +157,11 @@ def find_stages(submission, kit_folders, wanted, scratch):
         else:
             which = f"stages {', '.join(sorted(named))}" if named else "no stage"
             raise UploadError(
-                f"found {len(flat)} source files flat ({_describe(root)}) whose banners name {which}\n"
-                f"{EXPECTED}\nor pass --stages NN to say which stage these files are")
+                f"found {len(flat)} source file{'s' if len(flat) != 1 else ''} flat "
+                f"({_describe(root)}) whose banners name {which}\n"
+                f"{EXPECTED}\nre-upload them in their stages/NN-name/ folder, or with the banner line "
+                "the kit's file starts with (an instructor grading them by hand can pass --stages "
+                "NN instead)")
         dest = scratch / "flat" / kit_folders[stage]
         dest.mkdir(parents=True)
         for p in flat:
