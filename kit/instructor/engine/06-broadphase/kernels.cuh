@@ -502,7 +502,9 @@ __global__ void __launch_bounds__(kBandThreads, 1)
   __shared__ int wide[kWideMost];
   __shared__ int2 hit[kHitMost];
   Flags* f = a.flags;
-  if (stopped(f)) return;  // the same for every thread: written before this kernel
+  // Every thread of the block alike (other blocks of this kernel may raise `crowded` while this
+  // one starts: a thread that returned alone would leave the others at the barriers).
+  if (__syncthreads_or(stopped(f))) return;
   const sweep::Grid& g = d.g;
   const int k = blockIdx.y, columns = g.columns;
   const int r0 = blockIdx.x * band, r1 = min(g.rows, r0 + band);
