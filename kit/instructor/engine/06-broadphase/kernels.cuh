@@ -468,6 +468,28 @@ __device__ inline void band_run(const BandEntries& s, const BandRuns& b, int r, 
   to = max(from, s.start[y * s.columns + b.x1 + 1]);
 }
 
+/// An exclusive scan of `value[0 .. size)` (shared memory) by a block of kThreads threads, a
+/// stretch of consecutive items a thread: `put(k, first)` for each item k, with the sum of the
+/// items before it, once its own value is read (so `put` may write it over). Returns the sum of
+/// all. One barrier inside (cub's); the caller puts one between two scans with the same `temp`.
+template <int kThreads, class Put>
+__device__ inline int scan_stretches(const int* value, int size,
+                                     typename cub::BlockScan<int, kThreads>::TempStorage& temp,
+                                     Put&& put) {
+  const int per = (size + kThreads - 1) / kThreads;
+  const int lo = min(size, static_cast<int>(threadIdx.x) * per), hi = min(size, lo + per);
+  int sum = 0;
+  for (int k = lo; k < hi; ++k) sum += value[k];
+  int at = 0, total = 0;
+  cub::BlockScan<int, kThreads>(temp).ExclusiveSum(sum, at, total);
+  for (int k = lo; k < hi; ++k) {
+    const int v = value[k];
+    put(k, at);
+    at += v;
+  }
+  return total;
+}
+
 /// The rows [lo, hi) a band of rows [r0, r1) keeps in its block: its own, `halo` rows below,
 /// and `halo` (at least one, the next row of a slow entry's search) above.
 __device__ inline void band_rows_kept(int r0, int r1, int halo, int rows, int& lo, int& hi) {
@@ -587,18 +609,9 @@ __global__ void __launch_bounds__(kBandThreads, 1)
     if (threadIdx.x == 0) atomicOr(&f->crowded, kCrowdedBands);
     return;
   }
-  // Each cell's start: a block scan over runs of cells, one run a thread.
-  const int per = (cells + kBandThreads - 1) / kBandThreads;
-  const int c0 = min(cells, static_cast<int>(threadIdx.x) * per), c1 = min(cells, c0 + per);
-  int sum = 0;
-  for (int c = c0; c < c1; ++c) sum += start[c];
-  int at = 0;
-  Scan(temp).ExclusiveSum(sum, at);
-  for (int c = c0; c < c1; ++c) {
-    const int count = start[c];
-    start[c] = cursor[c] = at;
-    at += count;
-  }
+  // Each cell's start (its count scanned in place), and the scatter's cursor.
+  scan_stretches<kBandThreads>(start, cells, temp,
+                               [&](int c, int at) { start[c] = cursor[c] = at; });
   if (threadIdx.x == 0) start[cells] = m;
   __syncthreads();
   // Scatter: each kept particle to its cell, with what the search reads.
@@ -621,7 +634,6 @@ __global__ void __launch_bounds__(kBandThreads, 1)
   const int per_thread = (owned + kBandThreads - 1) / kBandThreads;
   const int j0 = min(owned, static_cast<int>(threadIdx.x) * per_thread);
   const int j1 = min(owned, j0 + per_thread);
-  int tests = 0;
   for (int j = j0; j < j1; ++j) {  // each entry's tests, kept in `before` for now
     const BandRuns b = band_runs(kept_entries, g, own0 + j);
     if (b.wide) {  // reaches past the rows kept: the whole slab, below
@@ -636,15 +648,10 @@ __global__ void __launch_bounds__(kBandThreads, 1)
       count += to - from;
     }
     before[j] = count;
-    tests += count;
   }
-  int first = 0, total = 0;
-  Scan(temp).ExclusiveSum(tests, first, total);
-  for (int j = j0; j < j1; ++j) {  // each entry's first test
-    const int count = before[j];
-    before[j] = first;
-    first += count;
-  }
+  // Each entry's first test (its count scanned in place), and the block's tests in all.
+  const int total =
+      scan_stretches<kBandThreads>(before, owned, temp, [&](int j, int at) { before[j] = at; });
   if (threadIdx.x == 0) before[owned] = total;
   __syncthreads();
   const int share = (total + kBandThreads - 1) / kBandThreads;
@@ -849,18 +856,11 @@ __global__ void __launch_bounds__(kBlockFinishThreads, 1)
   for (int i = threadIdx.x; i < n; i += kBlockFinishThreads) count[i] = a.slots.count[i];
   for (int q = threadIdx.x; q < filed; q += kBlockFinishThreads) list[q] = a.slots.list[q];
   __syncthreads();
-  // Each particle's row: an exclusive scan of the counts, a stretch of particles a thread.
-  const int per = (n + kBlockFinishThreads - 1) / kBlockFinishThreads;
-  const int i0 = min(n, static_cast<int>(threadIdx.x) * per), i1 = min(n, i0 + per);
-  int sum = 0;
-  for (int i = i0; i < i1; ++i) sum += count[i];
-  int at = 0;
-  Scan(temp).ExclusiveSum(sum, at);
-  for (int i = i0; i < i1; ++i) {
+  // Each particle's row (an exclusive scan of the counts), and start_rounds().
+  scan_stretches<kBlockFinishThreads>(count, n, temp, [&](int i, int at) {
     end[i] = at;
-    at += count[i];
-    if (start_one(i, s) > 0) a.contested[atomicAdd(&contested, 1)] = i;  // start_rounds()
-  }
+    if (start_one(i, s) > 0) a.contested[atomicAdd(&contested, 1)] = i;
+  });
   __syncthreads();
   for (int q = threadIdx.x; q < filed; q += kBlockFinishThreads) s.slots.place(q);
   __syncthreads();
