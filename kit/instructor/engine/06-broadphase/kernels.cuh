@@ -490,6 +490,13 @@ __device__ inline int scan_stretches(const int* value, int size,
   return total;
 }
 
+/// Rows a fast particle of speed `vmax` reaches beyond its own (sweep::search_of()'s reach in
+/// row heights, rounded up, and one for rounding): find_pairs_banded()'s halo, and what the host
+/// expects of it. Not a number when `vmax` is not.
+__host__ __device__ inline double halo_rows(const sweep::Grid& g, double vmax) {
+  return ceil((g.reach + g.margin + g.half * (2 * vmax)) * (1 + 1e-9) * g.inv_cell) + 1;
+}
+
 /// The rows [lo, hi) a band of rows [r0, r1) keeps in its block: its own, `halo` rows below,
 /// and `halo` (at least one, the next row of a slow entry's search) above.
 __device__ inline void band_rows_kept(int r0, int r1, int halo, int rows, int& lo, int& hi) {
@@ -532,8 +539,7 @@ __global__ void __launch_bounds__(kBandThreads, 1)
   const int r0 = blockIdx.x * band, r1 = min(g.rows, r0 + band);
   // The halo: rows within the fastest particle's reach (sweep::search_of() of a fast one).
   const double vmax = sqrt(__longlong_as_double(f->vmax2[f->steps_done % 2]));
-  const double rows_out = ceil((g.reach + g.margin + g.half * (2 * vmax)) * (1 + 1e-9) *
-                               g.inv_cell) + 1;
+  const double rows_out = halo_rows(g, vmax);
   const int most = min(g.rows, halo_most);
   const int halo = rows_out < most ? static_cast<int>(rows_out) : most;  // (not a number too)
   int lo, hi;

@@ -284,8 +284,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     double vmax2 = 0;
     for (std::size_t i = 0; i < p.size(); ++i)
       vmax2 = std::max(vmax2, p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i]);
-    const double out = std::ceil((g.reach + g.margin + g.half * (2 * std::sqrt(vmax2))) *
-                                 (1 + 1e-9) * g.inv_cell) + 1;
+    const double out = kernels::halo_rows(g, std::sqrt(vmax2));
     if (!(out < HUGE_VAL)) return;
     const int halo = static_cast<int>(std::min<double>(out, g.rows));
     const int rows_kept = std::min(g.rows, band_ + halo + std::max(halo, 1));
