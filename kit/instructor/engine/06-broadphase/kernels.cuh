@@ -751,17 +751,61 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
 }
 
 constexpr int kFinishThreads = 256;  //!< threads per block of finish_small()
+constexpr int kHeld = 4;             //!< pair events a thread of finish_small() keeps in registers
+
+/// A particle's pair events held by its thread of finish_small() (in registers) from one round
+/// to the next, so that a round reads only its partners' flags and choices, not its row and the
+/// list again: the rounds wait on the loads of each round, one after the other (about 0.5 us
+/// each), not on their arithmetic. A particle with more than kHeld events goes through
+/// cuda::choose_one() instead.
+struct HeldEvents {
+  int count = 0;         //!< its pair events (held when at most kHeld)
+  double wall = 0;       //!< its wall time
+  int other[kHeld]{};    //!< each event's other particle
+  double time[kHeld]{};  //!< each event's pair time
+  /// Reads particle `i`'s events from its row (after place_pairs()), when there are at most kHeld.
+  __device__ void read(int i, const StepArrays& a) {
+    if (count > kHeld) return;
+    const int first = a.slots.end[i] - count;
+    int q[kHeld];
+#pragma unroll
+    for (int u = 0; u < kHeld; ++u) q[u] = u < count ? a.slots.row[first + u] : 0;
+#pragma unroll
+    for (int u = 0; u < kHeld; ++u) {
+      if (u >= count) continue;
+      const cuda::Pair& pair = a.slots.list[q[u]];
+      other[u] = pair.lo ^ pair.hi ^ i;
+      time[u] = pair.t;
+    }
+  }
+  /// cuda::choose_one() over the held events: the same choice, written to `a.best[i]` and
+  /// returned (the events compared in another order: key_less() orders them completely).
+  __device__ Event choose(int i, const StepArrays& a, const Event& none) const {
+    if (count > kHeld) return choose_one(i, a, none);
+    Event b = cuda::wall_or_none(i, wall, none);
+    bool open[kHeld];
+#pragma unroll
+    for (int u = 0; u < kHeld; ++u) open[u] = u < count && !a.resolved[other[u]];
+#pragma unroll
+    for (int u = 0; u < kHeld; ++u)
+      if (open[u]) cuda::fold_pair(b, i, other[u], time[u]);
+    a.best[i] = b;
+    return b;
+  }
+};
 
 /// Everything of a small scene's step after the pair search, in one cooperative kernel of
 /// ceil(n / kFinishThreads) blocks (all resident; one thread a particle), with grid-wide
 /// barriers where the multi-kernel path has kernel boundaries: each particle's row of events
 /// (a block's rows side by side, at a place one atomic a block takes: rows need not be in the
 /// particles' order, only apart, so no scan over the grid) and start_rounds() together, then
-/// place_pairs(), the rounds of resolve_grid(), and apply(). The rounds take a particle's events
-/// in any order (the event key orders them completely) and every particle's arithmetic is that
-/// of those kernels, so the same bits; 8 kernels a step instead of 12, and 2 + 2 x rounds grid
-/// barriers. Nothing when the step was stopped; stops it (as place_pairs()) when the list had no
-/// room.
+/// place_pairs(), the rounds of resolve_grid(), and apply(). Each thread keeps its particle's
+/// count, wall time, events (HeldEvents) and choice in registers over the rounds, so a round's
+/// choose reads only the partners' `resolved` flags and its accept only the chosen partner's
+/// `best`. The rounds take a particle's events in any order (the event key orders them
+/// completely) and every particle's arithmetic is that of those kernels, so the same bits; 8
+/// kernels a step instead of 12, and 2 + 2 x rounds grid barriers. Nothing when the step was
+/// stopped; stops it (as place_pairs()) when the list had no room.
 __global__ void __launch_bounds__(kFinishThreads)
     finish_small(ParticlesView p, Box box, StepArrays a) {
   namespace cg = cooperative_groups;
@@ -779,26 +823,36 @@ __global__ void __launch_bounds__(kFinishThreads)
   }
   // Each particle's row: the block's rows side by side (a scan in the block), the block's at
   // the place one atomic takes; and start_rounds(), which reads only the counts.
+  HeldEvents held;
+  if (i < n) {
+    held.count = a.slots.count[i];
+    held.wall = a.wall[i];
+  }
   int mine = 0, total = 0;
-  Scan(temp).ExclusiveSum(i < n ? a.slots.count[i] : 0, mine, total);
+  Scan(temp).ExclusiveSum(held.count, mine, total);
   __shared__ int base;
   if (threadIdx.x == 0) base = atomicAdd(&f->rows, total);
   __syncthreads();
-  if (i < n) a.slots.end[i] = base + mine;
-  if (i < n && start_one(i, a) > 0) a.contested[atomicAdd(&f->contested, 1)] = i;
+  if (i < n) {
+    a.slots.end[i] = base + mine;
+    cuda::start_from(i, held.count, held.wall, a);  // start_rounds()
+  }
   grid.sync();
   const int stride = gridDim.x * blockDim.x;
   for (int q = i; q < filed; q += stride) a.slots.place(q);  // place_pairs()
   grid.sync();
-  const int m = f->contested;
+  bool open = i < n && held.count > 0;  // undecided
+  if (open) held.read(i, a);
   const Event none = model::pair_event_key(model::never(), n, n);
   for (int round = 0;; ++round) {  // resolve_grid()'s rounds
     if (i == 0) f->open[(round + 1) % 3] = 0;
-    for (int q = i; q < m; q += stride)  // choose
-      if (!a.resolved[a.contested[q]]) choose_one(a.contested[q], a, none);
+    Event b = none;
+    if (open) b = held.choose(i, a, none);
     grid.sync();
-    for (int q = i; q < m; q += stride)  // accept
-      if (!a.resolved[a.contested[q]] && !accept_one(a.contested[q], a)) f->open[round % 3] = 1;
+    if (open) {
+      open = !cuda::accept_choice(i, b, a);
+      if (open) f->open[round % 3] = 1;
+    }
     grid.sync();
     if (!f->open[round % 3]) break;
   }

@@ -38,6 +38,14 @@
 
 namespace plab::cuda {
 
+/// start_one() from particle `i`'s count of pair events and its wall time, already read (the
+/// wall time is read only when the count is 0).
+template <class Arrays>
+__device__ inline void start_from(int i, int count, double wall, const Arrays& a) {
+  a.partner[i] = (count == 0 && model::in_step(wall)) ? Plan::kWall : Plan::kFree;
+  a.resolved[i] = (count == 0);
+}
+
 /// Before the first round, for every particle `i`: one with no pair event is decided at once
 /// (resolved, with its wall when the wall time is in the step, else nothing); one with pair
 /// events is left unresolved, with no plan yet. Returns its count of pair events (it takes part
@@ -45,8 +53,7 @@ namespace plab::cuda {
 template <class Arrays>
 __device__ inline int start_one(int i, const Arrays& a) {
   const int c = a.slots.count[i];
-  a.partner[i] = (c == 0 && model::in_step(a.wall[i])) ? Plan::kWall : Plan::kFree;
-  a.resolved[i] = (c == 0);
+  start_from(i, c, c == 0 ? a.wall[i] : 0, a);
   return c;
 }
 
@@ -54,14 +61,27 @@ __device__ inline int start_one(int i, const Arrays& a) {
 /// flight together instead of one event after another.
 constexpr int kChooseBatch = 4;
 
+/// Folds particle `i`'s pair event with `o` at time `t` into its choice so far `b`: the earlier
+/// of the two by model::key_less().
+__device__ inline void fold_pair(model::Event& b, int i, int o, double t) {
+  const model::Event e = model::pair_event_key(t, i < o ? i : o, i < o ? o : i);
+  if (model::key_less(e, b)) b = e;
+}
+
+/// Particle `i`'s choice before its pairs: its wall event when the wall time `wall` is in the
+/// step, else `none`.
+__device__ inline model::Event wall_or_none(int i, double wall, const model::Event& none) {
+  return model::in_step(wall) ? model::wall_event_key(wall, i) : none;
+}
+
 /// A round's first half for unresolved particle `i`: `a.best[i]` = its earliest event among its
 /// wall (when in the step) and its pairs with unresolved partners, or `none`
-/// (`model::pair_event_key(model::never(), n, n)`) when it has neither. The events are read
-/// kChooseBatch at a time; the order in which they are compared does not matter (key_less() is a
-/// strict total order, and a pair filed twice gives the same key twice).
+/// (`model::pair_event_key(model::never(), n, n)`) when it has neither; returns it too. The
+/// events are read kChooseBatch at a time; the order in which they are compared does not matter
+/// (key_less() is a strict total order, and a pair filed twice gives the same key twice).
 template <class Arrays>
-__device__ inline void choose_one(int i, const Arrays& a, const model::Event& none) {
-  model::Event b = model::in_step(a.wall[i]) ? model::wall_event_key(a.wall[i], i) : none;
+__device__ inline model::Event choose_one(int i, const Arrays& a, const model::Event& none) {
+  model::Event b = wall_or_none(i, a.wall[i], none);
   const int count = a.slots.count[i];
   for (int s0 = 0; s0 < count; s0 += kChooseBatch) {
     int o[kChooseBatch];
@@ -75,22 +95,19 @@ __device__ inline void choose_one(int i, const Arrays& a, const model::Event& no
 #pragma unroll
     for (int u = 0; u < kChooseBatch; ++u) open[u] = s0 + u < count && !a.resolved[o[u]];
 #pragma unroll
-    for (int u = 0; u < kChooseBatch; ++u) {
-      if (!open[u]) continue;
-      const model::Event e = model::pair_event_key(t[u], i < o[u] ? i : o[u], i < o[u] ? o[u] : i);
-      if (model::key_less(e, b)) b = e;
-    }
+    for (int u = 0; u < kChooseBatch; ++u)
+      if (open[u]) fold_pair(b, i, o[u], t[u]);
   }
   a.best[i] = b;
+  return b;
 }
 
-/// A round's second half for unresolved particle `i` (every choose_one() of the round done):
-/// accepts its choice when it is none, a wall, or a pair the other particle chose too, writing
-/// only particle `i`'s plan entry and `resolved[i]`. Returns false when `i` is left for the next
-/// round.
+/// A round's second half for unresolved particle `i` whose choice this round is `e` (every
+/// choose_one() of the round done): accepts it when it is none, a wall, or a pair the other
+/// particle chose too, writing only particle `i`'s plan entry and `resolved[i]`. Returns false
+/// when `i` is left for the next round.
 template <class Arrays>
-__device__ inline bool accept_one(int i, const Arrays& a) {
-  const model::Event e = a.best[i];
+__device__ inline bool accept_choice(int i, const model::Event& e, const Arrays& a) {
   const int o = (e.lo == i) ? e.hi : e.lo;
   if (!model::in_step(e.t)) {
     a.resolved[i] = 1;
@@ -105,6 +122,12 @@ __device__ inline bool accept_one(int i, const Arrays& a) {
     return false;
   }
   return true;
+}
+
+/// accept_choice() with the choice read from `a.best[i]`.
+template <class Arrays>
+__device__ inline bool accept_one(int i, const Arrays& a) {
+  return accept_choice(i, a.best[i], a);
 }
 
 /// Every round of a step in the calling block over the `m` particles listed in `a.contested`
