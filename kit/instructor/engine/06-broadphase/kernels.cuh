@@ -36,6 +36,8 @@ struct Flags {
   int fast;              //!< fast entries the pass's search listed for a team search (the solution's
                          //!< find_fast_pairs)
   int rows;              //!< finish_small: events given a row so far this step
+  int spilled;           //!< a particle had more pair events than its slots this step
+                         //!< (CompactView::slot): finish_small lays the rows
   int crowded;           //!< kCrowdedBands: find_pairs_banded's entries did not fit a block's
                          //!< shared memory (the host goes back to the counting sort);
                          //!< kCrowdedFinish: finish_block's pairs did not fit (the host goes
@@ -121,6 +123,7 @@ __global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d,
     a.flags->contested = 0;
     a.flags->open[0] = a.flags->open[1] = a.flags->open[2] = 0;
     a.flags->rows = 0;
+    a.flags->spilled = 0;
   }
 }
 
@@ -189,8 +192,9 @@ __device__ inline void file_pair_of(const ParticlesView& p, const Box& box, cons
   const int lo = i < j ? i : j, hi = i < j ? j : i;
   const double t = model::pair_time(p.x[lo], p.y[lo], p.vx[lo], p.vy[lo], p.x[hi], p.y[hi],
                                     p.vx[hi], p.vy[hi], box.r);
-  if (model::in_step(t) && model::before_walls(t, a.wall[lo], a.wall[hi]))
-    a.slots.file(lo, hi, t, &a.flags->pairs);
+  if (model::in_step(t) && model::before_walls(t, a.wall[lo], a.wall[hi]) &&
+      !a.slots.file(lo, hi, t, &a.flags->pairs))
+    a.flags->spilled = 1;
 }
 
 /// file_pair_of() for the particle of entry `f` of the pass.
@@ -751,25 +755,29 @@ __global__ void __launch_bounds__(kResolveThreads) resolve(int n, StepArrays a) 
 }
 
 constexpr int kFinishThreads = 256;  //!< threads per block of finish_small()
-constexpr int kHeld = 4;             //!< pair events a thread of finish_small() keeps in registers
+
+/// Pair events a thread of finish_small() keeps in registers: as many as the search files in
+/// each particle's slots (CompactView::slot).
+constexpr int kHeld = Slots::kSlotted;
 
 /// A particle's pair events held by its thread of finish_small() (in registers) from one round
 /// to the next, so that a round reads only its partners' flags and choices, not its row and the
-/// list again: the rounds wait on the loads of each round, one after the other (about 0.5 us
-/// each), not on their arithmetic. A particle with more than kHeld events goes through
-/// cuda::choose_one() instead.
+/// list again: the rounds wait on the loads of each round, one after the other, not on their
+/// arithmetic. A particle with more than kHeld events goes through cuda::choose_one() instead.
 struct HeldEvents {
   int count = 0;         //!< its pair events (held when at most kHeld)
   double wall = 0;       //!< its wall time
   int other[kHeld]{};    //!< each event's other particle
   double time[kHeld]{};  //!< each event's pair time
-  /// Reads particle `i`'s events from its row (after place_pairs()), when there are at most kHeld.
-  __device__ void read(int i, const StepArrays& a) {
+  /// Reads particle `i`'s events, when there are at most kHeld: from its slots when `slotted`
+  /// (the search filed them there), else from its row (after place_pairs()).
+  __device__ void read(int i, const StepArrays& a, bool slotted) {
     if (count > kHeld) return;
-    const int first = a.slots.end[i] - count;
+    const int* at = slotted ? a.slots.slot + static_cast<long long>(i) * kHeld
+                            : a.slots.row + (a.slots.end[i] - count);
     int q[kHeld];
 #pragma unroll
-    for (int u = 0; u < kHeld; ++u) q[u] = u < count ? a.slots.row[first + u] : 0;
+    for (int u = 0; u < kHeld; ++u) q[u] = u < count ? at[u] : 0;
 #pragma unroll
     for (int u = 0; u < kHeld; ++u) {
       if (u >= count) continue;
@@ -779,13 +787,14 @@ struct HeldEvents {
     }
   }
   /// cuda::choose_one() over the held events: the same choice, written to `a.best[i]` and
-  /// returned (the events compared in another order: key_less() orders them completely).
-  __device__ Event choose(int i, const StepArrays& a, const Event& none) const {
+  /// returned (the events compared in another order: key_less() orders them completely). In
+  /// the first round every partner is undecided (it has a pair event), so no flag is read.
+  __device__ Event choose(int i, const StepArrays& a, const Event& none, bool first) const {
     if (count > kHeld) return choose_one(i, a, none);
     Event b = cuda::wall_or_none(i, wall, none);
     bool open[kHeld];
 #pragma unroll
-    for (int u = 0; u < kHeld; ++u) open[u] = u < count && !a.resolved[other[u]];
+    for (int u = 0; u < kHeld; ++u) open[u] = u < count && (first || !a.resolved[other[u]]);
 #pragma unroll
     for (int u = 0; u < kHeld; ++u)
       if (open[u]) cuda::fold_pair(b, i, other[u], time[u]);
@@ -796,16 +805,18 @@ struct HeldEvents {
 
 /// Everything of a small scene's step after the pair search, in one cooperative kernel of
 /// ceil(n / kFinishThreads) blocks (all resident; one thread a particle), with grid-wide
-/// barriers where the multi-kernel path has kernel boundaries: each particle's row of events
-/// (a block's rows side by side, at a place one atomic a block takes: rows need not be in the
-/// particles' order, only apart, so no scan over the grid) and start_rounds() together, then
-/// place_pairs(), the rounds of resolve_grid(), and apply(). Each thread keeps its particle's
-/// count, wall time, events (HeldEvents) and choice in registers over the rounds, so a round's
-/// choose reads only the partners' `resolved` flags and its accept only the chosen partner's
-/// `best`. The rounds take a particle's events in any order (the event key orders them
-/// completely) and every particle's arithmetic is that of those kernels, so the same bits; 8
-/// kernels a step instead of 12, and 2 + 2 x rounds grid barriers. Nothing when the step was
-/// stopped; stops it (as place_pairs()) when the list had no room.
+/// barriers where the multi-kernel path has kernel boundaries: start_rounds(), the rounds of
+/// resolve_grid(), and apply(). Each thread keeps its particle's count, wall time, events
+/// (HeldEvents) and choice in registers over the rounds, so a round's choose reads only the
+/// partners' `resolved` flags and its accept only the chosen partner's `best`. The events come
+/// from the slots the search filed them in (CompactView::slot); when a particle had more than
+/// kHeld (`spilled`), from rows laid as the multi-kernel path lays them (each particle's row: a
+/// block's rows side by side, at a place one atomic a block takes: rows need not be in the
+/// particles' order, only apart, so no scan over the grid; then place_pairs()). The rounds take
+/// a particle's events in any order (the event key orders them completely) and every
+/// particle's arithmetic is that of those kernels, so the same bits; one kernel where the
+/// multi-kernel path has five, and 2 x rounds grid barriers (2 more to lay rows). Nothing when
+/// the step was stopped; stops it (as place_pairs()) when the list had no room.
 __global__ void __launch_bounds__(kFinishThreads)
     finish_small(ParticlesView p, Box box, StepArrays a) {
   namespace cg = cooperative_groups;
@@ -821,33 +832,31 @@ __global__ void __launch_bounds__(kFinishThreads)
     if (i == 0 && filed > a.slots.capacity) atomicMax(&f->overflow, filed);
     return;
   }
-  // Each particle's row: the block's rows side by side (a scan in the block), the block's at
-  // the place one atomic takes; and start_rounds(), which reads only the counts.
   HeldEvents held;
   if (i < n) {
     held.count = a.slots.count[i];
     held.wall = a.wall[i];
-  }
-  int mine = 0, total = 0;
-  Scan(temp).ExclusiveSum(held.count, mine, total);
-  __shared__ int base;
-  if (threadIdx.x == 0) base = atomicAdd(&f->rows, total);
-  __syncthreads();
-  if (i < n) {
-    a.slots.end[i] = base + mine;
     cuda::start_from(i, held.count, held.wall, a);  // start_rounds()
   }
-  grid.sync();
-  const int stride = gridDim.x * blockDim.x;
-  for (int q = i; q < filed; q += stride) a.slots.place(q);  // place_pairs()
-  grid.sync();
+  const bool slotted = a.slots.slot != nullptr && !f->spilled;  // (final: the search is done)
+  if (!slotted) {  // each particle's row, then place_pairs()
+    int mine = 0, total = 0;
+    Scan(temp).ExclusiveSum(held.count, mine, total);
+    __shared__ int base;
+    if (threadIdx.x == 0) base = atomicAdd(&f->rows, total);
+    __syncthreads();
+    if (i < n) a.slots.end[i] = base + mine;
+    grid.sync();
+    for (int q = i; q < filed; q += gridDim.x * blockDim.x) a.slots.place(q);
+    grid.sync();
+  }
   bool open = i < n && held.count > 0;  // undecided
-  if (open) held.read(i, a);
+  if (open) held.read(i, a, slotted);
   const Event none = model::pair_event_key(model::never(), n, n);
   for (int round = 0;; ++round) {  // resolve_grid()'s rounds
     if (i == 0) f->open[(round + 1) % 3] = 0;
     Event b = none;
-    if (open) b = held.choose(i, a, none);
+    if (open) b = held.choose(i, a, none, round == 0);
     grid.sync();
     if (open) {
       open = !cuda::accept_choice(i, b, a);

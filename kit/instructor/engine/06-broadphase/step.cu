@@ -125,6 +125,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
       grid_blocks_ = launch::resolve_grid_blocks();
     } else {
       finish_small_ = n_ >= kFinishSmallFrom && !separate_asked() && launch::finish_small_fits(n_);
+      if (finish_small_) slot_.resize(static_cast<std::size_t>(n_) * cuda::CompactView::kSlotted);
       choose_finish_block();
     }
     sync();
@@ -340,7 +341,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   }
 
   [[nodiscard]] std::size_t arrays_bytes() const override {
-    return cuda::bytes_of(wall_, last_, slots_, phases_, temp_);
+    return cuda::bytes_of(wall_, last_, slots_, slot_, phases_, temp_);
   }
 
   /// The step's arrays: those of the two phases (lay_out()) with the ones kept for the run.
@@ -349,6 +350,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     a.wall = wall_.get();
     a.last = last_.get();
     a.slots = slots_.view(rows_, rows_length_);
+    a.slots.slot = finish_small_ ? slot_.get() : nullptr;
     a.flags = flags_.get();
     return a;
   }
@@ -395,6 +397,9 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   cuda::DeviceArray<double> wall_;
   cuda::DeviceArray<int> last_;
   cuda::DeviceCandidates slots_;
+  /// finish_small()'s scenes: each particle's first events as the search files them
+  /// (cuda::CompactView::slot), so that a step lays no rows when none has more.
+  cuda::DeviceArray<int> slot_;
   /// The arrays of the slab passes (read by the search, dead once it ends) and those of the
   /// rounds and apply (written only after the search) in one allocation, as large as the larger
   /// phase: a step never needs both at once (handouts/engine-gpu.md measures what this saves).

@@ -50,6 +50,11 @@ struct CompactView {
   Pair* list;      //!< the pairs filed this step, in any order
   int capacity;    //!< room in `list` (and for twice as many events in `row`)
   int* row;        //!< the list's index of each event, particle by particle
+  /// When not null: each particle's first kSlotted events as file() files them (the list's
+  /// index of each, at `slot[i * kSlotted + s]`), so that a stage may read a particle's events
+  /// without the scan and place() when none has more than kSlotted.
+  int* slot = nullptr;
+  static constexpr int kSlotted = 8;   //!< events a particle has room for in `slot`
   static constexpr int cap = INT_MAX;  //!< no per-particle limit (rounds.cuh reads it)
 
   /// The other particle of particle `i`'s event `s` (after place()): of the pair (lo, hi) that
@@ -62,12 +67,17 @@ struct CompactView {
   __device__ double time_at(int i, int s) const { return list[row[end[i] - count[i] + s]].t; }
 
   /// Files the pair event (lo, hi, t): counts it under both particles and puts it in the list
-  /// at the place `*length` gives (atomically: any thread may file), when there is room.
-  __device__ void file(int lo, int hi, double t, int* length) const {
+  /// at the place `*length` gives (atomically: any thread may file), when there is room; and,
+  /// with `slot`, its index in both particles' slots. Returns false when a particle had no slot
+  /// left (more than kSlotted events).
+  __device__ bool file(int lo, int hi, double t, int* length) const {
     const int q = atomicAdd(length, 1);
     if (q < capacity) list[q] = Pair{lo, hi, t};
-    atomicAdd(&count[lo], 1);
-    atomicAdd(&count[hi], 1);
+    const int s_lo = atomicAdd(&count[lo], 1), s_hi = atomicAdd(&count[hi], 1);
+    if (!slot) return true;
+    if (s_lo < kSlotted) slot[lo * kSlotted + s_lo] = q;
+    if (s_hi < kSlotted) slot[hi * kSlotted + s_hi] = q;
+    return s_lo < kSlotted && s_hi < kSlotted;
   }
   /// Lays pair `q` of the list into both particles' rows (after `end` became the exclusive scan
   /// of `count`).
