@@ -94,29 +94,57 @@ struct StepArrays {
   int* entry_at;     //!< per entry (at most slabs of a pass * N): (k - first) * n + i, its slab k
                      //!< and particle i in one int (particle_of(), slab_of())
   Entry* entry;      //!< ... its midpoint position and velocity
+  int* band_cell;    //!< find_pairs_banded()'s steps only (else null): per (slab k, particle i),
+                     //!< at [k * n + i], band_cell_of() (start_step() writes it)
   Flags* flags;      //!< see Flags
 };
+
+/// Particle `i`'s cell in slab k, for find_pairs_banded(): its midpoint's row and column
+/// (bucket_of()'s arithmetic) as row << 16 | column (the bands take N < 2^15: at most 181 rows
+/// and 724 columns), or -1 when it takes no part in slab k (its last slab is before k).
+__device__ inline int band_cell_of(double x, double y, double vx, double vy, int last, int k,
+                                   const sweep::Grid& g) {
+  if (last < k) return -1;
+  const double tm = sweep::slab_mid(k, g);
+  return sweep::row_of(y + tm * vy, g) << 16 | sweep::column_of(x + tm * vx, g);
+}
+
+/// Threads a particle of start_step(): with the bands' cells to write (every slab's), several.
+__host__ __device__ inline int start_step_groups(const StepArrays& a) {
+  return a.band_cell ? 4 : 1;
+}
 
 /// Wall times, the last slab of each particle, counters cleared; with `buckets` > 0 (a step of
 /// one pass) also the pass's first `buckets` bucket counts and the fast entries' counter, which
 /// the pass would otherwise clear with two memsets of its own.
 __global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d, int buckets) {
-  const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  for (int b = i; b < buckets; b += gridDim.x * blockDim.x) a.start[b] = 0;
-  if (i == 0 && buckets > 0) a.flags->fast = 0;
+  const int t = blockIdx.x * blockDim.x + threadIdx.x;
+  for (int b = t; b < buckets; b += gridDim.x * blockDim.x) a.start[b] = 0;
+  if (t == 0 && buckets > 0) a.flags->fast = 0;
+  // Thread t: particle i of group `group` (start_step_groups() groups; group 0 does all but
+  // the band cells, which the groups share: slab k to group k % groups).
+  const int group = p.n > 0 ? t / p.n : 0, i = t - group * p.n;
   // The largest squared speed, a warp's at a time (find_pairs_banded()'s reach).
   const long long s = a.flags->steps_done;
-  if (i == 0) a.flags->vmax2[(s + 1) % 2] = 0;
+  if (t == 0) a.flags->vmax2[(s + 1) % 2] = 0;
   unsigned long long v2 = 0;
-  if (i < p.n) v2 = __double_as_longlong(p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i]);
+  if (group == 0 && i < p.n) v2 = __double_as_longlong(p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i]);
   for (int step = 16; step > 0; step >>= 1) {
     const unsigned long long o = __shfl_down_sync(0xffffffffu, v2, step);
     v2 = o > v2 ? o : v2;
   }
   if (threadIdx.x % 32 == 0 && v2 != 0) atomicMax(&a.flags->vmax2[s % 2], v2);
-  if (i >= p.n) return;
-  a.wall[i] = model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
-  a.last[i] = sweep::last_slab(sweep::path_end(a.wall[i]), d.g);
+  const int groups = start_step_groups(a);
+  if (group >= groups) return;
+  const double x = p.x[i], y = p.y[i], vx = p.vx[i], vy = p.vy[i];
+  const double wall = model::wall_time(x, y, vx, vy, box.L, box.r);
+  const int last = sweep::last_slab(sweep::path_end(wall), d.g);
+  if (a.band_cell)  // the cells of slabs group, group + groups, ...: 4 bytes a band reads, not 40
+    for (int k = group; k < d.g.slabs; k += groups)
+      a.band_cell[static_cast<long long>(k) * p.n + i] = band_cell_of(x, y, vx, vy, last, k, d.g);
+  if (group > 0) return;
+  a.wall[i] = wall;
+  a.last[i] = last;
   a.slots.count[i] = 0;
   if (i == 0) {
     a.flags->pairs = 0;
@@ -395,7 +423,7 @@ __global__ void __launch_bounds__(kSearchThreads, kBlocksOf<S>)
 
 constexpr int kBandThreads = 1024;  //!< threads per block of find_pairs_banded()
 constexpr int kWideMost = 128;      //!< entries a band may search over the whole slab
-constexpr int kBandLoads = 4;       //!< particles a thread of find_pairs_banded() reads at a time
+constexpr int kBandLoads = 8;       //!< particles a thread of find_pairs_banded() reads at a time
 constexpr int kHitMost = 2048;      //!< pairs a block of find_pairs_banded() lists to file at once
 /// Shared memory find_pairs_banded() takes a kept entry: its midpoint position and velocity
 /// (32), its particle (4), while it is sorted its particle and cell again (8), and its first
@@ -417,26 +445,27 @@ struct BandRuns {
 /// What find_pairs_banded() keeps in shared memory: its entries in cell order, one array per
 /// field, and where each kept cell starts.
 struct BandEntries {
-  const double *x, *y, *vx, *vy;  //!< midpoint position and velocity
-  const int* start;               //!< kept cell c holds entries [start[c], start[c + 1])
-  int columns;                    //!< the grid's columns
-  int lo, hi;                     //!< the rows kept, [lo, hi)
+  const double2* pos;  //!< midpoint position
+  const double2* vel;  //!< velocity
+  const int* start;    //!< kept cell c holds entries [start[c], start[c + 1])
+  int columns;         //!< the grid's columns
+  int lo, hi;          //!< the rows kept, [lo, hi)
 };
 
 /// The runs entry `e` searches.
 __device__ inline BandRuns band_runs(const BandEntries& s, const sweep::Grid& g, int e) {
   BandRuns b{};
   b.e = e;
-  const sweep::Search q = sweep::search_of(s.vx[e], s.vy[e], g);
-  sweep::columns_within(s.x[e], q.d, g, b.x0, b.x1);
+  const sweep::Search q = sweep::search_of(s.vel[e].x, s.vel[e].y, g);
+  sweep::columns_within(s.pos[e].x, q.d, g, b.x0, b.x1);
   b.fast = q.fast;
   if (!q.fast) {  // its row after it, then the next row
-    b.y = sweep::row_of(s.y[e], g) - s.lo;
+    b.y = sweep::row_of(s.pos[e].y, g) - s.lo;
     b.count = b.y + s.lo + 1 < g.rows ? 2 : 1;
     return b;
   }
   int y0, y1;
-  sweep::rows_within(s.y[e], q.d, g, y0, y1);
+  sweep::rows_within(s.pos[e].y, q.d, g, y0, y1);
   b.wide = y0 < s.lo || y1 >= s.hi;
   b.y = y0 - s.lo;
   b.count = b.wide ? 0 : y1 - y0 + 1;
@@ -509,9 +538,10 @@ __device__ inline void band_rows_kept(int r0, int r1, int halo, int rows, int& l
 }
 
 /// The pair search of a small scene without the counting sort over the grid: a block for each
-/// (band of `band` rows, slab k) (grid: bands x slabs) reads every particle, keeps those whose
-/// midpoint in slab k lies in its rows or within the fastest particle's reach of them (the
-/// halo: start_step()'s `vmax2`), sorts them by cell in shared memory (a counting sort: shared
+/// (band of `band` rows, slab k) (grid: bands x slabs) reads every particle's cell in slab k
+/// (start_step()'s `band_cell`, 4 bytes a particle), keeps those whose midpoint in slab k lies
+/// in its rows or within the fastest particle's reach of them (the halo: start_step()'s
+/// `vmax2`), sorts them by cell in shared memory (a counting sort: shared
 /// atomics, a block scan), and searches its own rows' entries exactly as find_pairs() and
 /// find_fast_pairs() search the same entries of the pass's sort (the same runs: the cells are
 /// the grid's, restricted to the rows kept), so the same pairs are filed. A fast entry whose
@@ -559,11 +589,11 @@ __global__ void __launch_bounds__(kBandThreads, 1)
     return;
   }
   const int cap = static_cast<int>(room);
-  double* ex = reinterpret_cast<double*>(pool + used);
-  double* ey = ex + cap;
-  double* evx = ey + cap;
-  double* evy = evx + cap;
-  int2* packed = reinterpret_cast<int2*>(evy + cap);  // each own entry's runs (pack_runs())
+  // Midpoint positions and velocities as pairs: a test reads two 16-byte words, not four of 8
+  // (fewer bank conflicts: a warp's tests read entries at scattered places).
+  double2* pos = reinterpret_cast<double2*>(pool + used);
+  double2* vel = pos + cap;
+  int2* packed = reinterpret_cast<int2*>(vel + cap);  // each own entry's runs (pack_runs())
   int* id = reinterpret_cast<int*>(packed + cap);
   int* kept_id = id + cap;
   int* kept_cell = kept_id + cap;
@@ -572,39 +602,23 @@ __global__ void __launch_bounds__(kBandThreads, 1)
   for (int c = threadIdx.x; c < cells; c += blockDim.x) start[c] = 0;
   if (threadIdx.x == 0) kept = wides = hits = 0;
   __syncthreads();
-  // Count: the particles of slab k whose midpoint row is kept (bucket_of()'s arithmetic),
+  // Count: the particles of slab k whose midpoint row is kept (start_step()'s band_cell_of()),
   // kBandLoads particles a thread at a time (their loads in flight together: the block reads
   // every particle, and one at a time would wait for each).
   const double tm = sweep::slab_mid(k, g);
+  const int* cell_of = a.band_cell + static_cast<long long>(k) * p.n;
   for (int i0 = threadIdx.x; i0 < p.n; i0 += kBandLoads * kBandThreads) {
-    int last[kBandLoads], row[kBandLoads];
-    double x[kBandLoads], y[kBandLoads], vx[kBandLoads], vy[kBandLoads];
+    int cell[kBandLoads];
 #pragma unroll
-    for (int u = 0; u < kBandLoads; ++u) {  // what says whether it is kept: y, vy, its last slab
+    for (int u = 0; u < kBandLoads; ++u) {
       const int i = i0 + u * kBandThreads;
-      last[u] = i < p.n ? a.last[i] : -1;
-      if (i < p.n) {
-        y[u] = p.y[i];
-        vy[u] = p.vy[i];
-      }
+      cell[u] = i < p.n ? cell_of[i] : -1;
     }
 #pragma unroll
     for (int u = 0; u < kBandLoads; ++u) {
-      row[u] = last[u] < k ? -1 : sweep::row_of(y[u] + tm * vy[u], g);
-      if (row[u] < lo || row[u] >= hi) row[u] = -1;
-    }
-#pragma unroll
-    for (int u = 0; u < kBandLoads; ++u) {  // x and vx of those kept only
-      const int i = i0 + u * kBandThreads;
-      if (row[u] >= 0) {
-        x[u] = p.x[i];
-        vx[u] = p.vx[i];
-      }
-    }
-#pragma unroll
-    for (int u = 0; u < kBandLoads; ++u) {
-      if (row[u] < 0) continue;
-      const int c = (row[u] - lo) * columns + sweep::column_of(x[u] + tm * vx[u], g);
+      const int row = cell[u] >> 16;  // (-1 for -1: no part)
+      if (row < lo || row >= hi) continue;
+      const int c = (row - lo) * columns + (cell[u] & 0xffff);
       atomicAdd(&start[c], 1);
       const int q = atomicAdd(&kept, 1);
       if (q < cap) {
@@ -627,10 +641,8 @@ __global__ void __launch_bounds__(kBandThreads, 1)
   // Scatter: each kept particle to its cell, with what the search reads.
   for (int q = threadIdx.x; q < m; q += blockDim.x) {
     const int i = kept_id[q], e = atomicAdd(&cursor[kept_cell[q]], 1);
-    ex[e] = p.x[i] + tm * p.vx[i];
-    ey[e] = p.y[i] + tm * p.vy[i];
-    evx[e] = p.vx[i];
-    evy[e] = p.vy[i];
+    pos[e] = make_double2(p.x[i] + tm * p.vx[i], p.y[i] + tm * p.vy[i]);
+    vel[e] = make_double2(p.vx[i], p.vy[i]);
     id[e] = i;
   }
   __syncthreads();
@@ -640,7 +652,7 @@ __global__ void __launch_bounds__(kBandThreads, 1)
   // find_pairs_balanced() shares a warp's). A pair that passes is listed, and the block files
   // the list together afterwards (filing waits on device memory: one wait for all, not one each).
   const int own0 = start[(r0 - lo) * columns], owned = start[(r1 - lo) * columns] - own0;
-  const BandEntries kept_entries{ex, ey, evx, evy, start, columns, lo, hi};
+  const BandEntries kept_entries{pos, vel, start, columns, lo, hi};
   const int per_thread = (owned + kBandThreads - 1) / kBandThreads;
   const int j0 = min(owned, static_cast<int>(threadIdx.x) * per_thread);
   const int j1 = min(owned, j0 + per_thread);
@@ -680,7 +692,7 @@ __global__ void __launch_bounds__(kBandThreads, 1)
       band_run(kept_entries, b, ++r, from, to);
     }
     int o = from + skip;
-    double x = ex[b.e], y = ey[b.e], vx = evx[b.e], vy = evy[b.e];
+    double2 me = pos[b.e], mv = vel[b.e];
     for (int t = t0; t < t1; ++t) {
       while (o >= to) {  // the next run, or the next entry's first
         if (++r < b.count) {
@@ -690,11 +702,12 @@ __global__ void __launch_bounds__(kBandThreads, 1)
           b = unpack_runs(packed[j], own0 + j);
           r = 0;
           band_run(kept_entries, b, r, from, to);
-          x = ex[b.e], y = ey[b.e], vx = evx[b.e], vy = evy[b.e];
+          me = pos[b.e], mv = vel[b.e];
         }
         o = from;
       }
-      if (o != b.e && sweep::close_in_slab(x - ex[o], y - ey[o], vx - evx[o], vy - evy[o], g)) {
+      const double2 op = pos[o], ov = vel[o];
+      if (o != b.e && sweep::close_in_slab(me.x - op.x, me.y - op.y, mv.x - ov.x, mv.y - ov.y, g)) {
         const int h = atomicAdd(&hits, 1);
         if (h < kHitMost) hit[h] = make_int2(b.e, o);
       }
@@ -716,10 +729,11 @@ __global__ void __launch_bounds__(kBandThreads, 1)
   }
   for (int u = 0; u < w; ++u) {  // every particle of slab k, the block's threads together
     const int e = wide[u], i = id[e];
+    const double2 me = pos[e], mv = vel[e];
     for (int j = threadIdx.x; j < p.n; j += blockDim.x) {
       if (j == i || a.last[j] < k) continue;
-      if (sweep::close_in_slab(ex[e] - (p.x[j] + tm * p.vx[j]), ey[e] - (p.y[j] + tm * p.vy[j]),
-                               evx[e] - p.vx[j], evy[e] - p.vy[j], g))
+      if (sweep::close_in_slab(me.x - (p.x[j] + tm * p.vx[j]), me.y - (p.y[j] + tm * p.vy[j]),
+                               mv.x - p.vx[j], mv.y - p.vy[j], g))
         file_pair_of(p, box, a, d, i, k, j);
     }
   }

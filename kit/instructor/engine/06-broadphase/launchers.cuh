@@ -36,7 +36,8 @@ inline unsigned fast_blocks(long long most) {
 /// `buckets` > 0: also clears the one pass's bucket counts and fast counter (see the kernel).
 inline void start_step(const cuda::ParticlesView& p, const Box& box, const kernels::StepArrays& a,
                        const kernels::DeviceGrid& d, int buckets, cudaStream_t s) {
-  kernels::start_step<<<blocks(p.n), kThreads, 0, s>>>(p, box, a, d, buckets);
+  const int threads = p.n * kernels::start_step_groups(a);
+  kernels::start_step<<<blocks(threads), kThreads, 0, s>>>(p, box, a, d, buckets);
   PLAB_CUDA_CHECK_LAUNCH("start_step");
 }
 

@@ -254,6 +254,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     beside_ = passes == 1 && static_cast<long long>(n_) * per_pass_ < launch::kSmallPass &&
               n_ < kBesideBelow && !beside_off();
     choose_bands(p);
+    band_cell_.resize(banded_ ? static_cast<std::size_t>(n_) * grid_.g.slabs : 0);
     const int size = per_pass_ * grid_.cells + 1;
     temp_.resize(std::max(cuda::exclusive_scan_bytes(size), cuda::exclusive_scan_bytes(n_)));
     lay_out();
@@ -341,7 +342,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   }
 
   [[nodiscard]] std::size_t arrays_bytes() const override {
-    return cuda::bytes_of(wall_, last_, slots_, slot_, phases_, temp_);
+    return cuda::bytes_of(wall_, last_, slots_, slot_, band_cell_, phases_, temp_);
   }
 
   /// The step's arrays: those of the two phases (lay_out()) with the ones kept for the run.
@@ -351,6 +352,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     a.last = last_.get();
     a.slots = slots_.view(rows_, rows_length_);
     a.slots.slot = finish_small_ ? slot_.get() : nullptr;
+    a.band_cell = banded_ ? band_cell_.get() : nullptr;
     a.flags = flags_.get();
     return a;
   }
@@ -429,6 +431,8 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   /// memory a block (choose_bands()), unless PLAB_ENGINE_BANDED=off asks otherwise (to compare).
   bool banded_ = false;
   int band_ = 1, bands_ = 1, shared_bytes_ = 0;
+  /// The bands' steps: each particle's cell in every slab (kernels::StepArrays::band_cell).
+  cuda::DeviceArray<int> band_cell_;
   cuda::Stream side_;
   /// An event without timing: where side_ starts (the pass sorted) and where main_ waits for it.
   struct Mark {
