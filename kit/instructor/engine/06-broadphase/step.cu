@@ -275,9 +275,14 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     PLAB_CUDA_CHECK(cudaGetDevice(&device));
     PLAB_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
     shared_bytes_ = launch::all_shared_bytes(kernels::find_pairs_banded);
-    const int per_slab = std::max(1, sms / g.slabs);  // blocks a slab
-    band_ = (g.rows + per_slab - 1) / per_slab;
-    bands_ = (g.rows + band_ - 1) / band_;
+    // A block a multiprocessor (one wave of blocks); when a band and its halo do not fit, bands
+    // of fewer rows, in up to kBandWavesMost waves.
+    const auto split = [&](int waves) {
+      const int per_slab = std::max(1, sms / g.slabs) * waves;  // blocks a slab
+      band_ = (g.rows + per_slab - 1) / per_slab;
+      bands_ = (g.rows + band_ - 1) / band_;
+    };
+    split(1);
     if (asked == "cramped") {
       shared_bytes_ = 1024;
       banded_ = true;
@@ -289,10 +294,13 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     const double out = kernels::halo_rows(g, std::sqrt(vmax2));
     if (!(out < HUGE_VAL)) return;
     const int halo = static_cast<int>(std::min<double>(out, g.rows));
-    const int rows_kept = std::min(g.rows, band_ + halo + std::max(halo, 1));
-    const double cells_bytes = 8.0 * rows_kept * g.columns + 32;
-    const double entries = static_cast<double>(n_) * rows_kept / g.rows;
-    banded_ = cells_bytes + entries * kernels::kBandEntryBytes < shared_bytes_ * 2.0 / 3.0;
+    for (int waves = 1; waves <= kBandWavesMost && !banded_; ++waves) {
+      split(waves);
+      const int rows_kept = std::min(g.rows, band_ + halo + std::max(halo, 1));
+      const double cells_bytes = 8.0 * rows_kept * g.columns + 32;
+      const double entries = static_cast<double>(n_) * rows_kept / g.rows;
+      banded_ = cells_bytes + entries * kernels::kBandEntryBytes < shared_bytes_ * 2.0 / 3.0;
+    }
   }
 
   /// Whether the rows and rounds of a scene below kFinishSmallFrom run in one block
@@ -372,6 +380,8 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   static constexpr long long kCheckEvery = 32;  //!< steps between two looks at the flags
   /// Below this N a step may search in bands (choose_bands()).
   static constexpr int kBandedBelow = 1 << 15;
+  /// Waves of blocks the bands' search may take (choose_bands()).
+  static constexpr int kBandWavesMost = 4;
   static constexpr int kGridResolveFrom = 50000;  //!< from this N the rounds use the whole GPU
   /// From this N to kGridResolveFrom, finish_small() after the passes. Measured on an H100
   /// (2026-11-25, S = 500, the report's box): 3-4% slower than the separate kernels at
