@@ -11,14 +11,16 @@
 //         CUB scan -> bin_scatter -> find_pairs; then CUB scan of the counts -> place_pairs ->
 //         start_rounds -> resolve -> apply, recorded once as a graph (from kFinishSmallFrom to
 //         kGridResolveFrom particles, everything after the passes is one cooperative kernel,
-//         finish_small, with grid barriers between its phases). The grid is chosen on the
-//         host from the first state; particles that get faster than v_cut search wider, so it
-//         stays exact for any speed. Small scenes (below kBandedBelow, where a band's entries
-//         fit a block's shared memory) skip the passes: one kernel, find_pairs_banded, sorts
-//         and searches every slab's bands of rows in shared memory. A step with more pairs than
-//         the list holds (or a band that outgrew its block) stops the batch on the device, and
-//         the host redoes it with a longer list (or with the passes). Below kFinishSmallFrom,
-//         one block (finish_block) does the rows and the rounds in shared memory, then apply.
+//         finish_small, with grid barriers between its phases, each thread's particle's events in
+//         its registers, read from the slots the search filed them in). The grid is chosen on the
+//         host from the first state; particles that get faster than v_cut search wider, so it stays
+//         exact for any speed. Small scenes (below kBandedBelow, where a band's entries fit a
+//         block's shared memory) skip the passes: one kernel, find_pairs_banded, sorts and searches
+//         every slab's bands of rows in shared memory, from each particle's cell in every slab
+//         (start_step writes them). A step with more pairs than the list holds (or a band that
+//         outgrew its block) stops the batch on the device, and the host redoes it with a longer
+//         list (or with the passes). Below kFinishSmallFrom, one block (finish_block) does the rows
+//         and the rounds in shared memory, then apply.
 //  READ   handouts/engine.md    TEST   ./plab test --impl engine --stage 06 (on a GPU machine)
 // =================================================================================================
 #include <algorithm>
