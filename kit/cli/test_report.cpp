@@ -2,6 +2,8 @@
 /// \brief run_tests_reported(): CTest under `plab test`, its log in a file, a short report.
 #include "test_report.hpp"
 
+#include "test_log.hpp"
+
 #include <fcntl.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -23,14 +25,6 @@ namespace plab::cli {
 namespace fs = std::filesystem;
 namespace {
 
-/// One CTest test as its result line and log give it.
-struct TestResult {
-  std::string name;    //!< e.g. stage01.student.Golden
-  std::string status;  //!< Passed, Failed, Skipped, Not Run, Timeout, Exception: ...
-  double seconds = 0;
-  std::string output;  //!< what it printed (failed tests: from --output-on-failure)
-};
-
 /// One GoogleTest case inside a test's output.
 struct Case {
   std::string name;     //!< the part after the last '/', e.g. course_2
@@ -42,36 +36,6 @@ struct Case {
 struct Found {
   std::string step, particle, field, expected, actual, lines;
 };
-
-std::optional<TestResult> parse_result_line(const std::string& line) {
-  static const std::regex re(R"(^\s*\d+/\d+ Test\s+#\d+: (\S+) \.*\s*(?:\*\*\*)?(.*?)\s+([0-9.]+) sec\s*$)");
-  std::smatch m;
-  if (!std::regex_match(line, m, re)) return std::nullopt;
-  return TestResult{m[1], m[2], std::stod(m[3]), ""};
-}
-
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> lines;
-  std::istringstream in(text);
-  for (std::string l; std::getline(in, l);) lines.push_back(l);
-  return lines;
-}
-
-/// The tests of CTest's log, each with the output printed after its result line.
-std::vector<TestResult> parse_log(const std::string& text) {
-  std::vector<TestResult> tests;
-  bool in_output = false;
-  for (const std::string& line : lines_of(text)) {
-    if (auto r = parse_result_line(line)) {
-      tests.push_back(*r);
-      in_output = r->status != "Passed" && r->status != "Skipped";
-      continue;
-    }
-    if (line.find("% tests passed") != std::string::npos) in_output = false;
-    if (in_output) tests.back().output += line + "\n";
-  }
-  return tests;
-}
 
 /// Each skipped test's reason ("plab: no case was checked ...") from CTest's LastTest.log.
 std::map<std::string, std::string> skip_reasons(const std::vector<TestResult>& tests) {
@@ -395,7 +359,8 @@ int follow(pid_t pid, const std::string& log) {
   };
   std::map<std::string, Running> running;
   std::ifstream in;
-  std::string pending;
+  std::string pending, partial;  // (partial: a result line CTest broke, whole_line())
+  int pieces = 0;
   int status = 0;
   for (bool done = false; !done;) {
     done = waitpid(pid, &status, WNOHANG) == pid;
@@ -404,7 +369,9 @@ int follow(pid_t pid, const std::string& log) {
     while (in.is_open() && in.read(buf, sizeof buf).gcount() > 0) pending.append(buf, in.gcount());
     in.clear();
     for (std::size_t nl; (nl = pending.find('\n')) != std::string::npos; pending.erase(0, nl + 1)) {
-      const std::string line = pending.substr(0, nl);
+      const std::optional<std::string> whole = whole_line(partial, pieces, pending.substr(0, nl));
+      if (!whole) continue;
+      const std::string& line = *whole;
       if (const auto started = parse_start_line(line)) running[*started] = {Clock::now()};
       if (const auto r = parse_result_line(line)) {
         running.erase(r->name);
