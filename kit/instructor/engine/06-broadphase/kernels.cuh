@@ -31,7 +31,8 @@ struct Flags {
   int overflow;          //!< pairs a step needed, when they did not fit the list (else 0)
   long long steps_done;  //!< steps applied so far
   int pairs;             //!< pairs filed this step (CompactView::file())
-  int contested;         //!< particles with pair events this step (listed by start_rounds)
+  int contested;         //!< particles with pair events this step (listed by start_rounds; not
+                         //!< by finish_small, whose threads hold their own particles)
   int open[3];           //!< resolve_grid: someone left unresolved in round r (at r % 3)
   int fast;              //!< fast entries the pass's search listed for a team search (the solution's
                          //!< find_fast_pairs)
@@ -84,7 +85,9 @@ struct StepArrays {
   Slots slots;       //!< each particle's pair events of the step (count, list, rows)
   Event* best;       //!< each unresolved particle's earliest event in the current round
   char* resolved;    //!< 1 once a particle's event (or none) is decided
-  int* contested;    //!< the particles with at least one pair event
+  int* contested;    //!< the particles with at least one pair event (start_rounds(),
+                     //!< finish_block(); finish_small() leaves it, and with the slots also the
+                     //!< rows and their ends, unwritten)
   int* partner;      //!< the plan: Plan::kFree, Plan::kWall, or the other particle of its pair
   double* ptime;     //!< the plan's pair time
   int* start;        //!< a pass's slabs * cells + 1: entries counted into each bucket, then (an
@@ -101,7 +104,9 @@ struct StepArrays {
 
 /// Particle `i`'s cell in slab k, for find_pairs_banded(): its midpoint's row and column
 /// (bucket_of()'s arithmetic) as row << 16 | column (the bands take N < 2^15: at most 181 rows
-/// and 724 columns), or -1 when it takes no part in slab k (its last slab is before k).
+/// and 724 columns), or -1 when it takes no part in slab k (its last slab is before k). The
+/// midpoint is the scatter's expression in find_pairs_banded() (no contraction: --fmad=false),
+/// so an entry is sorted into the cell of the midpoint its search reads.
 __device__ inline int band_cell_of(double x, double y, double vx, double vy, int last, int k,
                                    const sweep::Grid& g) {
   if (last < k) return -1;

@@ -277,8 +277,10 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     PLAB_CUDA_CHECK(cudaGetDevice(&device));
     PLAB_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
     shared_bytes_ = launch::all_shared_bytes(kernels::find_pairs_banded);
-    // A block a multiprocessor (one wave of blocks); when a band and its halo do not fit, bands
-    // of fewer rows, in up to kBandWavesMost waves.
+    // A block a multiprocessor (one wave of blocks, when there are no more slabs than
+    // multiprocessors); when a band and its halo do not fit, bands of fewer rows: up to
+    // kBandWavesMost times as many blocks. (The fit is estimated from the average density: a
+    // band denser than that stops the first step, and the host goes back to the sort.)
     const auto split = [&](int waves) {
       const int per_slab = std::max(1, sms / g.slabs) * waves;  // blocks a slab
       band_ = (g.rows + per_slab - 1) / per_slab;
