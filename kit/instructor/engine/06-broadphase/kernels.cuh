@@ -127,7 +127,8 @@ __global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d,
   for (int b = t; b < buckets; b += gridDim.x * blockDim.x) a.start[b] = 0;
   if (t == 0 && buckets > 0) a.flags->fast = 0;
   // Thread t: particle i of group `group` (start_step_groups() groups; group 0 does all but
-  // the band cells, which the groups share: slab k to group k % groups).
+  // the band cells, which the groups share: slab k to group k % groups). Each group computes
+  // the particle's wall time and last slab again: no barrier between the groups.
   const int group = p.n > 0 ? t / p.n : 0, i = t - group * p.n;
   // The largest squared speed, a warp's at a time (find_pairs_banded()'s reach).
   const long long s = a.flags->steps_done;
