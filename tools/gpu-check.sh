@@ -49,8 +49,12 @@ for prog in plab-run-04-solution plab-run-05-solution plab-run-06-solution plab-
 done
 
 log "stage 06's engine on the GPU against its CPU path in every mode of its small scenes' search and finish (tools/engine-modes.sh)"
-tools/engine-modes.sh build-gpu/bin gpu > "$results/engine-modes.log" 2>&1 || status=1
-cat "$results/engine-modes.log"
+if [ -x tools/engine-modes.sh ]; then  # (the kit's engine: not in a student copy)
+  tools/engine-modes.sh build-gpu/bin gpu > "$results/engine-modes.log" 2>&1 || status=1
+  cat "$results/engine-modes.log"
+else
+  echo "no tools/engine-modes.sh (a student copy): skipped"
+fi
 
 log "stage 06 at the report's density (L = 20000 sqrt(N / 10^4), speeds 2500..5000), S = 100: the lab solution and the kit's engine"
 for impl in solution engine; do

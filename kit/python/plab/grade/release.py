@@ -40,7 +40,7 @@ import tempfile
 INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "README.md",
                    "handouts/measurements.md", "handouts/engine.md", "handouts/engine-gpu.md",
                    "handouts/engine-08.md", "tests/similar/", "kit/guide/",
-                   "kit/python/plab/guide.py")
+                   "kit/python/plab/guide.py", "tools/engine-modes.sh")
 # Files that belong to nobody's copy even when tracked by mistake: logs, build folders, scratch.
 SCRATCH = ("*.log", "*.partial", "*.orig", "*.rej", "*.swp", "*~", "*.pyc", "__pycache__/*",
            "build/*", "build-*/*", ".configure.log")
