@@ -458,6 +458,8 @@ def grade(name, root, stages="01,02,03", *extra):
     assert "grader error" not in tests, tests.get("grader error", {}).get("output")
     print(f"     ({name}: graded in {time.time() - start:.0f} s, sandbox "
           f"{doc.get('extra_data', {}).get('sandbox')})", flush=True)
+    if "not graded" in tests:  # (the grader refused: its reason, or every check below just fails)
+        print(f"     ({name}: NOT GRADED: {tests['not graded'].get('output', '')[:600]})", flush=True)
     return tests, doc, done.stdout
 
 

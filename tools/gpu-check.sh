@@ -74,7 +74,7 @@ if [ -z "${PLAB_SKIP_REDTEAM:-}" ]; then
     python3 tests/grader_redteam.py build-gpu/bin/plab "$PWD" "$scratch" gpu-ideas \
     > "$results/redteam-gpu.log" 2>&1 || status=1
   rm -rf "$scratch"
-  grep -E '^(ok|FAIL|SKIP)|passed|failed' "$results/redteam-gpu.log" | tail -25
+  grep -E '^(ok|FAIL|SKIP)|passed|failed|NOT GRADED' "$results/redteam-gpu.log" | tail -28
 fi
 
 [ -n "${PLAB_SKIP_ABLATION:-}" ] && { [ "$status" = 0 ] || echo "SOME GPU TESTS FAILED"; exit "$status"; }
