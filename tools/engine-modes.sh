@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Stage 06's engine on a device against its own CPU path, in every mode of its small scenes'
 # search and finish (PLAB_ENGINE_BANDED on, narrow, cramped; PLAB_ENGINE_KERNELS=separate;
-# PLAB_ENGINE_BANDED=off with each PLAB_ENGINE_SEARCH shape; other slab counts), on scenes chosen
-# to reach each path (the report's scene; crowded scenes whose pairs overflow the slots and the
-# bands' shared memory; speeds from 10 to 20000; r = 2; sizes on both sides of the paths' limits).
+# PLAB_ENGINE_BANDED=off with each PLAB_ENGINE_SEARCH shape; other slab counts;
+# PLAB_ENGINE_PDL=off, the bands launched after start_step without programmatic dependence), on
+# scenes chosen to reach each path (the report's scene; crowded scenes whose pairs overflow the
+# slots and the bands' shared memory; speeds from 10 to 20000; r = 2; sizes on both sides of the
+# paths' limits).
 # Every run must print the CPU's text byte for byte. Then compute-sanitizer (when there is one)
 # on the report's scene: memcheck, racecheck and synccheck.
 #
@@ -35,7 +37,7 @@ gen n40k --n 40000 --l 40000 --r 1 --steps 40 --mode perf
 modes=("PLAB_ENGINE_BANDED=on:" "PLAB_ENGINE_BANDED=narrow:" "PLAB_ENGINE_BANDED=cramped:"
        "PLAB_ENGINE_KERNELS=separate:" "PLAB_ENGINE_BANDED=off PLAB_ENGINE_SEARCH=batched:"
        "PLAB_ENGINE_BANDED=off PLAB_ENGINE_SEARCH=lean:" "PLAB_ENGINE_BANDED=off PLAB_ENGINE_SEARCH=balanced:"
-       ":--sweep-alpha 0.7" ":--sweep-alpha 1.2")
+       ":--sweep-alpha 0.7" ":--sweep-alpha 1.2" "PLAB_ENGINE_PDL=off:")
 for scene in report crowded crowded2k wide r2 mid n40k; do
   "$engine" --device cpu --quiet --out "$work/$scene.cpu" "$work/$scene.in" || { echo "$scene: the CPU run failed"; status=1; continue; }
   line="$scene:"

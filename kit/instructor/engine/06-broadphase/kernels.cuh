@@ -119,10 +119,29 @@ __host__ __device__ inline int start_step_groups(const StepArrays& a) {
   return a.band_cell ? 4 : 1;
 }
 
+/// Programmatic dependent launch (sm_90 and later; nothing before): a kernel launched with it
+/// (launch::find_pairs_banded()) may start while the kernel before it ends, and waits here, first
+/// thing, for that kernel to finish and its writes to be seen. So nothing is read or written
+/// early: what is saved is the launch's latency between the two kernels.
+__device__ inline void wait_for_kernel_before() {
+#if defined(__CUDA_ARCH__) && __CUDA_ARCH__ >= 900
+  asm volatile("griddepcontrol.wait;" ::: "memory");
+#endif
+}
+
+/// Lets the kernel after this one (when launched programmatically dependent) be launched now:
+/// its blocks start and wait in wait_for_kernel_before() until this kernel has finished.
+__device__ inline void let_kernel_after_launch() {
+#if defined(__CUDA_ARCH__) && __CUDA_ARCH__ >= 900
+  asm volatile("griddepcontrol.launch_dependents;" ::: "memory");
+#endif
+}
+
 /// Wall times, the last slab of each particle, counters cleared; with `buckets` > 0 (a step of
 /// one pass) also the pass's first `buckets` bucket counts and the fast entries' counter, which
 /// the pass would otherwise clear with two memsets of its own.
 __global__ void start_step(ParticlesView p, Box box, StepArrays a, DeviceGrid d, int buckets) {
+  let_kernel_after_launch();  // (the bands' kernel: its blocks wait for this one's end)
   const int t = blockIdx.x * blockDim.x + threadIdx.x;
   for (int b = t; b < buckets; b += gridDim.x * blockDim.x) a.start[b] = 0;
   if (t == 0 && buckets > 0) a.flags->fast = 0;
@@ -570,6 +589,7 @@ __global__ void __launch_bounds__(kBandThreads, 1)
   __shared__ int kept, wides, hits;
   __shared__ int wide[kWideMost];
   __shared__ int2 hit[kHitMost];
+  wait_for_kernel_before();  // start_step()
   Flags* f = a.flags;
   // Every thread of the block alike (other blocks of this kernel may raise `crowded` while this
   // one starts: a thread that returned alone would leave the others at the barriers).

@@ -4,6 +4,9 @@
 #pragma once
 
 
+#include <cstdlib>
+#include <string>
+
 #include "kernels.cuh"
 #include "plab/cuda/check.hpp"
 #include "plab/cuda/scan.cuh"
@@ -139,15 +142,40 @@ inline int all_shared_bytes(Kernel* kernel) {
   return bytes;
 }
 
+/// Whether find_pairs_banded() is launched programmatically dependent on start_step() (its
+/// blocks start while start_step() ends, and wait for it: kernels::wait_for_kernel_before()):
+/// on GPUs of compute capability 9 and later, unless PLAB_ENGINE_PDL=off (to measure the
+/// difference).
+inline bool dependent_launch() {
+  static const bool on = [] {
+    const char* v = std::getenv("PLAB_ENGINE_PDL");
+    if (v && std::string(v) == "off") return false;
+    int device = 0, major = 0;
+    PLAB_CUDA_CHECK(cudaGetDevice(&device));
+    PLAB_CUDA_CHECK(cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, device));
+    return major >= 9;
+  }();
+  return on;
+}
+
 /// The pair search of every slab without the counting sort: `bands` blocks of `band` rows a slab
 /// (kernels::find_pairs_banded()), `shared_bytes` of shared memory each, a halo of at most
 /// `halo_most` rows.
 inline void find_pairs_banded(const cuda::ParticlesView& p, const Box& box,
                               const kernels::StepArrays& a, const kernels::DeviceGrid& d, int band,
                               int bands, int shared_bytes, int halo_most, cudaStream_t s) {
-  kernels::find_pairs_banded<<<dim3(bands, d.g.slabs), kernels::kBandThreads, shared_bytes, s>>>(
-      p, box, a, d, band, shared_bytes, halo_most);
-  PLAB_CUDA_CHECK_LAUNCH("find_pairs_banded");
+  cudaLaunchConfig_t config{};
+  config.gridDim = dim3(bands, d.g.slabs);
+  config.blockDim = dim3(kernels::kBandThreads);
+  config.dynamicSmemBytes = shared_bytes;
+  config.stream = s;
+  cudaLaunchAttribute dependent{};
+  dependent.id = cudaLaunchAttributeProgrammaticStreamSerialization;
+  dependent.val.programmaticStreamSerializationAllowed = 1;
+  config.attrs = &dependent;
+  config.numAttrs = dependent_launch() ? 1 : 0;
+  PLAB_CUDA_CHECK(cudaLaunchKernelEx(&config, kernels::find_pairs_banded, p, box, a, d, band,
+                                     shared_bytes, halo_most));
 }
 
 /// The rows, start_rounds() and the rounds of a small scene in one block with `shared_bytes` of
@@ -190,6 +218,10 @@ inline bool finish_small_fits(int n) {
   return n > 0 && blocks <= sms * per_sm;
 }
 
+/// A cooperative launch (grid barriers), not programmatically dependent on the search before
+/// it: so launched, the report's scene was 1.5% slower, and no slower with its blocks forced
+/// one to a multiprocessor; likely its early blocks crowd onto the multiprocessors the search
+/// leaves free (handouts/engine-gpu.md).
 inline void finish_small(const cuda::ParticlesView& p, const Box& box,
                          const kernels::StepArrays& a, cudaStream_t s) {
   cuda::ParticlesView pv = p;

@@ -17,7 +17,7 @@
 //         exact for any speed. Small scenes (below kBandedBelow, where a band's entries fit a
 //         block's shared memory) skip the passes: one kernel, find_pairs_banded, sorts and searches
 //         every slab's bands of rows in shared memory, from each particle's cell in every slab
-//         (start_step writes them). A step with more pairs than the list holds (or a band that
+//         (start_step writes them; the bands launch as start_step's programmatic dependents). A step with more pairs than the list holds (or a band that
 //         outgrew its block) stops the batch on the device, and the host redoes it with a longer
 //         list (or with the passes). Below kFinishSmallFrom, one block (finish_block) does the rows
 //         and the rounds in shared memory, then apply.
