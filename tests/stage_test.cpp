@@ -465,7 +465,8 @@ TEST(RanksPhases, OneLineEachRank) {
   const plab::test::ScratchDir scratch;
   const std::string err = scratch.file("stderr.txt");
   setenv("PLAB_ENGINE_PHASES", "1", 1);
-  const std::string output = run_on_ranks(m.scene_path(d), 3, scratch, "PLAB_ENGINE_PHASES=1", "", err);
+  const std::string output =
+      run_on_ranks(m.scene_path(d), 3, scratch, "scene " + d.name + ", PLAB_ENGINE_PHASES=1", "", err);
   unsetenv("PLAB_ENGINE_PHASES");
   expect_same(plab::read_file(m.golden_path(d)), output, m.golden_path(d) + " (phases on 3 ranks)");
   const std::string text = plab::read_file(err);
@@ -487,9 +488,13 @@ TEST(RanksTraffic, ReportedWithAStatusFile) {
   ASSERT_FALSE(all.empty());
   const plab::test::ScratchDir scratch;
   const std::string report = scratch.file("report.json");
-  const std::string output =
-      run_on_ranks(m.scene_path(all.front()), 2, scratch, "--report", "--report " + report);
-  ASSERT_FALSE(output.empty());
+  const std::string output = run_on_ranks(m.scene_path(all.front()), 2, scratch,
+                                          "scene " + all.front().name + ", --report",
+                                          "--report " + report);
+  if (output.empty()) {  // run_on_ranks() said why when the run failed
+    if (!HasFailure()) ADD_FAILURE() << "stage 08 on 2 ranks, --report: no output";
+    return;
+  }
   const nlohmann::json j = nlohmann::json::parse(plab::read_file(report));
   EXPECT_EQ(j.at("ranks").get<int>(), 2) << j.dump();
   EXPECT_GT(j.at("bytes_sent").get<double>(), 0) << j.dump();

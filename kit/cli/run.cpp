@@ -77,7 +77,7 @@ void add_run(CLI::App& app) {
     if (a->ranks > 0) args = on_ranks(id, impl, a->ranks, args);
     g_status = run_stage_watched(args, {"stage " + id + " (" + impl + ") on " +
                                             fs::path(a->scene).filename().string(),
-                                        a->timeout, status});
+                                        a->timeout, status, a->ranks});
     fs::remove(status);
   });
 }

@@ -59,20 +59,41 @@ pid_t start(const std::vector<std::string>& args) {
   _exit(127);
 }
 
+/// Seconds without a finished step after which a run on several ranks is said to be, most
+/// likely, ranks waiting for each other.
+constexpr double kStallHint = 30;
+
+/// What a run on several ranks that has finished no step for `quiet` seconds is most likely
+/// doing; with `advice`, how to end it.
+std::string stall_hint(double quiet, bool advice) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.0f s", quiet);
+  return std::string(" (no step finished in the last ") + buf +
+         ": ranks waiting for each other for ever? a send without its receive, or a collective "
+         "some rank skips" +
+         (advice ? "; Ctrl-C ends every rank, --timeout does it for you)" : ")");
+}
+
 /// Shows where a long run is: a line kept in place on a terminal after 1 s, otherwise one line
 /// every 10 s once the run has taken that long.
 class Progress {
  public:
-  explicit Progress(std::string label) : label_(std::move(label)), tty_(isatty(STDERR_FILENO)) {}
-  void show(double t, const Steps& s) {
+  Progress(std::string label, int ranks)
+      : label_(std::move(label)), ranks_(ranks), tty_(isatty(STDERR_FILENO)) {}
+  /// `t`: seconds since the start; `quiet`: since the last step finished.
+  void show(double t, double quiet, const Steps& s) {
     if (s.total <= 0) return;
+    const bool stalled = ranks_ > 1 && quiet >= kStallHint;
     if (tty_ && t >= 1.0 && t - last_ >= 0.25) {
-      std::fprintf(stderr, "\r  step %lld/%lld, %.1f s ", s.done, s.total, t);
+      std::fprintf(stderr, "\r  step %lld/%lld, %.1f s%s ", s.done, s.total, t,
+                   stalled ? " (no step for a while: ranks waiting for each other? Ctrl-C ends "
+                             "them all)"
+                           : "");
       shown_ = true;
       last_ = t;
     } else if (!tty_ && t - last_ >= 10.0) {
-      std::fprintf(stderr, "plab run: %s: step %lld of %lld after %.0f s\n", label_.c_str(),
-                   s.done, s.total, t);
+      std::fprintf(stderr, "plab run: %s: step %lld of %lld after %.0f s%s\n", label_.c_str(),
+                   s.done, s.total, t, stalled ? stall_hint(quiet, true).c_str() : "");
       last_ = t;
     }
   }
@@ -83,6 +104,7 @@ class Progress {
 
  private:
   std::string label_;
+  int ranks_;
   bool tty_;
   double last_ = 0;
   bool shown_ = false;
@@ -128,7 +150,7 @@ int run_stage_watched(const std::vector<std::string>& args, const RunWatch& w) {
   const auto t0 = Clock::now();
   auto last_change = t0;
   Steps steps;
-  Progress progress(w.label);
+  Progress progress(w.label, w.ranks);
   for (;;) {
     int status = 0;
     if (waitpid(pid, &status, WNOHANG) == pid) {
@@ -144,17 +166,27 @@ int run_stage_watched(const std::vector<std::string>& args, const RunWatch& w) {
       if (s.done != steps.done) last_change = now;
       steps = s;
     }
-    progress.show(t, steps);
+    const double quiet = std::chrono::duration<double>(now - last_change).count();
+    progress.show(t, quiet, steps);
     const bool limit = w.timeout > 0 && t >= w.timeout;
     if (limit || g_stop_signal) {
       end_group(pid);
       progress.clear();
-      const double quiet = std::chrono::duration<double>(now - last_change).count();
-      if (!limit) return 128 + g_stop_signal;
+      const bool stalled = w.ranks > 1 && quiet >= kStallHint;
+      if (!limit) {
+        const char* abbrev = sigabbrev_np(g_stop_signal);
+        std::fprintf(stderr, "plab run: %s: stopped (SIG%s), %s%s\n", w.label.c_str(),
+                     abbrev ? abbrev : "?", where(steps).c_str(),
+                     stalled ? stall_hint(quiet, false).c_str() : "");
+        return 128 + g_stop_signal;
+      }
       std::fprintf(stderr,
                    "plab run: %s: stopped at the --timeout of %g s, %s (no step finished in the "
-                   "last %.0f s): an endless loop?\n",
-                   w.label.c_str(), w.timeout, where(steps).c_str(), quiet);
+                   "last %.0f s): %san endless loop?\n",
+                   w.label.c_str(), w.timeout, where(steps).c_str(), quiet,
+                   w.ranks > 1 ? "ranks waiting for each other for ever (a send without its "
+                                 "receive, a collective some rank skips?), or "
+                               : "");
       return 124;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
