@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -85,11 +86,11 @@ class Progress {
     if (s.total <= 0) return;
     const bool stalled = ranks_ > 1 && quiet >= kStallHint;
     if (tty_ && t >= 1.0 && t - last_ >= 0.25) {
-      std::fprintf(stderr, "\r  step %lld/%lld, %.1f s%s ", s.done, s.total, t,
-                   stalled ? " (no step for a while: ranks waiting for each other? Ctrl-C ends "
-                             "them all)"
-                           : "");
-      shown_ = true;
+      const int n = std::fprintf(
+          stderr, "\r  step %lld/%lld, %.1f s%s ", s.done, s.total, t,
+          stalled ? " (no step for a while: ranks waiting for each other? Ctrl-C ends them all)"
+                  : "");
+      shown_ = std::max(shown_, n);
       last_ = t;
     } else if (!tty_ && t - last_ >= 10.0) {
       std::fprintf(stderr, "plab run: %s: step %lld of %lld after %.0f s%s\n", label_.c_str(),
@@ -98,8 +99,8 @@ class Progress {
     }
   }
   void clear() {
-    if (shown_) std::fprintf(stderr, "\r%60s\r", "");
-    shown_ = false;
+    if (shown_ > 0) std::fprintf(stderr, "\r%*s\r", shown_, "");
+    shown_ = 0;
   }
 
  private:
@@ -107,7 +108,7 @@ class Progress {
   int ranks_;
   bool tty_;
   double last_ = 0;
-  bool shown_ = false;
+  int shown_ = 0;  //!< the longest line shown in place (0: none)
 };
 
 /// The exit status, with a message when a signal ended the program.
