@@ -61,6 +61,51 @@ bool found(const plab::Particles& p, const std::vector<double>& end, const plab:
   return false;
 }
 
+/// found() as the GPU engine's pass search finds the pair: each entry's midpoint and velocity
+/// rounded to float (its cell, its reach and whether it is fast from those), and the slab test in
+/// single precision (sweep::close_in_slab_single(), with `single`).
+bool found_single(const plab::Particles& p, const std::vector<double>& end,
+                  const plab::sweep::Grid& g, const plab::sweep::Single& single) {
+  namespace sweep = plab::sweep;
+  float vx[2], vy[2];
+  double v2[2];
+  sweep::Search q[2];
+  for (int i = 0; i < 2; ++i) {
+    vx[i] = static_cast<float>(p.vx[i]);
+    vy[i] = static_cast<float>(p.vy[i]);
+    v2[i] = double(vx[i]) * vx[i] + double(vy[i]) * vy[i];
+    q[i] = sweep::search_of(vx[i], vy[i], g);
+  }
+  const float s = std::fabs(vx[0]) + std::fabs(vy[0]) + std::fabs(vx[1]) + std::fabs(vy[1]);
+  for (int k = 0; k <= std::min(sweep::last_slab(end[0], g), sweep::last_slab(end[1], g)); ++k) {
+    const double tm = sweep::slab_mid(k, g);
+    float mx[2], my[2];
+    for (int i = 0; i < 2; ++i) {
+      mx[i] = static_cast<float>(p.x[i] + tm * p.vx[i]);
+      my[i] = static_cast<float>(p.y[i] + tm * p.vy[i]);
+    }
+    if (!sweep::close_in_slab_single(mx[0] - mx[1], my[0] - my[1], vx[0] - vx[1], vy[0] - vy[1],
+                                     s, single))
+      continue;
+    const int col[2] = {sweep::column_of(mx[0], g), sweep::column_of(mx[1], g)};
+    const int row[2] = {sweep::row_of(my[0], g), sweep::row_of(my[1], g)};
+    if (!q[0].fast && !q[1].fast) {
+      const int a = (row[0] < row[1] || (row[0] == row[1] && col[0] <= col[1])) ? 0 : 1, b = 1 - a;
+      int x0, x1;
+      sweep::columns_within(mx[a], q[a].d, g, x0, x1);
+      if (row[b] - row[a] <= 1 && (row[b] > row[a] ? x0 <= col[b] : true) && col[b] <= x1)
+        return true;
+      continue;
+    }
+    const int a = (q[0].fast && (!q[1].fast || v2[0] >= v2[1])) ? 0 : 1, b = 1 - a;
+    int x0, x1, y0, y1;
+    sweep::columns_within(mx[a], q[a].d, g, x0, x1);
+    sweep::rows_within(my[a], q[a].d, g, y0, y1);
+    if (x0 <= col[b] && col[b] <= x1 && y0 <= row[b] && row[b] <= y1) return true;
+  }
+  return false;
+}
+
 /// Each particle's path end (sweep::path_end() of its wall time).
 std::vector<double> path_ends(const plab::Box& box, const plab::Particles& p) {
   std::vector<double> end(p.size());
@@ -256,3 +301,80 @@ TEST(Plan, SparseGreedyInTeamIsSparseGreedy) {
 }
 
 }  // namespace
+
+// The GPU engine's pass search (float entries, the single-precision slab test) finds every pair
+// the model makes meet, also when the pair has become far faster than the first state that set
+// the grid (the GPU keeps its grid for the whole run). The double search is checked on the same
+// boosted pairs.
+TEST(Sweep, SingleNeverDropsAPair) {
+  std::mt19937_64 rng(2027);
+  std::uniform_real_distribution<double> u(0, 1);
+  long checked = 0;
+  for (int trial = 0; trial < 200000; ++trial) {
+    const double L = std::pow(10.0, 1 + 5 * u(rng));              // 10 .. 10^6
+    const double r = L * std::pow(10.0, -1 - 4 * u(rng));          // L/10 .. L/10^5
+    const double speed = L * std::pow(10.0, -6 + 6 * u(rng));      // tiny .. a whole box a step
+    const int n = 2 + static_cast<int>(u(rng) * 60);
+    const double miss = (u(rng) - 0.5) * 8 * std::numeric_limits<double>::epsilon() * L;
+    Case c = make_case(rng, L, r, speed, n, u(rng), miss, trial % 2 == 0);
+    const double t = plab::pair_candidate(c.box, c.p, 0, 1).t;
+    const std::vector<double> end = path_ends(c.box, c.p);
+    if (!plab::model::in_step(t) || !(t < end[0]) || !(t < end[1])) continue;
+    ++checked;
+    // The grid of a first state up to 10^4 times slower (speeds stay below the square root of
+    // the summed squares: sqrt(N) times the first fastest at most).
+    const double boost = trial % 4 == 0 ? 1 : std::pow(10.0, 4 * u(rng));
+    plab::Particles first = c.p;
+    for (std::size_t i = 0; i < first.size(); ++i) {
+      first.vx[i] /= boost;
+      first.vy[i] /= boost;
+    }
+    std::vector<double> scratch;
+    const plab::sweep::Grid g =
+        plab::sweep::choose(c.box, first, path_ends(c.box, first), scratch, trial % 3 / 2.0);
+    double energy = 0;
+    for (std::size_t i = 0; i < c.p.size(); ++i)
+      energy += c.p.vx[i] * c.p.vx[i] + c.p.vy[i] * c.p.vy[i];
+    const plab::sweep::Single single = plab::sweep::single_of(g, L, std::sqrt(energy));
+    ASSERT_TRUE(std::isfinite(single.rr)) << "L " << L << " r " << r << " speed " << speed;
+    ASSERT_TRUE(found_single(c.p, end, g, single))
+        << "pair time " << t << " dropped in float: L " << L << " r " << r << " speed " << speed
+        << " boost " << boost << " slabs " << g.slabs << " v_cut " << g.v_cut;
+    ASSERT_TRUE(found(c.p, end, g)) << "pair time " << t << " dropped: L " << L << " r " << r
+                                    << " speed " << speed << " boost " << boost;
+  }
+  EXPECT_GT(checked, 50000);
+}
+
+// The single-precision test passes (almost) only what the double test passes: its allowance
+// is a few millionths of the reach, not a looser net.
+TEST(Sweep, SingleIsTight) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0, 1);
+  plab::sweep::Grid g;
+  g.slabs = 8;
+  g.half = 0.5 / g.slabs;
+  g.margin = 1e-6 * 2e5;
+  g.reach = 2 + g.margin;
+  const plab::sweep::Single single = plab::sweep::single_of(g, 1e5, 5e6);
+  long both = 0, only_single = 0, only_double = 0;
+  for (int trial = 0; trial < 1000000; ++trial) {
+    const double x0 = 1e5 * u(rng), y0 = 1e5 * u(rng);
+    const double x1 = x0 + 40 * (u(rng) - 0.5), y1 = y0 + 40 * (u(rng) - 0.5);
+    const double vx0 = 5000 * (u(rng) - 0.5), vy0 = 5000 * (u(rng) - 0.5);
+    const double vx1 = 5000 * (u(rng) - 0.5), vy1 = 5000 * (u(rng) - 0.5);
+    const bool d = plab::sweep::close_in_slab(x0 - x1, y0 - y1, vx0 - vx1, vy0 - vy1, g);
+    const float fx0 = float(x0), fy0 = float(y0), fx1 = float(x1), fy1 = float(y1);
+    const float fvx0 = float(vx0), fvy0 = float(vy0), fvx1 = float(vx1), fvy1 = float(vy1);
+    const bool s = plab::sweep::close_in_slab_single(
+        fx0 - fx1, fy0 - fy1, fvx0 - fvx1, fvy0 - fvy1,
+        std::fabs(fvx0) + std::fabs(fvy0) + std::fabs(fvx1) + std::fabs(fvy1), single);
+    both += d && s;
+    only_single += s && !d;
+    only_double += d && !s;
+  }
+  EXPECT_EQ(only_double, 0);
+  EXPECT_GT(both, 1000);
+  EXPECT_LT(only_single, both / 20 + 10) << "the float test passes " << only_single
+                                          << " pairs the double test does not, of " << both;
+}

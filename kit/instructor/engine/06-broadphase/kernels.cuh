@@ -62,18 +62,32 @@ __device__ inline bool stopped(const Flags* f) { return f->overflow || f->crowde
 /// [(k - first) * n + i]. Large scenes take a few slabs a pass, so that the entries of one pass
 /// (not of the whole step) are what the memory holds.
 struct DeviceGrid {
-  sweep::Grid g;  //!< slabs, cells, v_cut
-  int cells;      //!< g.cells()
+  sweep::Grid g;         //!< slabs, cells, v_cut
+  sweep::Single single;  //!< the pass search's slab test on float entries (Entry)
+  int cells;             //!< g.cells()
   int first;      //!< the pass's first slab
   int slabs;      //!< the pass's number of slabs
 };
 
-/// What the pair search reads of an entry, in one 32-byte sector (the scatter writes it at a
-/// random place: one sector, not four).
-struct alignas(32) Entry {
-  double x, y;    //!< midpoint position
-  double vx, vy;  //!< velocity
+/// What the pass search reads of an entry: its midpoint position and velocity rounded to float,
+/// 16 bytes (the scatter writes it at a random place; the search reads some 190 a particle a
+/// step at the report's density). The entry is sorted by its rounded midpoint, and the search
+/// tests it in single precision (sweep::close_in_slab_single()): every pair the double test
+/// passes still passes (sweep::Single says why), the pair time stays the model's, in double.
+struct alignas(16) Entry {
+  float x, y;    //!< midpoint position
+  float vx, vy;  //!< velocity
 };
+
+/// An entry's \f$|v_x| + |v_y|\f$ (sweep::close_in_slab_single()'s `s` is two of them).
+__device__ inline float speed_sum(const Entry& e) { return fabsf(e.vx) + fabsf(e.vy); }
+
+/// The single-precision slab test of entries `me` and `o` (sweep::close_in_slab_single()).
+__device__ inline bool close_entries(const Entry& me, float me_s, const Entry& o,
+                                     const DeviceGrid& d) {
+  return sweep::close_in_slab_single(me.x - o.x, me.y - o.y, me.vx - o.vx, me.vy - o.vy,
+                                     me_s + speed_sum(o), d.single);
+}
 
 /// Each particle's pair events of the step, compact (cuda/candidates.cuh).
 using Slots = cuda::CompactView;
@@ -188,11 +202,15 @@ __device__ inline void midpoint(const ParticlesView& p, int i, int k, const Devi
   my = p.y[i] + tm * p.vy[i];
 }
 
-/// Particle i's bucket in slab k of the pass (its midpoint position's cell).
+/// Particle i's entry in slab k (its midpoint and velocity rounded to float), and its bucket in
+/// the pass: the cell of the rounded midpoint, which the search reads back.
 __device__ inline int bucket_of(const ParticlesView& p, int i, int k, const DeviceGrid& d,
-                                double& mx, double& my) {
+                                Entry& e) {
+  double mx, my;
   midpoint(p, i, k, d, mx, my);
-  return (k - d.first) * d.cells + sweep::cell_of(mx, my, d.g);
+  e = Entry{static_cast<float>(mx), static_cast<float>(my), static_cast<float>(p.vx[i]),
+            static_cast<float>(p.vy[i])};
+  return (k - d.first) * d.cells + sweep::cell_of(e.x, e.y, d.g);
 }
 
 /// Counting sort, pass 1 (grid: particles x the pass's slabs): each particle that takes part in
@@ -201,8 +219,8 @@ __global__ void bin_count(ParticlesView p, StepArrays a, DeviceGrid d) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   const int k = d.first + blockIdx.y;
   if (i >= p.n || a.last[i] < k) return;
-  double mx, my;
-  const int b = bucket_of(p, i, k, d, mx, my);
+  Entry entry;
+  const int b = bucket_of(p, i, k, d, entry);
   a.rank[static_cast<long long>(blockIdx.y) * p.n + i] = atomicAdd(&a.start[b], 1);
 }
 
@@ -212,11 +230,11 @@ __global__ void bin_scatter(ParticlesView p, StepArrays a, DeviceGrid d) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   const int k = d.first + blockIdx.y;
   if (i >= p.n || a.last[i] < k) return;
-  double mx, my;
-  const int b = bucket_of(p, i, k, d, mx, my);
+  Entry entry;
+  const int b = bucket_of(p, i, k, d, entry);
   const int e = a.start[b] + a.rank[static_cast<long long>(blockIdx.y) * p.n + i];
   a.entry_at[e] = static_cast<int>(blockIdx.y) * p.n + i;  // below max(N, 2^20) + N: an int
-  a.entry[e] = Entry{mx, my, p.vx[i], p.vy[i]};
+  a.entry[e] = entry;
 }
 
 /// The particle of entry `e` (bin_scatter() packs it with its slab: StepArrays::entry_at).
@@ -242,6 +260,8 @@ __device__ inline bool close_in_slab_at(const ParticlesView& p, int i, int j, in
 __device__ inline void file_pair_of(const ParticlesView& p, const Box& box, const StepArrays& a,
                                     const DeviceGrid& d, int i, int k, int j) {
   if (k > 0 && close_in_slab_at(p, i, j, k - 1, d)) return;  // found in slab k - 1
+  // Scales outside float's range: the single test passed everything, the double one decides.
+  if (!(d.single.rr < HUGE_VALF) && !close_in_slab_at(p, i, j, k, d)) return;
   const int lo = i < j ? i : j, hi = i < j ? j : i;
   const double t = model::pair_time(p.x[lo], p.y[lo], p.vx[lo], p.vy[lo], p.x[hi], p.y[hi],
                                     p.vx[hi], p.vy[hi], box.r);
@@ -266,6 +286,7 @@ __device__ inline void test_entries(const ParticlesView& p, const Box& box, cons
                                     int lanes = 1) {
   const int i = particle_of(a, p.n, e), k = slab_of(a, d, p.n, e);
   const Entry me = a.entry[e];
+  const float me_s = speed_sum(me);
   for (int f0 = from + lane; f0 < to; f0 += kBatch * lanes) {
     Entry o[kBatch];
 #pragma unroll
@@ -277,10 +298,7 @@ __device__ inline void test_entries(const ParticlesView& p, const Box& box, cons
 #pragma unroll
     for (int u = 0; u < kBatch; ++u) {
       const int f = f0 + u * lanes;
-      if (f < to && f != e &&
-          sweep::close_in_slab(me.x - o[u].x, me.y - o[u].y, me.vx - o[u].vx, me.vy - o[u].vy,
-                               d.g))
-        passed |= 1u << u;
+      if (f < to && f != e && close_entries(me, me_s, o[u], d)) passed |= 1u << u;
     }
     for (; passed != 0; passed &= passed - 1)
       file_pair(p, box, a, d, i, k, f0 + (__ffs(passed) - 1) * lanes);
@@ -343,7 +361,8 @@ __global__ void __launch_bounds__(kSearchThreads, kBlocksOf<S>)
 /// What a lane of find_pairs_balanced() tells the rest of its warp: its entry and the two runs
 /// it searches, as a span of the warp's tests.
 struct LaneRuns {
-  double x, y, vx, vy;  //!< the entry's midpoint position and velocity
+  Entry me;             //!< the entry's midpoint position and velocity
+  float s;              //!< speed_sum() of it
   int e;                //!< the entry
   int first;            //!< the first of its row's later entries it searches (e + 1)
   int next_row;         //!< where its run in the next row starts
@@ -386,7 +405,7 @@ __global__ void __launch_bounds__(kSearchThreads, 4)
       int x0, x1;
       sweep::columns_within(me.x, q.d, d.g, x0, x1);
       const int y = sweep::row_of(me.y, d.g);
-      mine = LaneRuns{me.x, me.y, me.vx, me.vy, e, e + 1, 0, 0, 0, 0};
+      mine = LaneRuns{me, speed_sum(me), e, e + 1, 0, 0, 0, 0};
       mine.row_tests = max(0, row[y * columns + x1 + 1] - (e + 1));
       count = mine.row_tests;
       if (y + 1 < d.g.rows) {
@@ -411,8 +430,7 @@ __global__ void __launch_bounds__(kSearchThreads, 4)
     const LaneRuns& r = warp[owner];
     const int j = t - r.from;
     const int f = j < r.row_tests ? r.first + j : r.next_row + (j - r.row_tests);
-    const Entry o = a.entry[f];
-    if (sweep::close_in_slab(r.x - o.x, r.y - o.y, r.vx - o.vx, r.vy - o.vy, d.g))
+    if (close_entries(r.me, r.s, a.entry[f], d))
       file_pair(p, box, a, d, particle_of(a, p.n, r.e), slab_of(a, d, p.n, r.e), f);
   }
 }
@@ -552,7 +570,7 @@ __device__ inline int scan_stretches(const int* value, int size,
 /// row heights, rounded up, and one for rounding): find_pairs_banded()'s halo, and what the host
 /// expects of it. Not a number when `vmax` is not.
 __host__ __device__ inline double halo_rows(const sweep::Grid& g, double vmax) {
-  return ceil((g.reach + g.margin + g.half * (2 * vmax)) * (1 + 1e-9) * g.inv_cell) + 1;
+  return ceil((g.reach + g.margin + g.half * (2 * vmax)) * (1 + 1e-6) * g.inv_cell) + 1;
 }
 
 /// The rows [lo, hi) a band of rows [r0, r1) keeps in its block: its own, `halo` rows below,

@@ -248,6 +248,11 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     for (std::size_t i = 0; i < p.size(); ++i)
       end[i] = sweep::path_end(model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box_.L, box_.r));
     grid_.g = sweep::choose(box_, p, end, scratch, 0.9, alpha_);
+    // No speed of the run exceeds the square root of the summed squared speeds (elastic
+    // collisions and walls keep the sum), which bounds the float entries' rounding.
+    double energy = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) energy += p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i];
+    grid_.single = sweep::single_of(grid_.g, box_.L, std::sqrt(energy) * (1 + 1e-6));
     grid_.cells = grid_.g.cells();
     // As few passes as kEntriesPerPass allows, with the slabs spread evenly over them.
     const long long most = std::max<long long>(1, kEntriesPerPass / std::max(n_, 1));

@@ -106,12 +106,14 @@ struct Search {
 /// \f$d = 2r + 2m + h(|v| + v_{cut})\f$ covers every slow partner, whichever of the two comes first
 /// in cell order, and is at most a row's height, so the partner is in its row or the next. A fast
 /// one's \f$d = 2r + 2m + 2h|v|\f$ covers every partner no faster than itself (a partner faster
-/// still searches for it).
+/// still searches for it). The factor \f$1 + 10^{-6}\f$ (with \f$m\f$) also covers midpoints and
+/// velocities rounded to float (the GPU engine's entries: Single), whose error grows with the
+/// speed, which can outgrow the \f$v_{max}\f$ that set \f$m\f$ when the grid is kept for a run.
 PLAB_HD inline Search search_of(double vx, double vy, const Grid& g) {
   const double v2 = vx * vx + vy * vy;
   const bool fast = v2 > g.v_cut2;
   const double v = sqrt(v2);
-  return {(g.reach + g.margin + g.half * (fast ? 2 * v : v + g.v_cut)) * (1 + 1e-9), fast};
+  return {(g.reach + g.margin + g.half * (fast ? 2 * v : v + g.v_cut)) * (1 + 1e-6), fast};
 }
 
 /// The columns [lo, hi] whose x lies within `d` of `x` (every column when either end is not a
@@ -147,6 +149,75 @@ PLAB_HD inline bool close_in_slab(double dx, double dy, double wx, double wy, co
   const bool near_inside = !(dd * ww - q * q > rr * ww);
   const bool near_end = !((dd - 2 * g.half * q) + g.half * g.half * ww > rr);
   return (inside & near_inside) | (!inside & near_end);
+}
+
+/// close_in_slab() in single precision, for the GPU engine's pass search, whose entries hold
+/// each midpoint and velocity rounded to float (16 bytes an entry instead of 32; float arithmetic
+/// instead of double). It passes every pair that close_in_slab()'s exact arithmetic passes on the
+/// unrounded values (a superset: a pair passed in excess gets model.md's pair time, which is all
+/// a candidate ever is), by these bounds, with \f$u = 2^{-24}\f$:
+/// - rounding: a midpoint coordinate lies within \f$L + h|v_c|\f$ of the box (its path before its
+///   wall is inside), so the rounded relative position and velocity are off by at most
+///   \f$u(2\sqrt2 L + h s + |d|)\f$ and \f$u(s + |w|)\f$, where \f$s\f$ is the pair's
+///   \f$|v_x| + |v_y|\f$ summed over both (`s` below): the closest approach moves by at most the
+///   first plus \f$h\f$ times the second;
+/// - arithmetic: each side of the two comparisons is off by at most \f$16u(|d|^2 + h^2|w|^2)\f$
+///   (times \f$|w|^2\f$ in the first), and a slab end taken for the inside (or back) costs
+///   \f$(q - h|w|^2)^2/|w|^2\f$, a few \f$u^2\f$ of the same.
+/// So, with \f$a\f$ the reach plus \f$4uL\f$, the allowance is \f$(a + 2uhs)^2\f$ (Single::rr,
+/// `k1` and `k2`, each with \f$32u\f$ of itself to spare) plus Single::slack \f$= 64u\f$ times
+/// \f$|d|^2 + h^2|w|^2\f$ (the error that grows with the pair's own lengths). Where float could
+/// overflow or go subnormal (single_of()), `rr` is infinite and every pair passes. Not-a-number
+/// counts as close. `Sweep.SingleNeverDropsAPair` checks it on random pairs that meet,
+/// `Sweep.SingleIsTight` that it passes few pairs the double test does not.
+struct Single {
+  float half = 0;   //!< h rounded up (a longer slab only widens the test)
+  float half2 = 0;  //!< h^2 rounded up
+  float rr = 0;     //!< the allowance's constant part, a^2, rounded up; +inf: every pair passes
+  float k1 = 0;     //!< times s: 4uah, rounded up
+  float k2 = 0;     //!< times s^2: 4u^2h^2, rounded up
+  float slack = 0;  //!< 64u: the allowance's part that grows with the pair's lengths
+};
+
+/// `x` rounded up to a float.
+inline float float_up(double x) {
+  float f = static_cast<float>(x);
+  if (static_cast<double>(f) < x) f = std::nextafter(f, HUGE_VALF);
+  return f;
+}
+
+/// The single-precision test's constants for grid `g` in a box of side `L`, for speeds that never
+/// exceed `vbound` (the square root of the summed squared speeds: elastic collisions and walls
+/// keep that sum). Every pair passes when the scales leave float's comfortable range: a reach below
+/// 2^-20, or positions and speeds past 10^8 (the products must stay normal and finite).
+inline Single single_of(const Grid& g, double L, double vbound) {
+  constexpr double u = 0x1p-24;
+  Single s;
+  s.half = float_up(g.half);
+  s.half2 = float_up(static_cast<double>(s.half) * s.half);
+  s.slack = static_cast<float>(64 * u);
+  const double a = g.reach + 4 * u * L, h = s.half, spare = 1 + 32 * u;
+  const bool comfortable = a >= 0x1p-20 && L + vbound < 1e8 && a < 1e8;
+  s.rr = comfortable ? float_up(a * a * spare) : HUGE_VALF;
+  s.k1 = float_up(4 * u * a * h * spare);
+  s.k2 = float_up(4 * u * u * h * h * spare);
+  return s;
+}
+
+/// close_in_slab() on float midpoints and velocities (Single): `d` and `w` as there, `s` the
+/// pair's \f$|v_x| + |v_y|\f$ summed over both particles.
+PLAB_HD inline bool close_in_slab_single(float dx, float dy, float wx, float wy, float s,
+                                         const Single& c) {
+  const float dd = dx * dx + dy * dy;
+  const float ww = wx * wx + wy * wy;
+  const float q = fabsf(dx * wx + dy * wy);
+  const float hw = c.half2 * ww;
+  const float allow = (c.rr + s * (c.k1 + c.k2 * s)) + c.slack * (dd + hw);
+  const bool tiny = ww < 0x1p-60f;  // products could go subnormal: close (never dropped)
+  const bool inside = q <= c.half * ww;
+  const bool near_inside = !(dd * ww - q * q > allow * ww);
+  const bool near_end = !((dd - 2 * c.half * q) + hw > allow);
+  return tiny | (inside & near_inside) | (!inside & near_end);
 }
 
 /// Chooses the grid for `active` particles, most no faster than `v_cut`, the fastest `vmax`, in a
