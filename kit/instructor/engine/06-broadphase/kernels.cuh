@@ -117,15 +117,17 @@ struct StepArrays {
 };
 
 /// Particle `i`'s cell in slab k, for find_pairs_banded(): its midpoint's row and column
-/// (bucket_of()'s arithmetic) as row << 16 | column (the bands take N < 2^15: at most 181 rows
-/// and 724 columns), or -1 when it takes no part in slab k (its last slab is before k). The
-/// midpoint is the scatter's expression in find_pairs_banded() (no contraction: --fmad=false),
-/// so an entry is sorted into the cell of the midpoint its search reads.
+/// (bucket_of()'s arithmetic, on the midpoint rounded to float) as row << 16 | column (the bands
+/// take N < 2^15: at most 181 rows and 724 columns), or -1 when it takes no part in slab k (its
+/// last slab is before k). The midpoint is the scatter's expression in find_pairs_banded() (no
+/// contraction: --fmad=false), so an entry is sorted into the cell of the midpoint its search
+/// reads.
 __device__ inline int band_cell_of(double x, double y, double vx, double vy, int last, int k,
                                    const sweep::Grid& g) {
   if (last < k) return -1;
   const double tm = sweep::slab_mid(k, g);
-  return sweep::row_of(y + tm * vy, g) << 16 | sweep::column_of(x + tm * vx, g);
+  const float mx = static_cast<float>(x + tm * vx), my = static_cast<float>(y + tm * vy);
+  return sweep::row_of(my, g) << 16 | sweep::column_of(mx, g);
 }
 
 /// Threads a particle of start_step(): with the bands' cells to write (every slab's), several.
@@ -468,10 +470,10 @@ constexpr int kBandThreads = 1024;  //!< threads per block of find_pairs_banded(
 constexpr int kWideMost = 128;      //!< entries a band may search over the whole slab
 constexpr int kBandLoads = 8;       //!< particles a thread of find_pairs_banded() reads at a time
 constexpr int kHitMost = 2048;      //!< pairs a block of find_pairs_banded() lists to file at once
-/// Shared memory find_pairs_banded() takes a kept entry: its midpoint position and velocity
-/// (32), its particle (4), while it is sorted its particle and cell again (8), and its first
-/// test and its runs, packed (4 + 8).
-constexpr int kBandEntryBytes = 56;
+/// Shared memory find_pairs_banded() takes a kept entry: its midpoint position and velocity in
+/// float (16: Entry), its particle (4), while it is sorted its particle and cell again (8), and
+/// its first test and its runs, packed (4 + 8).
+constexpr int kBandEntryBytes = 40;
 
 /// The runs of entries an entry of find_pairs_banded() tests (those of find_pairs() or
 /// find_fast_pairs()): a slow one, run 0 its row after it and run 1 the next row; a fast one, a
@@ -488,8 +490,8 @@ struct BandRuns {
 /// What find_pairs_banded() keeps in shared memory: its entries in cell order, one array per
 /// field, and where each kept cell starts.
 struct BandEntries {
-  const double2* pos;  //!< midpoint position
-  const double2* vel;  //!< velocity
+  const float2* pos;   //!< midpoint position, rounded to float
+  const float2* vel;   //!< velocity, rounded to float
   const int* start;    //!< kept cell c holds entries [start[c], start[c + 1])
   int columns;         //!< the grid's columns
   int lo, hi;          //!< the rows kept, [lo, hi)
@@ -633,10 +635,10 @@ __global__ void __launch_bounds__(kBandThreads, 1)
     return;
   }
   const int cap = static_cast<int>(room);
-  // Midpoint positions and velocities as pairs: a test reads two 16-byte words, not four of 8
-  // (fewer bank conflicts: a warp's tests read entries at scattered places).
-  double2* pos = reinterpret_cast<double2*>(pool + used);
-  double2* vel = pos + cap;
+  // Midpoint positions and velocities as float pairs (Entry's rounding: the single-precision
+  // test, sweep::close_in_slab_single()): a test reads two 8-byte words.
+  float2* pos = reinterpret_cast<float2*>(pool + used);
+  float2* vel = pos + cap;
   int2* packed = reinterpret_cast<int2*>(vel + cap);  // each own entry's runs (pack_runs())
   int* id = reinterpret_cast<int*>(packed + cap);
   int* kept_id = id + cap;
@@ -685,8 +687,9 @@ __global__ void __launch_bounds__(kBandThreads, 1)
   // Scatter: each kept particle to its cell, with what the search reads.
   for (int q = threadIdx.x; q < m; q += blockDim.x) {
     const int i = kept_id[q], e = atomicAdd(&cursor[kept_cell[q]], 1);
-    pos[e] = make_double2(p.x[i] + tm * p.vx[i], p.y[i] + tm * p.vy[i]);
-    vel[e] = make_double2(p.vx[i], p.vy[i]);
+    pos[e] = make_float2(static_cast<float>(p.x[i] + tm * p.vx[i]),
+                         static_cast<float>(p.y[i] + tm * p.vy[i]));
+    vel[e] = make_float2(static_cast<float>(p.vx[i]), static_cast<float>(p.vy[i]));
     id[e] = i;
   }
   __syncthreads();
@@ -736,7 +739,8 @@ __global__ void __launch_bounds__(kBandThreads, 1)
       band_run(kept_entries, b, ++r, from, to);
     }
     int o = from + skip;
-    double2 me = pos[b.e], mv = vel[b.e];
+    float2 me = pos[b.e], mv = vel[b.e];
+    float ms = fabsf(mv.x) + fabsf(mv.y);
     for (int t = t0; t < t1; ++t) {
       while (o >= to) {  // the next run, or the next entry's first
         if (++r < b.count) {
@@ -747,11 +751,14 @@ __global__ void __launch_bounds__(kBandThreads, 1)
           r = 0;
           band_run(kept_entries, b, r, from, to);
           me = pos[b.e], mv = vel[b.e];
+          ms = fabsf(mv.x) + fabsf(mv.y);
         }
         o = from;
       }
-      const double2 op = pos[o], ov = vel[o];
-      if (o != b.e && sweep::close_in_slab(me.x - op.x, me.y - op.y, mv.x - ov.x, mv.y - ov.y, g)) {
+      const float2 op = pos[o], ov = vel[o];
+      if (o != b.e &&
+          sweep::close_in_slab_single(me.x - op.x, me.y - op.y, mv.x - ov.x, mv.y - ov.y,
+                                      ms + (fabsf(ov.x) + fabsf(ov.y)), d.single)) {
         const int h = atomicAdd(&hits, 1);
         if (h < kHitMost) hit[h] = make_int2(b.e, o);
       }
@@ -773,7 +780,9 @@ __global__ void __launch_bounds__(kBandThreads, 1)
   }
   for (int u = 0; u < w; ++u) {  // every particle of slab k, the block's threads together
     const int e = wide[u], i = id[e];
-    const double2 me = pos[e], mv = vel[e];
+    // (in double, from the particle: the whole slab is read from device memory anyway)
+    const double2 me = make_double2(p.x[i] + tm * p.vx[i], p.y[i] + tm * p.vy[i]);
+    const double2 mv = make_double2(p.vx[i], p.vy[i]);
     for (int j = threadIdx.x; j < p.n; j += blockDim.x) {
       if (j == i || a.last[j] < k) continue;
       if (sweep::close_in_slab(me.x - (p.x[j] + tm * p.vx[j]), me.y - (p.y[j] + tm * p.vy[j]),
