@@ -37,7 +37,17 @@
 namespace plab {
 namespace {
 
-constexpr double kAlpha = 0.5;  //!< slabs per sqrt(N) v_cut / L (measured best on an H100)
+/// Slabs per sqrt(N) v_cut / L (sweep::choose()), measured best on an H200 with float entries
+/// (handouts/engine-gpu.md, "The pass search in float"): a scene searched in bands (the report's
+/// scene: 0.45 and 0.5 alike, 16% to 28% slower on both sides)...
+constexpr double kAlphaBands = 0.5;
+/// ... one sorted over the grid below 10^5 particles (N = 1.6 x 10^4 and 4 x 10^4: 0.35 to 0.5
+/// alike, 0.27 5% to 12% slower) ...
+constexpr double kAlphaPasses = 0.35;
+/// ... and from 10^5 (N = 10^6 at the report's density: 0.22 takes 0.78 of 0.5's time, 0.35
+/// 0.86; 10^5: 0.22 to 0.35 alike, 0.81 of 0.5's).
+constexpr double kAlphaLarge = 0.25;
+constexpr int kLargeFrom = 100000;  //!< particles from which kAlphaLarge
 /// Entries (particle, slab) one pass of the counting sort holds at most: a step takes as many
 /// passes as this needs (one up to N = 10^5 at the report's density, every slab alone from
 /// N = 10^6), so that memory grows with N, not with N times the slabs. One pass or nine made no
@@ -119,7 +129,7 @@ double measure_bandwidth(cudaStream_t stream) {
 class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
  public:
   CudaStepper(const Box& box, const Particles& p, std::string device, double alpha)
-      : DeviceStepper(std::move(device), box, p, cuda::Queue::kOwnStream), alpha_(alpha),
+      : DeviceStepper(std::move(device), box, p, cuda::Queue::kOwnStream), asked_alpha_(alpha),
         wall_(n_), last_(n_), slots_(n_, n_ / 4 + 1024) {  // the list grown as needed
     bandwidth_ = measure_bandwidth(main_);
     set_grid(p);
@@ -240,32 +250,45 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
     }
   }
 
-  /// The grid for the state `p` (sweep::choose(), the fastest 10% search wider), the slabs a
-  /// pass takes (kEntriesPerPass), and the arrays of both phases (lay_out()).
+  /// The grid for the state `p` (sweep::choose(), the fastest 10% search wider): the bands'
+  /// slabs first, and when the scene is not searched in bands (choose_bands()) the passes'; the
+  /// slabs a pass takes (kEntriesPerPass), and the arrays of both phases (lay_out()).
   void set_grid(const Particles& p) {
     sync();
-    std::vector<double> end(p.size()), scratch;
+    std::vector<double> end(p.size());
     for (std::size_t i = 0; i < p.size(); ++i)
       end[i] = sweep::path_end(model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box_.L, box_.r));
-    grid_.g = sweep::choose(box_, p, end, scratch, 0.9, alpha_);
     // No speed of the run exceeds the square root of the summed squared speeds (elastic
     // collisions and walls keep the sum), which bounds the float entries' rounding.
     double energy = 0;
     for (std::size_t i = 0; i < p.size(); ++i) energy += p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i];
-    grid_.single = sweep::single_of(grid_.g, box_.L, std::sqrt(energy) * (1 + 1e-6));
-    grid_.cells = grid_.g.cells();
-    // As few passes as kEntriesPerPass allows, with the slabs spread evenly over them.
-    const long long most = std::max<long long>(1, kEntriesPerPass / std::max(n_, 1));
-    const int passes = static_cast<int>((grid_.g.slabs + most - 1) / most);
-    per_pass_ = (grid_.g.slabs + passes - 1) / passes;
-    beside_ = passes == 1 && static_cast<long long>(n_) * per_pass_ < launch::kSmallPass &&
-              n_ < kBesideBelow && !beside_off();
+    const double vbound = std::sqrt(energy) * (1 + 1e-6);
+    const bool asked = asked_alpha_ > 0;
+    take_grid(p, end, vbound, asked ? asked_alpha_ : kAlphaBands);
     choose_bands(p);
+    if (!banded_ && !asked)  // sorted over the grid: that path's own slabs
+      take_grid(p, end, vbound, n_ >= kLargeFrom ? kAlphaLarge : kAlphaPasses);
     band_cell_.resize(banded_ ? static_cast<std::size_t>(n_) * grid_.g.slabs : 0);
     const int size = per_pass_ * grid_.cells + 1;
     temp_.resize(std::max(cuda::exclusive_scan_bytes(size), cuda::exclusive_scan_bytes(n_)));
     lay_out();
     stale_ = true;
+  }
+
+  /// The grid for the state `p` whose paths end at `end`, with `alpha` slabs per
+  /// sqrt(N) v_cut / L, its single-precision test for speeds up to `vbound`, and the slabs a
+  /// pass takes: as few passes as kEntriesPerPass allows, the slabs spread evenly over them.
+  void take_grid(const Particles& p, const std::vector<double>& end, double vbound,
+                 double alpha) {
+    std::vector<double> scratch;
+    grid_.g = sweep::choose(box_, p, end, scratch, 0.9, alpha);
+    grid_.single = sweep::single_of(grid_.g, box_.L, vbound);
+    grid_.cells = grid_.g.cells();
+    const long long most = std::max<long long>(1, kEntriesPerPass / std::max(n_, 1));
+    const int passes = static_cast<int>((grid_.g.slabs + most - 1) / most);
+    per_pass_ = (grid_.g.slabs + passes - 1) / passes;
+    beside_ = passes == 1 && static_cast<long long>(n_) * per_pass_ < launch::kSmallPass &&
+              n_ < kBesideBelow && !beside_off();
   }
 
   /// Whether a small scene searches in bands (find_pairs_banded()), and how: the rows of a slab
@@ -412,7 +435,7 @@ class CudaStepper final : public cuda::DeviceStepper<kernels::Flags> {
   /// the slow search is balanced and fills more of the GPU), 2 x 10^4 0.139 / 0.139.
   static constexpr int kBesideBelow = 10000;
   double bandwidth_ = 0;  //!< measure_bandwidth(), once, before the steps
-  double alpha_;  //!< slabs per sqrt(N) v_cut / L (StageOptions::sweep_alpha, or kAlpha)
+  double asked_alpha_;  //!< StageOptions::sweep_alpha (0: kAlphaBands, kAlphaPasses or kAlphaLarge)
   kernels::DeviceGrid grid_{};
   int per_pass_ = 1;  //!< slabs one pass of the counting sort takes
   cuda::DeviceArray<double> wall_;
@@ -472,7 +495,7 @@ std::unique_ptr<Stepper> make_gpu_stepper(const Box& box, Particles& p,
                                           const StageOptions& options) {
   if (options.device == Device::kAuto && !cuda::missing_device().empty()) return nullptr;
   return std::make_unique<CudaStepper>(box, p, cuda::require_device(),
-                                       options.sweep_alpha > 0 ? options.sweep_alpha : kAlpha);
+                                       options.sweep_alpha);
 }
 
 }  // namespace plab
