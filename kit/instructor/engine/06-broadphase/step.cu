@@ -14,7 +14,9 @@
 //         finish_small, with grid barriers between its phases, each thread's particle's events in
 //         its registers, read from the slots the search filed them in). The grid is chosen on the
 //         host from the first state; particles that get faster than v_cut search wider, so it stays
-//         exact for any speed. Small scenes (below kBandedBelow, where a band's entries fit a
+//         exact for any speed. The search reads entries rounded to float and tests them in single
+//         precision (sweep::close_in_slab_single(): it passes every pair the double test would);
+//         the pair times stay the model's, in double. Small scenes (below kBandedBelow, where a band's entries fit a
 //         block's shared memory) skip the passes: one kernel, find_pairs_banded, sorts and searches
 //         every slab's bands of rows in shared memory, from each particle's cell in every slab
 //         (start_step writes them; the bands launch as start_step's programmatic dependents). A step with more pairs than the list holds (or a band that
