@@ -20,27 +20,35 @@
 
 namespace {
 
-/// Whether the broad phase finds particles 0 and 1 of `p` in some slab, as stage 06 searches:
-/// both take part in the slab (up to their last slabs), close_in_slab() holds at the slab's
-/// midpoint, and either neither is fast and the later in cell order is in the same or the next
-/// row within the reach of the earlier, or one lies within the reach of the other, which is fast
-/// and at least as fast (sweep::search_of()).
-bool found(const plab::Particles& p, const std::vector<double>& end, const plab::sweep::Grid& g) {
+/// Whether the broad phase finds particles 0 and 1 of `p` in some slab, as stage 06 searches,
+/// each entry's midpoint and velocity held as `Real` (its cell, its reach and whether it is fast
+/// from those): both take part in the slab (up to their last slabs), `close(dx, dy, wx, wy, s)`
+/// (the slab test on the rounded values, `s` the pair's |vx| + |vy|) holds at the slab's midpoint,
+/// and either neither is fast and the later in cell order is in the same or the next row within
+/// the reach of the earlier, or one lies within the reach of the other, which is fast and at
+/// least as fast (sweep::search_of()).
+template <class Real, class Close>
+bool found_as(const plab::Particles& p, const std::vector<double>& end,
+              const plab::sweep::Grid& g, Close close) {
   namespace sweep = plab::sweep;
-  const sweep::Search q[2] = {sweep::search_of(p.vx[0], p.vy[0], g),
-                              sweep::search_of(p.vx[1], p.vy[1], g)};
-  const double v2[2] = {p.vx[0] * p.vx[0] + p.vy[0] * p.vy[0],
-                        p.vx[1] * p.vx[1] + p.vy[1] * p.vy[1]};
+  Real vx[2], vy[2];
+  double v2[2];
+  sweep::Search q[2];
+  for (int i = 0; i < 2; ++i) {
+    vx[i] = static_cast<Real>(p.vx[i]);
+    vy[i] = static_cast<Real>(p.vy[i]);
+    v2[i] = double(vx[i]) * vx[i] + double(vy[i]) * vy[i];
+    q[i] = sweep::search_of(vx[i], vy[i], g);
+  }
+  const Real s = std::fabs(vx[0]) + std::fabs(vy[0]) + std::fabs(vx[1]) + std::fabs(vy[1]);
   for (int k = 0; k <= std::min(sweep::last_slab(end[0], g), sweep::last_slab(end[1], g)); ++k) {
     const double tm = sweep::slab_mid(k, g);
-    double mx[2], my[2];
+    Real mx[2], my[2];
     for (int i = 0; i < 2; ++i) {
-      mx[i] = p.x[i] + tm * p.vx[i];
-      my[i] = p.y[i] + tm * p.vy[i];
+      mx[i] = static_cast<Real>(p.x[i] + tm * p.vx[i]);
+      my[i] = static_cast<Real>(p.y[i] + tm * p.vy[i]);
     }
-    if (!sweep::close_in_slab(mx[0] - mx[1], my[0] - my[1], p.vx[0] - p.vx[1], p.vy[0] - p.vy[1],
-                              g))
-      continue;
+    if (!close(mx[0] - mx[1], my[0] - my[1], vx[0] - vx[1], vy[0] - vy[1], s)) continue;
     const int col[2] = {sweep::column_of(mx[0], g), sweep::column_of(mx[1], g)};
     const int row[2] = {sweep::row_of(my[0], g), sweep::row_of(my[1], g)};
     if (!q[0].fast && !q[1].fast) {
@@ -61,49 +69,19 @@ bool found(const plab::Particles& p, const std::vector<double>& end, const plab:
   return false;
 }
 
-/// found() as the GPU engine's pass search finds the pair: each entry's midpoint and velocity
-/// rounded to float (its cell, its reach and whether it is fast from those), and the slab test in
-/// single precision (sweep::close_in_slab_single(), with `single`).
+/// found_as() in double with close_in_slab(): the CPU engine's search.
+bool found(const plab::Particles& p, const std::vector<double>& end, const plab::sweep::Grid& g) {
+  return found_as<double>(p, end, g, [&g](double dx, double dy, double wx, double wy, double) {
+    return plab::sweep::close_in_slab(dx, dy, wx, wy, g);
+  });
+}
+
+/// found_as() in float with close_in_slab_single(): the GPU engine's search.
 bool found_single(const plab::Particles& p, const std::vector<double>& end,
                   const plab::sweep::Grid& g, const plab::sweep::Single& single) {
-  namespace sweep = plab::sweep;
-  float vx[2], vy[2];
-  double v2[2];
-  sweep::Search q[2];
-  for (int i = 0; i < 2; ++i) {
-    vx[i] = static_cast<float>(p.vx[i]);
-    vy[i] = static_cast<float>(p.vy[i]);
-    v2[i] = double(vx[i]) * vx[i] + double(vy[i]) * vy[i];
-    q[i] = sweep::search_of(vx[i], vy[i], g);
-  }
-  const float s = std::fabs(vx[0]) + std::fabs(vy[0]) + std::fabs(vx[1]) + std::fabs(vy[1]);
-  for (int k = 0; k <= std::min(sweep::last_slab(end[0], g), sweep::last_slab(end[1], g)); ++k) {
-    const double tm = sweep::slab_mid(k, g);
-    float mx[2], my[2];
-    for (int i = 0; i < 2; ++i) {
-      mx[i] = static_cast<float>(p.x[i] + tm * p.vx[i]);
-      my[i] = static_cast<float>(p.y[i] + tm * p.vy[i]);
-    }
-    if (!sweep::close_in_slab_single(mx[0] - mx[1], my[0] - my[1], vx[0] - vx[1], vy[0] - vy[1],
-                                     s, single))
-      continue;
-    const int col[2] = {sweep::column_of(mx[0], g), sweep::column_of(mx[1], g)};
-    const int row[2] = {sweep::row_of(my[0], g), sweep::row_of(my[1], g)};
-    if (!q[0].fast && !q[1].fast) {
-      const int a = (row[0] < row[1] || (row[0] == row[1] && col[0] <= col[1])) ? 0 : 1, b = 1 - a;
-      int x0, x1;
-      sweep::columns_within(mx[a], q[a].d, g, x0, x1);
-      if (row[b] - row[a] <= 1 && (row[b] > row[a] ? x0 <= col[b] : true) && col[b] <= x1)
-        return true;
-      continue;
-    }
-    const int a = (q[0].fast && (!q[1].fast || v2[0] >= v2[1])) ? 0 : 1, b = 1 - a;
-    int x0, x1, y0, y1;
-    sweep::columns_within(mx[a], q[a].d, g, x0, x1);
-    sweep::rows_within(my[a], q[a].d, g, y0, y1);
-    if (x0 <= col[b] && col[b] <= x1 && y0 <= row[b] && row[b] <= y1) return true;
-  }
-  return false;
+  return found_as<float>(p, end, g, [&single](float dx, float dy, float wx, float wy, float s) {
+    return plab::sweep::close_in_slab_single(dx, dy, wx, wy, s, single);
+  });
 }
 
 /// Each particle's path end (sweep::path_end() of its wall time).
@@ -153,28 +131,44 @@ Case make_case(std::mt19937_64& rng, double L, double r, double speed, int n, do
   return c;
 }
 
+/// A random pair that the model makes meet in the step (and before both walls), in a scene of
+/// up to 61 particles: boxes 10 .. 10^6, radii L/10 .. L/10^5, speeds from tiny to a box a step,
+/// 2r apart give or take a few ulps at any time of the step, grazing on even trials.
+struct Meeting {
+  Case c;
+  double L = 0, r = 0, speed = 0;  //!< the scene's scales
+  double t = 0;                    //!< the pair's time (model.md)
+  std::vector<double> end;         //!< each particle's path end
+};
+
+/// Draws the next Meeting for `trial`; false when the pair does not meet in the step before both
+/// walls (a pair at or after either wall time loses to that wall and is never accepted).
+bool next_meeting(std::mt19937_64& rng, int trial, Meeting& m) {
+  std::uniform_real_distribution<double> u(0, 1);
+  m.L = std::pow(10.0, 1 + 5 * u(rng));              // 10 .. 10^6
+  m.r = m.L * std::pow(10.0, -1 - 4 * u(rng));       // L/10 .. L/10^5
+  m.speed = m.L * std::pow(10.0, -6 + 6 * u(rng));   // tiny .. a whole box a step
+  const int n = 2 + static_cast<int>(u(rng) * 60);
+  // meet right at the margin: 2r apart give or take a few ulps, at any time of the step
+  const double miss = (u(rng) - 0.5) * 8 * std::numeric_limits<double>::epsilon() * m.L;
+  m.c = make_case(rng, m.L, m.r, m.speed, n, u(rng), miss, trial % 2 == 0);
+  m.t = plab::pair_candidate(m.c.box, m.c.p, 0, 1).t;
+  m.end = path_ends(m.c.box, m.c.p);
+  return plab::model::in_step(m.t) && m.t < m.end[0] && m.t < m.end[1];
+}
+
 TEST(Sweep, NeverDropsAPairThatMeetsInTheStep) {
   std::mt19937_64 rng(2026);
-  std::uniform_real_distribution<double> u(0, 1);
   long checked = 0;
+  Meeting m;
   for (int trial = 0; trial < 200000; ++trial) {
-    const double L = std::pow(10.0, 1 + 5 * u(rng));              // 10 .. 10^6
-    const double r = L * std::pow(10.0, -1 - 4 * u(rng));          // L/10 .. L/10^5
-    const double speed = L * std::pow(10.0, -6 + 6 * u(rng));      // tiny .. a whole box a step
-    const int n = 2 + static_cast<int>(u(rng) * 60);
-    // meet right at the margin: 2r apart give or take a few ulps, at any time of the step
-    const double miss = (u(rng) - 0.5) * 8 * std::numeric_limits<double>::epsilon() * L;
-    Case c = make_case(rng, L, r, speed, n, u(rng), miss, trial % 2 == 0);
-    const double t = plab::pair_candidate(c.box, c.p, 0, 1).t;
-    const std::vector<double> end = path_ends(c.box, c.p);
-    // A pair at or after either wall time loses to that wall and is never accepted.
-    if (!plab::model::in_step(t) || !(t < end[0]) || !(t < end[1])) continue;
+    if (!next_meeting(rng, trial, m)) continue;
     ++checked;
     std::vector<double> scratch;
-    const plab::sweep::Grid g = plab::sweep::choose(c.box, c.p, end, scratch, trial % 3 / 2.0);
-    ASSERT_TRUE(found(c.p, end, g)) << "pair time " << t << " dropped: L " << L << " r " << r
-                                    << " speed " << speed << " slabs " << g.slabs
-                                    << " v_cut " << g.v_cut;
+    const plab::sweep::Grid g = plab::sweep::choose(m.c.box, m.c.p, m.end, scratch, trial % 3 / 2.0);
+    ASSERT_TRUE(found(m.c.p, m.end, g)) << "pair time " << m.t << " dropped: L " << m.L << " r "
+                                        << m.r << " speed " << m.speed << " slabs " << g.slabs
+                                        << " v_cut " << g.v_cut;
   }
   EXPECT_GT(checked, 50000);
 }
@@ -310,38 +304,31 @@ TEST(Sweep, SingleNeverDropsAPair) {
   std::mt19937_64 rng(2027);
   std::uniform_real_distribution<double> u(0, 1);
   long checked = 0;
+  Meeting m;
   for (int trial = 0; trial < 200000; ++trial) {
-    const double L = std::pow(10.0, 1 + 5 * u(rng));              // 10 .. 10^6
-    const double r = L * std::pow(10.0, -1 - 4 * u(rng));          // L/10 .. L/10^5
-    const double speed = L * std::pow(10.0, -6 + 6 * u(rng));      // tiny .. a whole box a step
-    const int n = 2 + static_cast<int>(u(rng) * 60);
-    const double miss = (u(rng) - 0.5) * 8 * std::numeric_limits<double>::epsilon() * L;
-    Case c = make_case(rng, L, r, speed, n, u(rng), miss, trial % 2 == 0);
-    const double t = plab::pair_candidate(c.box, c.p, 0, 1).t;
-    const std::vector<double> end = path_ends(c.box, c.p);
-    if (!plab::model::in_step(t) || !(t < end[0]) || !(t < end[1])) continue;
+    if (!next_meeting(rng, trial, m)) continue;
     ++checked;
     // The grid of a first state up to 10^4 times slower (speeds stay below the square root of
     // the summed squares: sqrt(N) times the first fastest at most).
     const double boost = trial % 4 == 0 ? 1 : std::pow(10.0, 4 * u(rng));
-    plab::Particles first = c.p;
+    plab::Particles first = m.c.p;
     for (std::size_t i = 0; i < first.size(); ++i) {
       first.vx[i] /= boost;
       first.vy[i] /= boost;
     }
     std::vector<double> scratch;
     const plab::sweep::Grid g =
-        plab::sweep::choose(c.box, first, path_ends(c.box, first), scratch, trial % 3 / 2.0);
+        plab::sweep::choose(m.c.box, first, path_ends(m.c.box, first), scratch, trial % 3 / 2.0);
     double energy = 0;
-    for (std::size_t i = 0; i < c.p.size(); ++i)
-      energy += c.p.vx[i] * c.p.vx[i] + c.p.vy[i] * c.p.vy[i];
-    const plab::sweep::Single single = plab::sweep::single_of(g, L, std::sqrt(energy));
-    ASSERT_TRUE(std::isfinite(single.rr)) << "L " << L << " r " << r << " speed " << speed;
-    ASSERT_TRUE(found_single(c.p, end, g, single))
-        << "pair time " << t << " dropped in float: L " << L << " r " << r << " speed " << speed
-        << " boost " << boost << " slabs " << g.slabs << " v_cut " << g.v_cut;
-    ASSERT_TRUE(found(c.p, end, g)) << "pair time " << t << " dropped: L " << L << " r " << r
-                                    << " speed " << speed << " boost " << boost;
+    for (std::size_t i = 0; i < m.c.p.size(); ++i)
+      energy += m.c.p.vx[i] * m.c.p.vx[i] + m.c.p.vy[i] * m.c.p.vy[i];
+    const plab::sweep::Single single = plab::sweep::single_of(g, m.L, std::sqrt(energy));
+    ASSERT_TRUE(std::isfinite(single.rr)) << "L " << m.L << " r " << m.r << " speed " << m.speed;
+    ASSERT_TRUE(found_single(m.c.p, m.end, g, single))
+        << "pair time " << m.t << " dropped in float: L " << m.L << " r " << m.r << " speed "
+        << m.speed << " boost " << boost << " slabs " << g.slabs << " v_cut " << g.v_cut;
+    ASSERT_TRUE(found(m.c.p, m.end, g)) << "pair time " << m.t << " dropped: L " << m.L << " r "
+                                        << m.r << " speed " << m.speed << " boost " << boost;
   }
   EXPECT_GT(checked, 50000);
 }
