@@ -39,7 +39,8 @@ namespace plab {
 namespace {
 
 using lanes::Isa;
-using lanes::kLanes;  // close_in_slab() is evaluated for this many entries at a time
+using lanes::kLanes;        // the int and double arrays' padding
+using lanes::kLanesSingle;  // close_in_slab_single() is evaluated for this many entries at a time
 constexpr double kQuantile = 0.9;  //!< the fastest 10% search wider (sweep::choose())
 constexpr double kAlpha = 0.3;     //!< slabs per sqrt(N) v_cut / L, measured best on the report's scene
 constexpr int kChunk = 256;        //!< entries a thread searches at a time (dynamic schedule)
@@ -68,7 +69,9 @@ struct Entries {
 /// barriers comes in two copies, one for even slabs and one for odd.
 struct Slab {
   Entries set[2];                   //!< slab k's entries are set[(k + 1) % 2], its input set[k % 2]
-  std::vector<double> x, y;         //!< per entry of the slab: midpoint position (padded by kLanes)
+  std::vector<float> x, y;          //!< per entry of the slab: midpoint position, rounded to float
+                                    //!< (the entry's cell is the rounded one's; padded by kLanesSingle)
+  std::vector<float> vx, vy;        //!< ... its velocity, rounded to float (what the search tests)
   std::vector<int> start;           //!< cell c holds entries [start[c], start[c + 1])
   std::vector<int> row_start[2];    //!< row r of slab k holds entries [row_start[k % 2][r], ... [r + 1])
   std::vector<int> counts[2];       //!< slab k's entries per thread and row (count_stride() a thread)
@@ -78,12 +81,15 @@ struct Slab {
   void reserve(int n, const sweep::Grid& g, int threads);
 };
 
-/// What the search of a slab reads: its entries in cell order, one array per field.
+/// What the search of a slab reads: its entries in cell order, one array per field, midpoints and
+/// velocities rounded to float (sweep::close_in_slab_single() tests them: sixteen lanes a vector,
+/// half the bytes a test).
 struct View {
-  const double* x;             //!< midpoint position x
-  const double* y;             //!< midpoint position y
-  const double* vx;            //!< velocity x
-  const double* vy;            //!< velocity y
+  const float* x;              //!< midpoint position x
+  const float* y;              //!< midpoint position y
+  const float* vx;             //!< velocity x
+  const float* vy;             //!< velocity y
+  sweep::Single single;        //!< the single-precision test's constants
   const sweep::Search* reach;  //!< what each entry searches
   const int* start;            //!< cell c holds entries [start[c], start[c + 1])
   const int* row_start;        //!< row r holds entries [row_start[r], row_start[r + 1])
@@ -112,7 +118,7 @@ inline std::size_t count_stride(int rows) {
 
 void Slab::reserve(int n, const sweep::Grid& g, int threads) {
   for (Entries& e : set) e.reserve(n);
-  for (auto* v : {&x, &y}) v->resize(n + kLanes);
+  for (auto* v : {&x, &y, &vx, &vy}) v->resize(n + kLanesSingle);
   from.resize(n);
   order.resize(n);
   start.resize(static_cast<std::size_t>(g.cells()) + 1);
@@ -127,6 +133,10 @@ inline int share(int count, int t, int threads) {
   return static_cast<int>(static_cast<long long>(count) * t / threads);
 }
 
+/// A midpoint coordinate, from the start `x0` and the velocity `v` at slab time `tm`, rounded to
+/// float: what the search reads, and so what the entry is sorted by.
+inline float midpoint(double x0, double v, double tm) { return static_cast<float>(x0 + tm * v); }
+
 /// Files entry `e` of `in` for slab k: its row and column by its midpoint position (row -1 when it
 /// takes no part, last < k), counted in `count` (one per row, then one for those dropped).
 inline void count_entry(Entries& in, int e, int k, const sweep::Grid& g, int* count) {
@@ -136,8 +146,8 @@ inline void count_entry(Entries& in, int e, int k, const sweep::Grid& g, int* co
     return;
   }
   const double tm = sweep::slab_mid(k, g);
-  in.row[e] = sweep::row_of(in.y0[e] + tm * in.vy[e], g);
-  in.column[e] = sweep::column_of(in.x0[e] + tm * in.vx[e], g);
+  in.row[e] = sweep::row_of(midpoint(in.y0[e], in.vy[e], tm), g);
+  in.column[e] = sweep::column_of(midpoint(in.x0[e], in.vx[e], tm), g);
   ++count[in.row[e]];
 }
 
@@ -227,8 +237,10 @@ inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, i
       out.vx[to] = in.vx[j];
       out.vy[to] = in.vy[j];
       out.reach[to] = in.reach[j];
-      s.x[to] = in.x0[j] + tm * in.vx[j];
-      s.y[to] = in.y0[j] + tm * in.vy[j];
+      s.x[to] = midpoint(in.x0[j], in.vx[j], tm);
+      s.y[to] = midpoint(in.y0[j], in.vy[j], tm);
+      s.vx[to] = static_cast<float>(in.vx[j]);
+      s.vy[to] = static_cast<float>(in.vy[j]);
       if (k == 0) s.order[to] = in.id[j];
       if (next_count) count_entry(out, to, k + 1, g, next_count);
     }
@@ -240,14 +252,16 @@ inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, i
   if (r0 < r1 && r1 == g.rows) s.start[g.cells()] = row_start[g.rows];
 }
 
-/// Files entry `a` with every entry of [from, to) but itself that passes close_in_slab() in
-/// `hits`, kLanes entries at a time (the arrays are padded: lanes past `to` are masked off).
+/// Files entry `a` with every entry of [from, to) but itself that passes close_in_slab_single()
+/// in `hits`, kLanesSingle entries at a time (the arrays are padded: lanes past `to` are masked
+/// off). It passes every pair close_in_slab() passes on the unrounded values (sweep::Single).
 template <Isa kIsa>
 inline void test_range(const View& s, std::vector<std::pair<int, int>>& hits, int a, int from,
-                       int to, const sweep::Grid& g) {
-  lanes::for_each_close<kIsa>({s.x, s.y, s.vx, s.vy}, a, from, to, g, [&hits, a](int b) {
-    if (b != a) hits.emplace_back(a, b);
-  });
+                       int to, const sweep::Grid&) {
+  lanes::for_each_close_single<kIsa>({s.x, s.y, s.vx, s.vy}, a, from, to, s.single,
+                                     [&hits, a](int b) {
+                                       if (b != a) hits.emplace_back(a, b);
+                                     });
 }
 
 /// The search of entries [from, to) of the slab, entry by entry (sweep::search_of()): a slow
@@ -329,14 +343,16 @@ inline void narrow(const Box& box, const ParticlesOf<Real>& p, const Entries& ou
 /// `my.found`). One level and one move an entry: the slab is small enough to stay in cache.
 template <class Real>
 inline void slab_alone(const Box& box, const ParticlesOf<Real>& p, Slab& o, Mine& my,
-                       const Entries& in, int n, int k, const sweep::Grid& g) {
+                       const Entries& in, int n, int k, const sweep::Grid& g,
+                       const sweep::Single& single) {
   const double tm = sweep::slab_mid(k, g);
   std::vector<int>& cell = o.from;  // per input entry: its cell, or -1
   int* start = o.start.data();
   std::fill(start, start + g.cells() + 1, 0);
   for (int j = 0; j < n; ++j) {  // count
     cell[j] = in.last[j] < k ? -1
-                             : sweep::cell_of(in.x0[j] + tm * in.vx[j], in.y0[j] + tm * in.vy[j], g);
+                             : sweep::cell_of(midpoint(in.x0[j], in.vx[j], tm),
+                                              midpoint(in.y0[j], in.vy[j], tm), g);
     if (cell[j] >= 0) ++start[cell[j] + 1];
   }
   for (int c = 0; c < g.cells(); ++c) start[c + 1] += start[c];
@@ -352,15 +368,17 @@ inline void slab_alone(const Box& box, const ParticlesOf<Real>& p, Slab& o, Mine
     out.vx[to] = in.vx[j];
     out.vy[to] = in.vy[j];
     out.reach[to] = in.reach[j];
-    o.x[to] = in.x0[j] + tm * in.vx[j];
-    o.y[to] = in.y0[j] + tm * in.vy[j];
+    o.x[to] = midpoint(in.x0[j], in.vx[j], tm);
+    o.y[to] = midpoint(in.y0[j], in.vy[j], tm);
+    o.vx[to] = static_cast<float>(in.vx[j]);
+    o.vy[to] = static_cast<float>(in.vy[j]);
     if (k == 0) o.order[to] = in.id[j];
   }
   for (int c = g.cells(); c > 0; --c) start[c] = start[c - 1];
   start[0] = 0;
   std::vector<int>& row_start = o.row_start[0];
   for (int r = 0; r <= g.rows; ++r) row_start[r] = start[static_cast<std::size_t>(r) * g.columns];
-  const View v{o.x.data(),       o.y.data(), out.vx.data(), out.vy.data(),
+  const View v{o.x.data(),       o.y.data(), o.vx.data(),      o.vy.data(), single,
                out.reach.data(), start,      row_start.data()};
   my.hits.clear();
   search(v, my.hits, 0, taking, g);
@@ -382,6 +400,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
   static Plan plan;
   static SparseSelection selection;
   static sweep::Grid g;
+  static sweep::Single single;  // the search's test in float, for g
   wall.resize(n);
   end.resize(n);
   if (static_cast<int>(s.order.size()) != n) {  // a new scene: any order will do to begin with
@@ -449,6 +468,8 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
       }
       g = sweep::choose_from_sample(box, active, max2, unordered, scratch, kQuantile,
                                      alpha_in_use);
+      // (this step's fastest bounds every speed the search's float entries round)
+      single = sweep::single_of(g, box.L, std::sqrt(max2) * (1 + 1e-6));
       const bool alone = whole_slabs(n, g, threads);
       s.reserve(n, g, threads);
       for (Mine& m : mine) {
@@ -465,7 +486,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
 #pragma omp barrier
 #pragma omp for schedule(dynamic, 1)
       for (int k = 0; k < g.slabs; ++k) {
-        slab_alone(box, p, my.own, my, in, n, k, g);
+        slab_alone(box, p, my.own, my, in, n, k, g, single);
         my.first |= (k == 0);
       }
       if (my.first) std::swap(s.order, my.own.order);  // no thread reads s.order until next step
@@ -510,7 +531,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
         // The search (each pair that passes, then the narrow phase at once), in chunks of entries
         // taken as threads come free; then this thread groups slab k + 1's entries by row. No
         // barrier between: the grouping touches nothing the search reads.
-        const View v{s.x.data(),       s.y.data(),     out.vx.data(),   out.vy.data(),
+        const View v{s.x.data(),       s.y.data(),     s.vx.data(),     s.vy.data(), single,
                      out.reach.data(), s.start.data(), row_start.data()};
 #pragma omp for schedule(dynamic, 1) nowait
         for (int from = 0; from < taking; from += kChunk) {
