@@ -184,13 +184,15 @@ __attribute__((target("avx512f"))) inline unsigned close_lanes_single_avx512(
 #endif
 
 #if !PLAB_AVX2
-// Without the vector paths, every Isa takes the portable loop.
+/// Without the vector paths (not x86-64), every Isa takes the portable loop: close_lanes().
 inline unsigned close_lanes_avx2(const Fields& s, int a, int b0, const sweep::Grid& g) {
   return close_lanes(s, a, b0, g);
 }
+/// Without the vector paths: close_lanes().
 inline unsigned close_lanes_avx512(const Fields& s, int a, int b0, const sweep::Grid& g) {
   return close_lanes(s, a, b0, g);
 }
+/// Without the vector paths: close_lanes_single().
 inline unsigned close_lanes_single_avx512(const SingleFields& s, int a, int b0,
                                           const sweep::Single& c) {
   return close_lanes_single(s, a, b0, c);
