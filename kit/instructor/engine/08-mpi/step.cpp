@@ -17,7 +17,7 @@
 ///  3. the rounds of stage 03 across ranks (share_with_ghosts(), any_rank());
 ///  4. apply (a pair with a ghost: both owners compute it, each keeps its own particle);
 ///  5. migration: particles now in another rank's block move there (any rank, any distance), and
-///     each rank keeps its own in the order of place (order_by_place()).
+///     each rank keeps its own in the order of place (migrate()).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -248,7 +248,7 @@ double end_of(const Box& box, const Local& s, int k) {
 void share_halo(const Ranks& r, const Box& box, const Scene& sc, Local& s) {
   s.sent_to.assign(r.ranks, {});
   std::vector<std::vector<Ghost>> out(r.ranks);
-  for (int k = 0; k < s.owned; ++k) {
+  for (int k = 0; k < s.owned && r.ranks > 1; ++k) {  // (a rank alone has no halo)
     const double T = end_of(box, s, k);
     if (!(T > 0)) continue;  // its wall comes first: it takes part in no pair
     const double at = s.p.x[k] + T * s.p.vx[k], yat = s.p.y[k] + T * s.p.vy[k];
@@ -627,53 +627,59 @@ void apply_events(const Box& box, const std::vector<model::Event>& chosen,
   }
 }
 
-/// Sorts `recs` into the order of a coarse grid over their range (rows in y, then columns in x,
-/// about four particles a cell, a counting sort): nearly the order of the next step's cells, so
-/// that each time slab's counting sort (bin()) reads the particles in about the order it writes
-/// them and the search's neighbours lie close together in memory. No bit depends on the order:
-/// events are keyed by scene indices, and a pair's time is computed with the lower one first.
-void order_by_place(std::vector<Record>& recs) {
-  const int n = static_cast<int>(recs.size());
-  double x0 = HUGE_VAL, x1 = -HUGE_VAL, y0 = HUGE_VAL, y1 = -HUGE_VAL;
-  for (const Record& q : recs) {
-    x0 = std::fmin(x0, q.x), x1 = std::fmax(x1, q.x);
-    y0 = std::fmin(y0, q.y), y1 = std::fmax(y1, q.y);
+/// 5. Migration: every owned particle now in another rank's block goes there (`blocks`); ghosts
+/// are dropped. What a rank keeps (those that stay, then those that came) goes into the order of
+/// a coarse grid over their range (rows in y, then columns in x, about four particles a cell: a
+/// counting sort into a second set of arrays, kept from step to step, which then takes the place
+/// of `s`'s): nearly the order of the next step's cells, so that each time slab's counting sort
+/// (bin()) reads the particles in about the order it writes them and the search's neighbours lie
+/// close together in memory. No bit depends on the order: events are keyed by scene indices, and
+/// a pair's time is computed with the lower one first.
+void migrate(const Ranks& r, const Blocks& blocks, Local& s) {
+  std::vector<std::vector<Record>> out(r.ranks);
+  std::vector<int> stay;  // owned particles that stay here
+  stay.reserve(s.owned);
+  for (int k = 0; k < s.owned; ++k) {
+    const int q = blocks.owner_of(s.p.x[k], s.p.y[k]);
+    if (q == r.rank) stay.push_back(k);
+    else out[q].push_back(s.record(k));
   }
-  if (n < 2 || !(x1 - x0 > 0) || !(y1 - y0 > 0) || !std::isfinite(x1 - x0) ||
-      !std::isfinite(y1 - y0))
-    return;
-  const int side = std::max(1, static_cast<int>(std::sqrt(n / 4.0)));
-  const double fx = side / (x1 - x0), fy = side / (y1 - y0);
+  const std::vector<Record> came = all_to_all(r, out);
+  const int m = static_cast<int>(stay.size()), n = m + static_cast<int>(came.size());
+  const auto x_of = [&](int j) { return j < m ? s.p.x[stay[j]] : came[j - m].x; };
+  const auto y_of = [&](int j) { return j < m ? s.p.y[stay[j]] : came[j - m].y; };
+  double x0 = HUGE_VAL, x1 = -HUGE_VAL, y0 = HUGE_VAL, y1 = -HUGE_VAL;
+  for (int j = 0; j < n; ++j) {
+    x0 = std::fmin(x0, x_of(j)), x1 = std::fmax(x1, x_of(j));
+    y0 = std::fmin(y0, y_of(j)), y1 = std::fmax(y1, y_of(j));
+  }
+  // One cell (the order they are in) when the range gives no grid.
+  const bool grid = n >= 2 && x1 - x0 > 0 && y1 - y0 > 0 && std::isfinite(x1 - x0) &&
+                    std::isfinite(y1 - y0);
+  const int side = grid ? std::max(1, static_cast<int>(std::sqrt(n / 4.0))) : 1;
+  const double fx = grid ? side / (x1 - x0) : 0, fy = grid ? side / (y1 - y0) : 0;
   const auto index = [side](double v) {  // 0 .. side - 1; a not-a-number: 0
     return v >= 0 ? (v < side ? static_cast<int>(v) : side - 1) : 0;
   };
   std::vector<int> start(static_cast<std::size_t>(side) * side + 1, 0), cell(n);
-  for (int k = 0; k < n; ++k) {
-    cell[k] = index((recs[k].y - y0) * fy) * side + index((recs[k].x - x0) * fx);
-    ++start[cell[k] + 1];
+  for (int j = 0; j < n; ++j) {
+    cell[j] = grid ? index((y_of(j) - y0) * fy) * side + index((x_of(j) - x0) * fx) : 0;
+    ++start[cell[j] + 1];
   }
   for (std::size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
-  std::vector<Record> sorted(n);
-  for (int k = 0; k < n; ++k) sorted[start[cell[k]]++] = recs[k];
-  recs = std::move(sorted);
-}
-
-/// 5. Migration: every owned particle now in another rank's block goes there (`blocks`); ghosts
-/// are dropped; what a rank keeps is in the order of place (order_by_place()).
-void migrate(const Ranks& r, const Blocks& blocks, Local& s) {
-  std::vector<std::vector<Record>> out(r.ranks);
-  std::vector<Record> mine;
-  for (int k = 0; k < s.owned; ++k) {
-    const int q = blocks.owner_of(s.p.x[k], s.p.y[k]);
-    if (q == r.rank) mine.push_back(s.record(k));
-    else out[q].push_back(s.record(k));
+  static Local kept;  // (one rank a process)
+  kept.p.resize(n);
+  kept.id.resize(n);
+  for (int j = 0; j < n; ++j) {
+    const int at = start[cell[j]]++;
+    const Record q = j < m ? s.record(stay[j]) : came[j - m];
+    kept.p.x[at] = q.x, kept.p.y[at] = q.y, kept.p.vx[at] = q.vx, kept.p.vy[at] = q.vy;
+    kept.p.pc[at] = q.pc, kept.p.wc[at] = q.wc, kept.id[at] = q.id;
   }
-  for (const Record& rec : all_to_all(r, out)) mine.push_back(rec);
-  order_by_place(mine);
-  Local kept;
-  for (const Record& rec : mine) kept.push(rec);
-  kept.owned = kept.size();
-  s = std::move(kept);
+  kept.owned = n;
+  kept.sent_to.clear();
+  kept.ghosts_from.clear();
+  std::swap(s, kept);
 }
 
 }  // namespace
