@@ -3,13 +3,19 @@
 each cut into 4 columns a row height (the order of the engine's grid at the step's start),
 row-major. The same particles and the same physics, other scene ids; handouts/engine-gpu.md uses
 it to measure what particles kept in cell order would be worth (the scene as generated against
-the same scene numbered by place).
+the same scene numbered by place). The scene is read by the kit's reader (`plab read`: a
+malformed one is refused with its line) and written with every value's bits kept.
 
   tools/scene-in-place-order.py IN OUT [--rows ROWS]
 """
 import argparse
 import math
+import pathlib
 import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "kit" / "python"))
+from plab import plabio  # noqa: E402  (the kit's formats and programs)
+from plab.stress import scene_text  # noqa: E402
 
 
 def main():
@@ -20,23 +26,20 @@ def main():
     ap.add_argument("--rows", type=int, default=0,
                     help="rows of the order (default: sqrt(N), about the engine's own)")
     a = ap.parse_args()
-    with open(a.scene) as f:
-        head = [f.readline() for _ in range(5)]
-        try:
-            n, box = int(head[0]), float(head[1])
-        except ValueError:
-            sys.exit(f"{a.scene}: lines 1-2: expected N and L (model.md's input)")
-        parts = [line.split() for line in f if line.strip()]
-    if len(parts) != n or any(len(p) != 5 for p in parts):
-        sys.exit(f"{a.scene}: expected {n} particle lines 'i x y vx vy' after the header "
-                 f"(a scene without them: write it with plab gen first)")
+    try:
+        s = plabio.Plab().read_scene(a.scene)
+    except (plabio.FormatError, plabio.ProgramError) as e:
+        sys.exit(f"error: {e}")
+    if s["generated"]:
+        sys.exit(f"error: {a.scene} has no particle lines (the kit generates them): write the "
+                 f"scene with plab gen --out first")
+    n = s["n"]
     rows = a.rows if a.rows > 0 else max(1, int(math.sqrt(n)))
-    cell = box / rows
-    parts.sort(key=lambda p: (int(float(p[2]) / cell), int(float(p[1]) * 4 / cell)))
+    cell = s["L"] / rows
+    order = sorted(range(n), key=lambda i: (int(s["y"][i] / cell), int(s["x"][i] * 4 / cell)))
+    particles = [(s["x"][i], s["y"][i], s["vx"][i], s["vy"][i]) for i in order]
     with open(a.out, "w") as f:
-        f.writelines(head)
-        for k, p in enumerate(parts):  # the numbers as written: the same bits
-            f.write(f"{k} {p[1]} {p[2]} {p[3]} {p[4]}\n")
+        f.write(scene_text(s["L"], s["r"], s["steps"], particles, s["mode"]))
     print(f"{a.out}: {n} particles numbered in the order of {rows} rows x {4 * rows} columns")
 
 
