@@ -246,25 +246,35 @@ TEST(Plan, SparseGreedyIsGreedy) {
 
 TEST(Plan, SparseGreedyInTeamIsSparseGreedy) {
   // The team version (stage 06's CPU path) on the same kind of candidate sets, split over 1 to 5
-  // threads in a different order each time: always the serial plan.
+  // threads in a different order each time: always the serial plan. Small sets of few times
+  // (ties everywhere), then larger and denser ones whose contested pairs form long chains of
+  // falling times (the rounds then take many rounds), on up to 8 threads.
   std::mt19937_64 rng(11);
-  std::uniform_int_distribution<int> pick(0, 39);
-  std::uniform_int_distribution<int> step(0, 7);
-  for (int trial = 0; trial < 500; ++trial) {
-    std::vector<double> wall(40);
+  for (int trial = 0; trial < 700; ++trial) {
+    const bool large = trial >= 500;
+    const int n = large ? 300 + trial : 40;
+    const int count = large ? 3 * n : 30;
+    std::uniform_int_distribution<int> pick(0, n - 1);
+    std::uniform_int_distribution<int> step(0, large ? 1000 : 7);
+    std::uniform_int_distribution<int> near(1, 3);
+    std::vector<double> wall(n);
     std::vector<plab::model::Event> pairs;
-    for (int i = 0; i < 40; ++i) wall[i] = step(rng) / 4.0;
-    for (int e = 0; e < 30; ++e) {
-      const int i = pick(rng), j = pick(rng);
+    for (int i = 0; i < n; ++i) wall[i] = large ? 0.5 + step(rng) / 1000.0 : step(rng) / 4.0;
+    for (int e = 0; e < count; ++e) {
+      const int i = pick(rng);
+      // in the large sets, mostly neighbours by index, with later times further along: chains
+      const int j = large && e % 4 != 0 ? std::min(n - 1, i + near(rng)) : pick(rng);
       if (i == j) continue;
-      const auto pair = plab::model::pair_event_key(step(rng) / 8.0, std::min(i, j), std::max(i, j));
+      const double t = large && e % 4 != 0 ? 0.4 * (n - i) / n + step(rng) / 1e6 : step(rng) / 8.0;
+      const auto pair = plab::model::pair_event_key(large ? t : step(rng) / 8.0, std::min(i, j),
+                                                    std::max(i, j));
       pairs.push_back(pair);
       if (e % 5 == 0) pairs.push_back(pair);  // found twice
     }
     std::vector<plab::model::Event> serial = pairs;
     const plab::Plan want = plab::sparse_greedy_plan(serial, wall);
 #ifdef _OPENMP
-    const int threads = 1 + trial % 5;
+    const int threads = large ? 1 + trial % 8 : 1 + trial % 5;
 #else
     const int threads = 1;
 #endif
@@ -287,7 +297,7 @@ TEST(Plan, SparseGreedyInTeamIsSparseGreedy) {
       plab::sparse_greedy_plan_in_team(parts[t], wall, got, work);
     }
     ASSERT_EQ(got.partner, want.partner) << "trial " << trial;
-    for (int i = 0; i < 40; ++i)
+    for (int i = 0; i < n; ++i)
       if (want.partner[i] >= 0) {
         ASSERT_EQ(got.time[i], want.time[i]) << "trial " << trial << " particle " << i;
       }

@@ -25,9 +25,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "plab/close_lanes.hpp"
@@ -46,18 +49,51 @@ constexpr double kAlpha = 0.3;     //!< slabs per sqrt(N) v_cut / L, measured be
 constexpr int kChunk = 256;        //!< entries a thread searches at a time (dynamic schedule)
 constexpr int kSmall = 1 << 15;    //!< up to this many particles, a thread may take whole slabs
 
+/// An allocator that leaves the elements a resize adds unwritten (default-initialised), so that
+/// a buffer's pages are first written, and so mapped by the system, by the threads that use it,
+/// in parallel, and not zeroed by the one thread that grows it (at N = 10^6 the first step's
+/// buffers are some 200 MB).
+template <class T>
+struct Unwritten : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = Unwritten<U>;
+  };
+  Unwritten() = default;
+  template <class U>
+  Unwritten(const Unwritten<U>&) noexcept {}
+  template <class U, class... Args>
+  void construct(U* at, Args&&... args) {
+    if constexpr (sizeof...(Args) == 0)
+      ::new (static_cast<void*>(at)) U;
+    else
+      ::new (static_cast<void*>(at)) U(std::forward<Args>(args)...);
+  }
+};
+/// A step's working array of N or so elements (Unwritten).
+template <class T>
+using Buffer = std::vector<T, Unwritten<T>>;
+
+/// Resizes `v` to `size` elements of which the last `padding` are zero (a vector's lanes past
+/// the entries read them).
+template <class T>
+void resize_padded(Buffer<T>& v, std::size_t size, std::size_t padding) {
+  v.resize(size);
+  std::fill(v.end() - static_cast<std::ptrdiff_t>(std::min(padding, size)), v.end(), T{});
+}
+
 /// A slab's entries, one array per field: the particles that take part, in cell order.
 struct Entries {
-  std::vector<int> id;               //!< the particle
-  std::vector<int> last;             //!< its last slab (sweep::last_slab())
-  std::vector<double> x0, y0;        //!< its start-of-step position
-  std::vector<double> vx, vy;        //!< its velocity (padded by kLanes)
-  std::vector<sweep::Search> reach;  //!< what it searches (sweep::search_of())
-  std::vector<int> row, column;      //!< its row (-1: takes no part) and column in the next slab
+  Buffer<int> id;               //!< the particle
+  Buffer<int> last;             //!< its last slab (sweep::last_slab())
+  Buffer<double> x0, y0;        //!< its start-of-step position
+  Buffer<double> vx, vy;        //!< its velocity (padded by kLanes)
+  Buffer<sweep::Search> reach;  //!< what it searches (sweep::search_of())
+  Buffer<int> row, column;      //!< its row (-1: takes no part) and column in the next slab
   /// Room for `n` entries (and kLanes of padding).
   void reserve(int n) {
-    for (auto* v : {&id, &last, &row, &column}) v->resize(n + kLanes);
-    for (auto* v : {&x0, &y0, &vx, &vy}) v->resize(n + kLanes);
+    for (auto* v : {&id, &last, &row, &column}) resize_padded(*v, n + kLanes, kLanes);
+    for (auto* v : {&x0, &y0, &vx, &vy}) resize_padded(*v, n + kLanes, kLanes);
     reach.resize(n);
   }
 };
@@ -69,13 +105,13 @@ struct Entries {
 /// barriers comes in two copies, one for even slabs and one for odd.
 struct Slab {
   Entries set[2];                   //!< slab k's entries are set[(k + 1) % 2], its input set[k % 2]
-  std::vector<float> x, y;          //!< per entry of the slab: midpoint position, rounded to float
+  Buffer<float> x, y;               //!< per entry of the slab: midpoint position, rounded to float
                                     //!< (the entry's cell is the rounded one's; padded by kLanesSingle)
-  std::vector<float> vx, vy;        //!< ... its velocity, rounded to float (what the search tests)
+  Buffer<float> vx, vy;             //!< ... its velocity, rounded to float (what the search tests)
   std::vector<int> start;           //!< cell c holds entries [start[c], start[c + 1])
   std::vector<int> row_start[2];    //!< row r of slab k holds entries [row_start[k % 2][r], ... [r + 1])
   std::vector<int> counts[2];       //!< slab k's entries per thread and row (count_stride() a thread)
-  std::vector<int> from;            //!< per entry, grouped by row: the input entry it comes from
+  Buffer<int> from;                 //!< per entry, grouped by row: the input entry it comes from
   std::vector<int> order;           //!< every particle, in the cell order of the last step's slab 0
   /// Room for `n` particles in grid `g` sorted by `threads` threads.
   void reserve(int n, const sweep::Grid& g, int threads);
@@ -118,7 +154,7 @@ inline std::size_t count_stride(int rows) {
 
 void Slab::reserve(int n, const sweep::Grid& g, int threads) {
   for (Entries& e : set) e.reserve(n);
-  for (auto* v : {&x, &y, &vx, &vy}) v->resize(n + kLanesSingle);
+  for (auto* v : {&x, &y, &vx, &vy}) resize_padded(*v, n + kLanesSingle, kLanesSingle);
   from.resize(n);
   order.resize(n);
   start.resize(static_cast<std::size_t>(g.cells()) + 1);
@@ -346,7 +382,7 @@ inline void slab_alone(const Box& box, const ParticlesOf<Real>& p, Slab& o, Mine
                        const Entries& in, int n, int k, const sweep::Grid& g,
                        const sweep::Single& single) {
   const double tm = sweep::slab_mid(k, g);
-  std::vector<int>& cell = o.from;  // per input entry: its cell, or -1
+  Buffer<int>& cell = o.from;  // per input entry: its cell, or -1
   int* start = o.start.data();
   std::fill(start, start + g.cells() + 1, 0);
   for (int j = 0; j < n; ++j) {  // count
@@ -387,6 +423,57 @@ inline void slab_alone(const Box& box, const ParticlesOf<Real>& p, Slab& o, Mine
 
 }  // namespace
 
+/// Where each thread's time goes, part by part (PLAB_ENGINE_PHASES=1 asks for it, as it does of
+/// stage 08's engine): omp_get_wtime() laps of step_in()'s parts by every thread, summed over the
+/// steps, written to stderr when the process ends (handouts/engine.md reads them). `wait` is the
+/// time at the team's barriers (and, for the threads that do not run it, the grid's choice);
+/// `select` holds the selection's own barriers and its one-thread merge.
+struct PhaseClock {
+  enum Part { kWalls, kChoose, kGather, kSort, kSearch, kGroup, kSelect, kApply, kWait, kParts };
+  static constexpr const char* kNames[kParts] = {"walls",  "choose", "gather", "sort", "search",
+                                                 "group",  "select", "apply",  "wait"};
+  /// One thread's laps (on cache lines of its own).
+  struct alignas(128) Laps {
+    double seconds[kParts] = {};
+    double t0 = 0;
+  };
+  bool on = std::getenv("PLAB_ENGINE_PHASES") != nullptr;
+  std::vector<Laps> laps;
+  double region = 0;  //!< the parallel regions' time, summed
+  long long steps = 0;
+  int threads = 0;
+  /// Thread `t` starts its laps.
+  void start(int t) {
+    if (on) laps[t].t0 = omp_get_wtime();
+  }
+  /// Thread `t`'s time since its last lap goes to `part`.
+  void lap(int t, Part part) {
+    if (!on) return;
+    const double now = omp_get_wtime();
+    laps[t].seconds[part] += now - laps[t].t0;
+    laps[t].t0 = now;
+  }
+  ~PhaseClock() {
+    if (!on || steps == 0) return;
+    std::string line = "stage 06 (engine, CPU) " + std::to_string(threads) +
+                       " threads, ms a step (mean / slowest thread):";
+    char part[96];
+    for (int k = 0; k < kParts; ++k) {
+      double sum = 0, most = 0;
+      for (int t = 0; t < threads; ++t) {
+        sum += laps[t].seconds[k];
+        most = std::max(most, laps[t].seconds[k]);
+      }
+      std::snprintf(part, sizeof part, " %s %.2f / %.2f", kNames[k], 1e3 * sum / threads / steps,
+                    1e3 * most / steps);
+      line += part;
+    }
+    std::snprintf(part, sizeof part, "; the step %.2f\n", 1e3 * region / steps);
+    std::fputs((line + part).c_str(), stderr);
+  }
+};
+PhaseClock phases;
+
 /// One step in reals of type `Real`: `double` is model.md's step, `float` the variant that
 /// `plab accuracy` measures (the broad phase always works in double). One parallel region: every
 /// thread works on every slab in turn (two barriers a slab), or, in a small scene with at least two
@@ -412,10 +499,14 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
   plan.time.resize(n);
   selection.only.resize(n);
   selection.contested.resize(omp_get_max_threads());
+  using Part = PhaseClock::Part;
+  if (phases.on) phases.laps.resize(std::max<std::size_t>(phases.laps.size(), mine.size()));
+  const double region_from = phases.on ? omp_get_wtime() : 0;
 
 #pragma omp parallel
   {
     const int t = omp_get_thread_num(), threads = omp_get_num_threads();
+    phases.start(t);
     Mine& my = mine[t];
     my.found.clear();
     // Wall times, and what the grid needs to know (sweep::choose(), by the team): how many take
@@ -437,7 +528,9 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
       my.max2 = std::max(my.max2, v2);
       ++my.active;
     }
+    phases.lap(t, Part::kWalls);
 #pragma omp barrier
+    phases.lap(t, Part::kWait);
     my.sample.clear();
     const int stride = static_cast<int>(sweep::sample_stride(n));
     if (n > kSmall) {  // a small scene's sample is taken by the single below: one barrier less
@@ -449,7 +542,9 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
         for (int i = my.lo; i < my.hi; ++i)
           if (end[i] > 0 && at++ % stride == 0) my.sample.push_back(speed2(i));
       }
+      phases.lap(t, Part::kWalls);
 #pragma omp barrier
+      phases.lap(t, Part::kWait);
     }
 #pragma omp single
     {
@@ -476,19 +571,26 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
         m.next.resize(g.rows + 1);
         if (alone && &m - mine.data() < threads) m.own.reserve(n, g, 1);
       }
+      phases.lap(t, Part::kChoose);
     }
+    phases.lap(t, Part::kWait);
     if (whole_slabs(n, g, threads)) {
       // 1-2. Broad and narrow phase, each thread whole slabs alone, from slab 0's input (gathered
       // by the team); whoever sorts slab 0 hands its order on to the next step.
       Entries& in = s.set[0];
       gather(in, p, end, s.order, share(n, t, threads), share(n, t + 1, threads), g, nullptr);
       my.first = false;
+      phases.lap(t, Part::kGather);
 #pragma omp barrier
-#pragma omp for schedule(dynamic, 1)
+      phases.lap(t, Part::kWait);
+#pragma omp for schedule(dynamic, 1) nowait
       for (int k = 0; k < g.slabs; ++k) {
         slab_alone(box, p, my.own, my, in, n, k, g, single);
         my.first |= (k == 0);
       }
+      phases.lap(t, Part::kSearch);  // the slabs' sorts and searches
+#pragma omp barrier
+      phases.lap(t, Part::kWait);
       if (my.first) std::swap(s.order, my.own.order);  // no thread reads s.order until next step
     } else {
       // 1. Broad phase. Slab 0's input: every particle, in the order of the last step's slab 0
@@ -500,10 +602,14 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
       my.lo = share(n, t, threads);
       my.hi = share(n, t + 1, threads);
       gather(first, p, end, s.order, my.lo, my.hi, g, count);
+      phases.lap(t, Part::kGather);
 #pragma omp barrier
+      phases.lap(t, Part::kWait);
       int taking = place_rows(s, my.next, 0, g, t, threads);
       group_rows(s, my, first, 0, g);
+      phases.lap(t, Part::kGroup);
 #pragma omp barrier
+      phases.lap(t, Part::kWait);
       for (int k = 0; k < g.slabs; ++k) {
         const Entries& in = s.set[k % 2];
         Entries& out = s.set[(k + 1) % 2];
@@ -526,7 +632,9 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
         sort_rows(s, in, out, k, r0, r1, g, next_count);
         my.lo = row_start[r0];
         my.hi = row_start[r1];
+        phases.lap(t, Part::kSort);
 #pragma omp barrier
+        phases.lap(t, Part::kWait);
         const int next_taking = k + 1 < g.slabs ? place_rows(s, my.next, k + 1, g, t, threads) : 0;
         // The search (each pair that passes, then the narrow phase at once), in chunks of entries
         // taken as threads come free; then this thread groups slab k + 1's entries by row. No
@@ -539,16 +647,26 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
           search(v, my.hits, from, std::min(from + kChunk, taking), g);
           narrow(box, p, out, my.hits, my.found);  // the pairs' times, at once
         }
+        phases.lap(t, Part::kSearch);
         if (k + 1 < g.slabs) group_rows(s, my, out, k + 1, g);
         taking = next_taking;
+        phases.lap(t, Part::kGroup);
 #pragma omp barrier
+        phases.lap(t, Part::kWait);
       }
     }
 
     // 3. Selection (model.md's greedy rule over the sparse candidates) and apply, by the team.
     sparse_greedy_plan_in_team(my.found, wall, plan, selection);
+    phases.lap(t, Part::kSelect);
 #pragma omp for schedule(static)
     for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);
+    phases.lap(t, Part::kApply);
+  }
+  if (phases.on) {
+    phases.region += omp_get_wtime() - region_from;
+    phases.threads = std::max(phases.threads, omp_get_max_threads());
+    ++phases.steps;
   }
 }
 

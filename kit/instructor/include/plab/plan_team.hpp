@@ -20,12 +20,18 @@
 namespace plab {
 
 /// Working memory of sparse_greedy_plan_in_team(), kept between steps (no allocation per step
-/// once it has grown).
+/// once it has grown). The caller sizes `only` (a particle each) and `contested` (a thread each);
+/// the rest sizes itself.
 struct SparseSelection {
   std::vector<int> only;                           //!< per particle: its one partner, or none, or many
   std::vector<std::vector<model::Event>> contested;  //!< per thread: pairs that meet another pair
-  std::vector<std::pair<model::Event, int>> heads;  //!< the merge: each list's next pair
-  std::vector<std::size_t> next;                     //!< the merge: each list's next place
+  std::vector<model::Event> pairs;                   //!< every thread's contested pairs, in turn
+  std::vector<std::size_t> from;                     //!< where each thread's pairs start in `pairs`
+  std::vector<int> best;      //!< the rounds: each particle's choice (a pair's place, or below)
+  std::vector<char> decided;  //!< the rounds: 1 once a particle's event (or none) is decided
+  std::vector<std::vector<int>> open_pairs;      //!< per thread: its pairs not yet decided
+  std::vector<std::vector<int>> open_particles;  //!< per thread: its particles not yet decided
+  std::vector<int> still;                        //!< per thread: whether it left one open
 };
 
 /// sparse_greedy_plan() by a team of threads: every thread of an OpenMP parallel region calls it
@@ -34,14 +40,18 @@ struct SparseSelection {
 /// sparse_greedy_plan(), whatever the split and the order: each pass decides from the set of
 /// candidates only. Every thread's parts in parallel: drop the pairs at or after a wall, then
 /// count each particle's partners (atomics that end in the same state in any order); accept each
-/// isolated pair (whose particles meet no other), at its earliest time; the contested rest are
-/// sorted (each thread its own), merged and taken in key order by one thread; each particle left
-/// free takes its wall.
+/// isolated pair (whose particles meet no other), at its earliest time; the contested rest go
+/// through stage 03's "mutual earliest" rounds (handout 03 proves that they give the greedy
+/// plan), every thread on its own pairs and particles: each undecided particle chooses its
+/// earliest event among its pairs with undecided partners (an atomic minimum by
+/// model::key_less(), a strict total order, so the choice does not depend on the order), and a
+/// pair that both its particles chose is accepted; then each particle left free takes its wall.
 /// `plan` must hold `wall.size()` particles; `work.contested` one list per thread.
 inline void sparse_greedy_plan_in_team(std::vector<model::Event>& mine,
                                        const std::vector<double>& wall, Plan& plan,
                                        SparseSelection& work) {
   constexpr int kNone = -1, kMany = -2;
+  constexpr int kChoseNothing = -1, kChoseWall = -2;  // `best`, besides a pair's place
   const int n = static_cast<int>(wall.size());
 #ifdef _OPENMP
   const int t = omp_get_thread_num(), threads = omp_get_num_threads();
@@ -86,30 +96,89 @@ inline void sparse_greedy_plan_in_team(std::vector<model::Event>& mine,
            !time.compare_exchange_weak(seen, e.t, std::memory_order_relaxed)) {
     }
   }
-  std::sort(contested.begin(), contested.end(),  // each thread its own, in parallel
-            [](const model::Event& a, const model::Event& b) { return model::key_less(a, b); });
 #pragma omp barrier
 #pragma omp single
-  {  // the contested pairs of every thread in key order (a merge), each taken if both are free
-    using Head = std::pair<model::Event, int>;  // a list's next pair, and the list
-    const auto later = [](const Head& a, const Head& b) { return model::key_less(b.first, a.first); };
-    std::vector<Head>& heads = work.heads;
-    std::vector<std::size_t>& next = work.next;
-    heads.clear();
-    next.assign(threads, 0);
-    for (int u = 0; u < threads; ++u)
-      if (!work.contested[u].empty()) heads.emplace_back(work.contested[u][next[u]++], u);
-    std::make_heap(heads.begin(), heads.end(), later);
-    while (!heads.empty()) {
-      std::pop_heap(heads.begin(), heads.end(), later);
-      const auto [e, u] = heads.back();
-      heads.pop_back();
-      if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
-      if (next[u] < work.contested[u].size()) {
-        heads.emplace_back(work.contested[u][next[u]++], u);
-        std::push_heap(heads.begin(), heads.end(), later);
-      }
+  {  // room for the rounds
+    work.from.assign(threads + 1, 0);
+    for (int u = 0; u < threads; ++u) work.from[u + 1] = work.from[u] + work.contested[u].size();
+    work.pairs.resize(work.from[threads]);
+    work.best.resize(n);
+    work.decided.resize(n);
+    work.open_pairs.resize(threads);
+    work.open_particles.resize(threads);
+    work.still.resize(threads);
+  }
+  // Each thread: its contested pairs into `pairs`, and the particles of its share that meet
+  // another in a contested pair (several partners, or one that has several).
+  std::vector<int>& pairs_open = work.open_pairs[t];
+  std::vector<int>& open = work.open_particles[t];
+  pairs_open.clear();
+  open.clear();
+  for (std::size_t k = 0; k < contested.size(); ++k) {
+    work.pairs[work.from[t] + k] = contested[k];
+    pairs_open.push_back(static_cast<int>(work.from[t] + k));
+  }
+  for (int i = static_cast<int>(static_cast<long long>(n) * t / threads),
+           end = static_cast<int>(static_cast<long long>(n) * (t + 1) / threads);
+       i < end; ++i) {
+    const int o = work.only[i];
+    if (o == kMany || (o >= 0 && work.only[o] != i)) {
+      open.push_back(i);
+      work.decided[i] = 0;
     }
+  }
+  // The rounds: is `p` (a pair's place) earlier than particle i's choice `seen`?
+  const auto earlier = [&](int p, int seen, int i) {
+    if (seen == kChoseNothing) return true;
+    const model::Event& e = work.pairs[p];
+    if (seen == kChoseWall) return model::key_less(e, model::wall_event_key(wall[i], i));
+    return model::key_less(e, work.pairs[seen]);
+  };
+  const auto fold = [&](int i, int p) {  // i's choice: the earlier of it and pair p
+    std::atomic_ref<int> best(work.best[i]);
+    int seen = best.load(std::memory_order_relaxed);
+    while (earlier(p, seen, i) && !best.compare_exchange_weak(seen, p, std::memory_order_relaxed)) {
+    }
+  };
+#pragma omp barrier
+  for (;;) {  // three barriers a round
+    for (const int i : open)  // choose, 1: the wall when it is in the step, else nothing
+      work.best[i] = model::in_step(wall[i]) ? kChoseWall : kChoseNothing;
+#pragma omp barrier
+    std::size_t kept = 0;  // choose, 2: every pair whose particles are both undecided
+    for (const int p : pairs_open) {
+      const model::Event& e = work.pairs[p];
+      if (work.decided[e.lo] || work.decided[e.hi]) continue;
+      pairs_open[kept++] = p;
+      fold(e.lo, p);
+      fold(e.hi, p);
+    }
+    pairs_open.resize(kept);
+#pragma omp barrier
+    kept = 0;  // accept: a wall, nothing, or a pair that its other particle chose too
+    for (const int i : open) {
+      const int c = work.best[i];
+      if (c >= 0) {
+        const model::Event& e = work.pairs[c];
+        const int o = e.lo == i ? e.hi : e.lo;
+        const int d = work.best[o];
+        if (d < 0 || work.pairs[d].lo != e.lo || work.pairs[d].hi != e.hi) {
+          open[kept++] = i;  // left for the next round
+          continue;
+        }
+        plan.partner[i] = o;
+        plan.time[i] = e.t;
+      } else if (c == kChoseWall) {
+        plan.partner[i] = Plan::kWall;
+      }
+      work.decided[i] = 1;
+    }
+    open.resize(kept);
+    work.still[t] = kept > 0;
+#pragma omp barrier
+    bool any = false;
+    for (int u = 0; u < threads; ++u) any |= work.still[u] != 0;
+    if (!any) break;
   }
 #pragma omp for schedule(static)
   for (int i = 0; i < n; ++i) {
