@@ -10,8 +10,8 @@ DIR, by default beside itself; `plab docs` writes them into build/docs/figures)
   stage06-pairs.png     pairs tested per step by stage 06 against all pairs, and time per step
                         against N at the report's density (data/pairs-stage06.csv,
                         data/bench-stage0[36]-cpu-scale.csv, data/bench-stage06-gpu-scale.csv)
-  stage06-cores.png     stage 06's CPU path on 1-16 threads of the H100 machine's host
-                        (data/bench-stage06-cpu16.csv)
+  stage06-cores.png     stage 06's CPU path on 1-16 threads of the H100 and H200 machines' hosts
+                        (data/bench-stage06-cpu16.csv, data/bench-engine-selection-h200.csv)
   stage08-scaling.png   stage 08 on 1-16 ranks: strong scaling at N = 10^6 and weak scaling at
                         10^5 a rank, with the share of time in exchanges (data/bench-stage08-cpu16.csv)
   accuracy.png          run time against error of the stepped model's variants, against stage
@@ -138,16 +138,19 @@ def stage06_pairs():
 
 def stage06_cores():
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
-    data = rows("bench-stage06-cpu16.csv")
-    for n, steps in sorted({(int(r["n"]), int(r["steps"])) for r in data}):
-        pts = sorted((int(r["threads"]), float(r["step_median_s"])) for r in data
-                     if int(r["n"]) == n and int(r["steps"]) == steps)
-        ax.plot([p[0] for p in pts], [pts[0][1] / p[1] for p in pts], "o-",
-                label=f"N = {n}, S = {steps}")
+    for name, style, when in (("bench-stage06-cpu16.csv", "o-", "H100 host, 2026-11-24"),
+                              ("bench-engine-selection-h200.csv", "s--",
+                               "H200 host, 2026-11-29, selection in rounds")):
+        data = rows(name)
+        for n, steps in sorted({(int(r["n"]), int(r["steps"])) for r in data}):
+            pts = sorted((int(r["threads"]), float(r["step_median_s"])) for r in data
+                         if int(r["n"]) == n and int(r["steps"]) == steps)
+            ax.plot([p[0] for p in pts], [pts[0][1] / p[1] for p in pts], style,
+                    label=f"N = {n}, S = {steps} ({when})")
     ax.plot([1, 16], [1, 16], "k:", label="linear")
     ax.set(xscale="log", yscale="log", xlabel="threads", ylabel="speedup over 1 thread (time in steps)",
            xticks=[1, 2, 4, 8, 16], xticklabels=["1", "2", "4", "8", "16"],
-           title="Stage 06, CPU path, 16-core host")
+           title="Stage 06, CPU path, 16-core hosts")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
