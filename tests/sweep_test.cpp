@@ -247,8 +247,8 @@ TEST(Plan, SparseGreedyIsGreedy) {
 TEST(Plan, SparseGreedyInTeamIsSparseGreedy) {
   // The team version (stage 06's CPU path) on the same kind of candidate sets, split over 1 to 5
   // threads in a different order each time: always the serial plan. Small sets of few times
-  // (ties everywhere), then larger and denser ones whose contested pairs form long chains of
-  // falling times (the rounds then take many rounds), on up to 8 threads.
+  // (ties everywhere, a pair repeated at other times), then larger and denser ones whose pairs
+  // form long chains of falling times (the rounds then take many rounds), on up to 8 threads.
   std::mt19937_64 rng(11);
   for (int trial = 0; trial < 700; ++trial) {
     const bool large = trial >= 500;
@@ -285,8 +285,6 @@ TEST(Plan, SparseGreedyInTeamIsSparseGreedy) {
     got.partner.resize(wall.size());
     got.time.resize(wall.size());
     plab::SparseSelection work;
-    work.only.resize(wall.size());
-    work.contested.resize(threads);
 #pragma omp parallel num_threads(threads)
     {
 #ifdef _OPENMP

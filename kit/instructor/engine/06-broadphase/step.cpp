@@ -427,7 +427,7 @@ inline void slab_alone(const Box& box, const ParticlesOf<Real>& p, Slab& o, Mine
 /// stage 08's engine): omp_get_wtime() laps of step_in()'s parts by every thread, summed over the
 /// steps, written to stderr when the process ends (handouts/engine.md reads them). `wait` is the
 /// time at the team's barriers (and, for the threads that do not run it, the grid's choice);
-/// `select` holds the selection's own barriers and its one-thread merge.
+/// `select` holds the selection's own barriers (plan_team.hpp's rounds).
 struct PhaseClock {
   enum Part { kWalls, kChoose, kGather, kSort, kSearch, kGroup, kSelect, kApply, kWait, kParts };
   static constexpr const char* kNames[kParts] = {"walls",  "choose", "gather", "sort", "search",
@@ -497,8 +497,6 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
   mine.resize(omp_get_max_threads());
   plan.partner.resize(n);
   plan.time.resize(n);
-  selection.only.resize(n);
-  selection.contested.resize(omp_get_max_threads());
   using Part = PhaseClock::Part;
   if (phases.on) phases.laps.resize(std::max<std::size_t>(phases.laps.size(), mine.size()));
   const double region_from = phases.on ? omp_get_wtime() : 0;
