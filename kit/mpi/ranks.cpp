@@ -10,6 +10,7 @@
 #include <sys/time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <csignal>
 #include <ctime>
 
@@ -113,6 +114,10 @@ Ranks the_ranks;
 /// The stage's step (set by mpi_stage() on rank 0 and serve() on the others).
 DistStepFn the_step = nullptr;
 
+/// Where rank 0's scatter sends each particle (mpi_stage_any_cut()'s `owner`); nullptr: the kit's
+/// slabs (Ranks::owner_of()).
+OwnerFn the_owner = nullptr;
+
 /// Rank 0 tells every rank the next command (a non-blocking broadcast, which next_command()
 /// receives).
 void send_command(int command, MPI_Comm comm) {
@@ -175,12 +180,17 @@ int status_of(const std::exception& e) {
   std::abort();
 }
 
-/// Scatters rank 0's particles to their owners (each rank's part of `all`).
+/// Scatters rank 0's particles to their owners (each rank's part of `all`): the kit's slabs, or
+/// the_owner's parts (a rank outside [0, R) read as the nearest).
 void scatter(const Ranks& r, const Particles* all, Local& s) {
   std::vector<std::vector<Record>> out(r.ranks);
+  const auto owner = [&](int i) {
+    if (!the_owner) return r.owner_of(all->x[i]);
+    return std::clamp(the_owner(all->x[i], all->y[i], r.L, r.ranks), 0, r.ranks - 1);
+  };
   if (r.rank == 0)
     for (int i = 0; i < static_cast<int>(all->size()); ++i)
-      out[r.owner_of(all->x[i])].push_back(
+      out[owner(i)].push_back(
           {all->x[i], all->y[i], all->vx[i], all->vy[i], all->pc[i], all->wc[i], i});
   std::vector<int> bytes(r.ranks), at(r.ranks);
   std::vector<Record> send;
@@ -374,12 +384,14 @@ int serve(DistStepFn step) {
 std::unique_ptr<Stepper> mpi_stage(const Box& box, Particles& p, DistStepFn step,
                                    const std::string& gpu) {
   the_step = step;
+  the_owner = nullptr;
   return std::make_unique<DistStepper>(box, p, gpu, true);
 }
 
 std::unique_ptr<Stepper> mpi_stage_any_cut(const Box& box, Particles& p, DistStepFn step,
-                                           const std::string& gpu) {
+                                           const std::string& gpu, OwnerFn owner) {
   the_step = step;
+  the_owner = owner;
   return std::make_unique<DistStepper>(box, p, gpu, false);
 }
 

@@ -95,14 +95,19 @@ using DistStepFn = void (*)(const Box& box, const Ranks& r, Local& s);
 std::unique_ptr<Stepper> mpi_stage(const Box& box, Particles& p, DistStepFn step,
                                    const std::string& gpu = "");
 
+/// The rank that owns a particle at (x, y) before the first step, for `ranks` ranks in a box of
+/// side `L` (mpi_stage_any_cut()).
+using OwnerFn = int (*)(double x, double y, double L, int ranks);
+
 /// mpi_stage() for the instructor's engine (kit/instructor/engine/08-mpi), whose ranks own the
-/// particles of blocks of the box, not the kit's slabs: the gather of the output then takes each
-/// rank's particles wherever they are. mpi_stage() instead checks, at every gather, that each
-/// rank owns exactly the particles whose centres lie in its slab (Ranks::owner_of()): a stage
-/// whose rank 0 took every particle over would otherwise step them all alone with no message
-/// a step. plab grade refuses a stage's code that calls this one.
+/// particles of blocks of the box, not the kit's slabs: rank 0 scatters the particles by
+/// `owner` (the kit's slabs when it is nullptr), and the gather of the output takes each rank's
+/// particles wherever they are. mpi_stage() instead checks, at every gather, that each rank owns
+/// exactly the particles whose centres lie in its slab (Ranks::owner_of()): a stage whose rank 0
+/// took every particle over would otherwise step them all alone with no message a step. plab
+/// grade refuses a stage's code that calls this one.
 std::unique_ptr<Stepper> mpi_stage_any_cut(const Box& box, Particles& p, DistStepFn step,
-                                           const std::string& gpu = "");
+                                           const std::string& gpu = "", OwnerFn owner = nullptr);
 
 /// The stage's step on this rank, which its step.cpp defines: the kit's entry points
 /// (kit/mpi/stage_entry.cpp, a stage's `kit_sources`) hand it to mpi_stage() and serve(), so

@@ -32,6 +32,10 @@ using PairSearch = void (*)(const Box& box, const Ranks& r, const LocalGrid& lg,
 /// One step of the distributed model on this rank (step.cpp; the kit's DistStepFn).
 void step(const Box& box, const Ranks& r, Local& s);
 
+/// The rank whose block holds (x, y) in the even cuts that the first step starts from (step.cpp;
+/// the kit's OwnerFn): where the kit's scatter places each particle.
+int first_owner(double x, double y, double L, int ranks);
+
 /// The GPU's PairSearch (step.cu), set by make_gpu_stepper() when this build has a GPU path;
 /// nullptr otherwise (the kit's stand-in, built without nvcc, sets nothing).
 extern PairSearch gpu_search;

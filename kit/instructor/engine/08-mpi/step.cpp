@@ -70,10 +70,11 @@ struct Ghost {
 /// R up to sqrt(R): 4 x 4 at 16 ranks, 4 x 2 at 8, 3 x 1 at 3), rank row * px + column. A
 /// block's border is shorter than a slab's (at 16 ranks, 4 sides of L/4 against 2 of L), and so
 /// is its halo. The cuts start even and move with the load (rebalance()): a column's cuts in x,
-/// then each column's cuts in y. Not the kit's cut (Ranks::owner_of(), slabs), which the scatter
-/// uses: the first step's migration moves the particles to their blocks, and nothing needs them
-/// there at any time (the halo follows where each rank's particles are, not where its block is),
-/// so any cuts give the same bits; every rank computes the same cuts from the same numbers.
+/// then each column's cuts in y. Not the kit's cut (Ranks::owner_of(), slabs): the kit's scatter
+/// places the particles in the even blocks (first_owner()), and each step's migration keeps them
+/// in their blocks; nothing needs them there at any time (the halo follows where each rank's
+/// particles are, not where its block is), so any cuts give the same bits; every rank computes
+/// the same cuts from the same numbers.
 struct Blocks {
   int px = 1, py = 1;  //!< blocks across x and across y
   double L = 0;        //!< the box side
@@ -82,10 +83,12 @@ struct Blocks {
   std::vector<std::vector<double>> ycut;  //!< per column: py + 1 row cuts, 0 .. L
 
   /// Even cuts for `r` ranks in `box`, unless they are set for them already.
-  void fit(const Ranks& r, const Box& box) {
-    if (ranks == r.ranks && L == box.L) return;
-    ranks = r.ranks;
-    L = box.L;
+  void fit(const Ranks& r, const Box& box) { fit(r.ranks, box.L); }
+  /// Even cuts for `count` ranks in a box of side `side`, unless they are set for them already.
+  void fit(int count, double side) {
+    if (ranks == count && L == side) return;
+    ranks = count;
+    L = side;
     py = 1;
     for (int d = 1; d * d <= ranks; ++d)
       if (ranks % d == 0) py = d;
@@ -684,6 +687,13 @@ void migrate(const Ranks& r, const Blocks& blocks, Local& s) {
 
 }  // namespace
 
+/// The kit's scatter's owner (search.hpp): the block of the even cuts that step() starts from.
+int first_owner(double x, double y, double L, int ranks) {
+  static Blocks even;  // (rank 0's scatter only)
+  even.fit(ranks, L);
+  return even.owner_of(x, y);
+}
+
 /// Where a rank's time goes, part by part (PLAB_ENGINE_PHASES=1 asks for it): MPI_Wtime() laps
 /// of step()'s parts, summed over the steps, and the particles it held. Each rank writes one line
 /// to stderr when its process ends (handouts/engine-08.md reads them). An exchange's time
@@ -772,7 +782,7 @@ int stage_worker() {
 std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageOptions& options) {
   dist::isa_in_use = lanes::choose_isa(options.simd);
   if (auto gpu = make_gpu_stepper(box, p, options)) return gpu;
-  return dist::mpi_stage_any_cut(box, p, dist::step);  // its ranks own blocks, not slabs
+  return dist::mpi_stage_any_cut(box, p, dist::step, "", dist::first_owner);  // blocks, not slabs
 }
 
 }  // namespace plab

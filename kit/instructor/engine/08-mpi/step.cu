@@ -197,7 +197,7 @@ std::unique_ptr<Stepper> make_gpu_stepper(const Box& box, Particles& p,
                                           const StageOptions& options) {
   dist::gpu_search = &dist::search_on_gpu;
   if (options.device != Device::kGpu) return nullptr;
-  return dist::mpi_stage_any_cut(box, p, dist::step, cuda::require_device());
+  return dist::mpi_stage_any_cut(box, p, dist::step, cuda::require_device(), dist::first_owner);
 }
 
 }  // namespace plab
