@@ -318,6 +318,34 @@ INSTANTIATE_TEST_SUITE_P(
                     plab::GenParams{60, 100, 1, 20, plab::Mode::kPrint, 20194, 400, 1000}), // 4-10 boxes a step
     [](const auto& info) { return "scene" + std::to_string(info.index); });
 
+/// Stage 06's engine's PLAB_ENGINE_PHASES=1 on the CPU (handouts/engine.md): one line of each
+/// part's time per thread on stderr when the run ends, and the golden output all the same.
+TEST(PhasesInvariants, OneLineOnTheCpu) {
+  if (plab::stage_info().id != "06" || plab::stage_info().impl != "engine")
+    GTEST_SKIP() << "PLAB_ENGINE_PHASES on the CPU is stage 06's engine's";
+  const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
+  const std::vector<plab::Dataset> all = datasets(false);
+  ASSERT_FALSE(all.empty());
+  const plab::Dataset& d = all.front();
+  const plab::test::ScratchDir scratch;
+  const std::string out = scratch.file("out.txt"), err = scratch.file("stderr.txt");
+  plab::test::watch(this_name() + ", scene " + d.name, 0);
+  ASSERT_EQ(plab::test::run_watched("env PLAB_ENGINE_PHASES=1 OMP_NUM_THREADS=2 " +
+                                    std::string(plab::test::kThisProgram) +
+                                    " --device cpu --quiet --out " + out + " " + m.scene_path(d) +
+                                    " 2>" + err),
+            0);
+  expect_same(plab::read_file(m.golden_path(d)), plab::read_file(out),
+              m.golden_path(d) + " (PLAB_ENGINE_PHASES=1)");
+  const std::string text = plab::read_file(err);
+  const std::string head = "stage 06 (engine, CPU) 2 threads, ms a step (mean / slowest thread): walls ";
+  const auto at = text.find(head);
+  ASSERT_NE(at, std::string::npos) << "no phases in:\n" << text;
+  EXPECT_NE(text.find(" select ", at), std::string::npos) << text;
+  EXPECT_NE(text.find("; the step ", at), std::string::npos) << text;
+  EXPECT_EQ(text.find(head, at + 1), std::string::npos) << "two lines of phases:\n" << text;
+}
+
 TEST(Invariants, EnergyConservedFiniteCountersGrow) {
   PLAB_SKIP_WITHOUT_DEVICE();
   const plab::Scene scene = plab::generate_scene({80, 60, 1, 1, plab::Mode::kPerf, 77});

@@ -442,6 +442,20 @@ struct PhaseClock {
   double region = 0;  //!< the parallel regions' time, summed
   long long steps = 0;
   int threads = 0;
+  /// Before a step's parallel region of up to `most` threads: room for their laps; returns the
+  /// region's start.
+  double begin(std::size_t most) {
+    if (!on) return 0;
+    laps.resize(std::max(laps.size(), most));
+    return omp_get_wtime();
+  }
+  /// After the region that began at `from`.
+  void end(double from) {
+    if (!on) return;
+    region += omp_get_wtime() - from;
+    threads = std::max(threads, omp_get_max_threads());
+    ++steps;
+  }
   /// Thread `t` starts its laps.
   void start(int t) {
     if (on) laps[t].t0 = omp_get_wtime();
@@ -498,8 +512,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
   plan.partner.resize(n);
   plan.time.resize(n);
   using Part = PhaseClock::Part;
-  if (phases.on) phases.laps.resize(std::max<std::size_t>(phases.laps.size(), mine.size()));
-  const double region_from = phases.on ? omp_get_wtime() : 0;
+  const double region_from = phases.begin(mine.size());
 
 #pragma omp parallel
   {
@@ -661,11 +674,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
     for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);
     phases.lap(t, Part::kApply);
   }
-  if (phases.on) {
-    phases.region += omp_get_wtime() - region_from;
-    phases.threads = std::max(phases.threads, omp_get_max_threads());
-    ++phases.steps;
-  }
+  phases.end(region_from);
 }
 
 void step(const Box& box, Particles& p) { step_in(box, p); }
