@@ -55,6 +55,7 @@ void add_bench(CLI::App& app) {
     std::string csv, impl;
     std::uint64_t seed = 1;
     bool fixed_density = false;
+    bool ceiling = false;
     std::string speed;
   };
   auto a = std::make_shared<Args>();
@@ -82,6 +83,13 @@ void add_bench(CLI::App& app) {
                                      "with --fixed-density)");
   c->add_option("--impl", a->impl, "solution, student or engine (default as for run)");
   c->add_option("--csv", a->csv, "also write the table as CSV to this file");
+  c->add_flag("--ceiling", a->ceiling,
+              "also measure what this machine allows: for each thread (or rank) count T above the "
+              "first count F, run T / F copies of the F run at once (independent processes, "
+              "--runs times) and compare their time in steps with the F run's alone: work that "
+              "shares nothing reaches T / F times that ratio here, the machine's own ceiling for "
+              "the speedup (CSV: ceiling, and ceiling_slowest when the slowest copy sets the "
+              "pace)");
   c->callback([a] {
     const std::string impl = a->impl.empty() ? default_impl() : a->impl;
     check_impl(impl);
@@ -94,6 +102,8 @@ void add_bench(CLI::App& app) {
       csv.pop_back();
       csv += ",ranks,bytes_per_step,comm_share\n";
     }
+    csv.pop_back();
+    csv += ",ceiling,ceiling_slowest\n";
     std::printf("%-5s %6s %5s %7s %-11s %10s %9s %8s %10s %9s  %s\n", "stage", "N", "S",
                 by_ranks ? "ranks" : "threads",
                 "schedule", "median s", "spread", "speedup", "in steps", "ms/step", "device");
@@ -130,6 +140,18 @@ void add_bench(CLI::App& app) {
         const std::string id = two_digits(raw);
         const std::string program = require_stage(id, impl);
         for (const std::string& schedule : a->schedules) {
+          // The command line of one run on `count` threads (or ranks), its report to `report_to`.
+          const auto run_args = [&](int count, const std::string& report_to) {
+            std::vector<std::string> args{program, scene, "--quiet", "--out", "/dev/null",
+                                          "--threads", by_ranks ? "1" : std::to_string(count),
+                                          "--schedule", schedule, "--report", report_to};
+            return by_ranks ? on_ranks(id, impl, count, args) : args;
+          };
+          const auto check_ran = [&](int rc) {
+            if (rc != 0)
+              throw std::runtime_error("stage " + id + " failed (exit " + std::to_string(rc) +
+                                       ") on " + scene);
+          };
           double one_thread = 0, one_thread_steps = 0;
           for (const int threads : a->threads) {
             std::vector<double> t, steps_t;
@@ -139,14 +161,7 @@ void add_bench(CLI::App& app) {
                 std::fprintf(stderr, "\r  stage %s N=%lld threads=%d run %d/%d ", id.c_str(), n,
                              threads, k + 1, a->runs);
               const auto t0 = std::chrono::steady_clock::now();
-              std::vector<std::string> args{program, scene, "--quiet", "--out", "/dev/null",
-                                            "--threads", by_ranks ? "1" : std::to_string(threads),
-                                            "--schedule", schedule, "--report", report};
-              if (by_ranks) args = on_ranks(id, impl, threads, args);
-              const int rc = run_program(args);
-              if (rc != 0)
-                throw std::runtime_error("stage " + id + " failed (exit " + std::to_string(rc) +
-                                         ") on " + scene);
+              check_ran(run_program(run_args(threads, report)));
               t.push_back(wall_seconds(t0));
               last = nlohmann::json::parse(read_file(report));
               steps_t.push_back(last.at("step_seconds").get<double>());
@@ -212,6 +227,60 @@ void add_bench(CLI::App& app) {
                           bytes / steps, step_median > 0 ? 100 * comm / step_median : 0.0,
                           step_median > 0 ? one_thread_steps / step_median : 0.0,
                           a->threads.front());
+            // This machine's ceiling for the row: copies of the first count's run at once.
+            double ceiling = 0, ceiling_slowest = 0;
+            const int first = a->threads.front();
+            if (a->ceiling && (!gpu || by_ranks) && threads > first && threads % first == 0 &&
+                one_thread_steps > 0 && step_median > 0) {
+              const int copies = threads / first;
+              std::vector<std::string> reports;
+              for (int k = 0; k < copies; ++k) {
+                reports.push_back(temp_path("bench-ceiling-" + std::to_string(k) + ".json"));
+                if (std::find(made.begin(), made.end(), reports.back()) == made.end())
+                  made.push_back(reports.back());
+              }
+              std::vector<std::vector<std::string>> programs;
+              for (const std::string& r : reports) {
+                programs.push_back(run_args(first, r));
+                // mpirun binds a run of one or two ranks to the first cores: copies at once
+                // would all share them
+                if (by_ranks)
+                  programs.back().insert(programs.back().begin() + 1, {"--bind-to", "none"});
+              }
+              std::vector<double> mean_t, slowest_t;
+              for (int k = 0; k < a->runs; ++k) {
+                if (stderr_is_terminal())
+                  std::fprintf(stderr, "\r  stage %s N=%lld: %d copies of the %d-%s run at once, "
+                               "run %d/%d ", id.c_str(), n, copies, first,
+                               by_ranks ? "rank" : "thread", k + 1, a->runs);
+                double sum = 0, most = 0;
+                const std::vector<int> status = run_programs(programs);
+                for (std::size_t u = 0; u < reports.size(); ++u) {
+                  check_ran(status[u]);
+                  const double at = nlohmann::json::parse(read_file(reports[u]))
+                                        .at("step_seconds").get<double>();
+                  sum += at;
+                  most = std::max(most, at);
+                }
+                mean_t.push_back(sum / copies);
+                slowest_t.push_back(most);
+              }
+              if (stderr_is_terminal()) std::fprintf(stderr, "\r%70s\r", "");
+              std::sort(mean_t.begin(), mean_t.end());
+              std::sort(slowest_t.begin(), slowest_t.end());
+              const double mean = mean_t[mean_t.size() / 2];
+              const double slowest = slowest_t[slowest_t.size() / 2];
+              ceiling = copies * one_thread_steps / mean;
+              ceiling_slowest = copies * one_thread_steps / slowest;
+              const double in_steps = one_thread_steps / step_median;
+              std::printf("      this machine's ceiling: %d copies of the %d-%s run at once took "
+                          "%.2fx (mean) and %.2fx (slowest) its time in steps alone, so work that "
+                          "shares nothing reaches %.2fx here (%.2fx when the slowest sets the "
+                          "pace); this row's %.2fx in steps is %.0f%% of that\n",
+                          copies, first, by_ranks ? "rank" : "thread", mean / one_thread_steps,
+                          slowest / one_thread_steps, ceiling, ceiling_slowest, in_steps,
+                          100 * in_steps / ceiling);
+            }
             std::fflush(stdout);
             char row[512];
             std::snprintf(row, sizeof row,
@@ -222,11 +291,12 @@ void add_bench(CLI::App& app) {
                           steps_t.back(), timer.c_str(), device.c_str(),
                           last.value("device_bytes", std::size_t{0}), bandwidth, floor_s);
             csv += row;
-            if (by_ranks) {
-              csv.pop_back();
+            csv.pop_back();
+            if (by_ranks)
               csv += "," + std::to_string(threads) + "," + std::to_string(bytes / steps) + "," +
-                     std::to_string(step_median > 0 ? comm / step_median : 0.0) + "\n";
-            }
+                     std::to_string(step_median > 0 ? comm / step_median : 0.0);
+            const auto or_empty = [](double v) { return v > 0 ? std::to_string(v) : ""; };
+            csv += "," + or_empty(ceiling) + "," + or_empty(ceiling_slowest) + "\n";
             if (gpu && !by_ranks) break;  // threads and schedules are CPU settings (ranks are not)
           }
         }
@@ -238,8 +308,13 @@ void add_bench(CLI::App& app) {
                 "over %d runs; speedup: over the first thread (or rank) count; in steps: the median of the "
                 "stage's own time in steps (host clock on the CPU, CUDA events on a GPU); memory "
                 "(the engine): the step against the time to read and write the state once at the "
-                "measured bandwidth (CSV: bandwidth in B/s, floor_s a step)\n",
-                a->runs);
+                "measured bandwidth (CSV: bandwidth in B/s, floor_s a step)%s\n",
+                a->runs,
+                a->ceiling ? "; this machine's ceiling (--ceiling): the speedup that independent "
+                             "copies of the first count's run reach on as many cores, what the "
+                             "machine's shared memory, caches and clocks leave to work that "
+                             "shares nothing"
+                           : "");
     if (a->runs == 1)
       std::printf("one run per row (--runs 1): no spread to judge the noise by; take 3 or more\n");
     if (!noisy.empty()) {

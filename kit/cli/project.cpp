@@ -112,47 +112,54 @@ std::vector<char*> argv_of(const std::vector<std::string>& args) {
 }
 }  // namespace
 
-int run_program(const std::vector<std::string>& args, const std::string& stdout_path) {
+namespace {
+/// Starts a program (stdout to `stdout_path` when given, and stderr with it when `and_stderr`)
+/// and returns its process id, or -1 when it could not be started.
+pid_t start_program(const std::vector<std::string>& args, const std::string& stdout_path,
+                    bool and_stderr = false) {
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   if (!stdout_path.empty())
     posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, stdout_path.c_str(),
                                      O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (and_stderr) posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
   std::fflush(nullptr);
   pid_t pid = 0;
   auto argv = argv_of(args);
   const int rc = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
-  if (rc != 0) return 127;
+  return rc == 0 ? pid : -1;
+}
+
+/// Waits for a program start_program() started: its exit status as run_program() gives it.
+int wait_program(pid_t pid) {
+  if (pid < 0) return 127;
   int status = 0;
   while (waitpid(pid, &status, 0) < 0) {
   }
   if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
   return WEXITSTATUS(status);
 }
+}  // namespace
+
+int run_program(const std::vector<std::string>& args, const std::string& stdout_path) {
+  return wait_program(start_program(args, stdout_path));
+}
+
+std::vector<int> run_programs(const std::vector<std::vector<std::string>>& programs) {
+  std::vector<pid_t> pids;
+  for (const auto& args : programs) pids.push_back(start_program(args, ""));
+  std::vector<int> status;
+  for (const pid_t pid : pids) status.push_back(wait_program(pid));
+  return status;
+}
 
 Captured capture_program(const std::vector<std::string>& args) {
   const fs::path dir = fs::path(build_dir()) / "tmp";
   fs::create_directories(dir);
   const std::string path = (dir / ("capture." + std::to_string(getpid()))).string();
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, path.c_str(),
-                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-  std::fflush(nullptr);
-  pid_t pid = 0;
-  auto argv = argv_of(args);
   Captured c;
-  if (posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) {
-    c.status = 127;
-  } else {
-    int status = 0;
-    while (waitpid(pid, &status, 0) < 0) {
-    }
-    c.status = WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WEXITSTATUS(status);
-  }
-  posix_spawn_file_actions_destroy(&actions);
+  c.status = wait_program(start_program(args, path, true));
   std::ifstream in(path);
   std::ostringstream text;
   text << in.rdbuf();

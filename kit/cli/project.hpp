@@ -64,6 +64,9 @@ Captured capture_program(const std::vector<std::string>& args);
 /// Runs a program and waits; stdout goes to `stdout_path` when given. Returns the exit status
 /// (128 + signal when killed by a signal, 127 when it could not be started).
 int run_program(const std::vector<std::string>& args, const std::string& stdout_path = "");
+/// Runs the programs at once, each as run_program() runs one (stdout not redirected), and waits
+/// for them all: their exit statuses, in order.
+std::vector<int> run_programs(const std::vector<std::vector<std::string>>& programs);
 /// Replaces this process with the program (does not return unless it fails).
 [[noreturn]] void exec_program(const std::vector<std::string>& args);
 
