@@ -173,6 +173,31 @@ TEST(Sweep, NeverDropsAPairThatMeetsInTheStep) {
   EXPECT_GT(checked, 50000);
 }
 
+// The CPU engine's 4-byte search: the reach never shorter than the double one (a shorter reach
+// could drop a pair), barely longer, and the fast flag kept, from tiny to huge and odd values.
+TEST(Sweep, PackedSearchNeverShortens) {
+  std::mt19937_64 rng(30);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<double> reaches{0, 1e-45, 1e-39, 1.17e-38, 1e-30, 1, 3.0000001, 1e38, 3.4e38, 1e300,
+                              INFINITY};
+  for (int k = 0; k < 200000; ++k)
+    reaches.push_back(std::pow(10.0, -40 + 80 * u(rng)) * (1 + u(rng)));
+  for (const double d : reaches)
+    for (const bool fast : {false, true}) {
+      const plab::sweep::PackedSearch q = plab::sweep::PackedSearch::of({d, fast});
+      ASSERT_GE(q.d(), d) << d;
+      if (d > 1e-37 && d < 1e38) {
+        ASSERT_LE(q.d(), d * (1 + 3e-7)) << d;
+      }
+      ASSERT_EQ(q.fast(), fast) << d;
+    }
+  for (const bool fast : {false, true}) {  // a not-a-number reach (a particle of no speed known)
+    const plab::sweep::PackedSearch q = plab::sweep::PackedSearch::of({-NAN, fast});
+    EXPECT_TRUE(std::isnan(q.d()));
+    EXPECT_EQ(q.fast(), fast);
+  }
+}
+
 TEST(Sweep, GridFromTheScene) {
   plab::Particles p;
   p.resize(10000);

@@ -88,7 +88,7 @@ struct Entries {
   Buffer<int> last;             //!< its last slab (sweep::last_slab())
   Buffer<double> x0, y0;        //!< its start-of-step position
   Buffer<double> vx, vy;        //!< its velocity (padded by kLanes)
-  Buffer<sweep::Search> reach;  //!< what it searches (sweep::search_of())
+  Buffer<sweep::PackedSearch> reach;  //!< what it searches (sweep::search_of())
   Buffer<int> row, column;      //!< its row (-1: takes no part) and column in the next slab
   /// Room for `n` entries (and kLanes of padding).
   void reserve(int n) {
@@ -126,7 +126,7 @@ struct View {
   const float* vx;             //!< velocity x
   const float* vy;             //!< velocity y
   sweep::Single single;        //!< the single-precision test's constants
-  const sweep::Search* reach;  //!< what each entry searches
+  const sweep::PackedSearch* reach;  //!< what each entry searches
   const int* start;            //!< cell c holds entries [start[c], start[c + 1])
   const int* row_start;        //!< row r holds entries [row_start[r], row_start[r + 1])
 };
@@ -240,7 +240,7 @@ inline void gather(Entries& first, const ParticlesOf<Real>& p, const std::vector
     first.y0[j] = p.y[i];
     first.vx[j] = p.vx[i];
     first.vy[j] = p.vy[i];
-    first.reach[j] = sweep::search_of(p.vx[i], p.vy[i], g);
+    first.reach[j] = sweep::PackedSearch::of(sweep::search_of(p.vx[i], p.vy[i], g));
     if (count) count_entry(first, j, 0, g, count);
   }
 }
@@ -312,17 +312,18 @@ inline void search_cells(const View& s, std::vector<std::pair<int, int>>& hits, 
                              s.row_start) - 1;
   for (int a = from; a < to; ++a) {
     while (a >= s.row_start[row + 1]) ++row;
-    const sweep::Search q = s.reach[a];
+    const sweep::PackedSearch q = s.reach[a];
+    const double d = q.d();
     int x0, x1;
-    sweep::columns_within(s.x[a], q.d, g, x0, x1);
-    if (!q.fast) {
+    sweep::columns_within(s.x[a], d, g, x0, x1);
+    if (!q.fast()) {
       test_range<kIsa>(s, hits, a, a + 1, s.start[row * columns + x1 + 1], g);
       if (row + 1 < g.rows)
         test_range<kIsa>(s, hits, a, s.start[(row + 1) * columns + x0],
                          s.start[(row + 1) * columns + x1 + 1], g);
     } else {  // a pair found twice is harmless
       int y0, y1;
-      sweep::rows_within(s.y[a], q.d, g, y0, y1);
+      sweep::rows_within(s.y[a], d, g, y0, y1);
       for (int y = y0; y <= y1; ++y)
         test_range<kIsa>(s, hits, a, s.start[y * columns + x0], s.start[y * columns + x1 + 1], g);
     }
