@@ -230,6 +230,10 @@ void add_bench(CLI::App& app) {
             // This machine's ceiling for the row: copies of the first count's run at once.
             double ceiling = 0, ceiling_slowest = 0;
             const int first = a->threads.front();
+            if (a->ceiling && (!gpu || by_ranks) && threads > first && threads % first != 0)
+              std::printf("      this machine's ceiling: not measured (%d is not a multiple of the "
+                          "first count, %d: copies of that run cannot fill it)\n",
+                          threads, first);
             if (a->ceiling && (!gpu || by_ranks) && threads > first && threads % first == 0 &&
                 one_thread_steps > 0 && step_median > 0) {
               const int copies = threads / first;
