@@ -122,6 +122,7 @@ PLAB_HD inline Search search_of(double vx, double vy, const Grid& g) {
 /// still found), its sign the `fast` flag (a not-a-number's too).
 struct PackedSearch {
   float packed;  //!< the reach, negative for a fast entry
+  /// `q` packed: its reach rounded up to float, negative when `q.fast`.
   static PackedSearch of(const Search& q) {
     // 1e-7 is more than float's rounding of a normal number (2^-24): nextafter() only where the
     // result is not one (reaches below 10^-38)
@@ -130,7 +131,7 @@ struct PackedSearch {
     return {std::copysign(d, q.fast ? -1.0f : 1.0f)};
   }
   [[nodiscard]] double d() const { return std::fabs(packed); }  //!< at least Search::d
-  [[nodiscard]] bool fast() const { return std::signbit(packed); }
+  [[nodiscard]] bool fast() const { return std::signbit(packed); }  //!< Search::fast
 };
 
 /// The columns [lo, hi] whose x lies within `d` of `x` (every column when either end is not a
