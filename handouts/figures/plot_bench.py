@@ -12,6 +12,9 @@ DIR, by default beside itself; `plab docs` writes them into build/docs/figures)
                         data/bench-stage0[36]-cpu-scale.csv, data/bench-stage06-gpu-scale.csv)
   stage06-cores.png     stage 06's CPU path on 1-16 threads of the H100 and H200 machines' hosts
                         (data/bench-stage06-cpu16.csv, data/bench-engine-selection-h200.csv)
+  ceiling.png           speedup on 1-16 threads (stage 06's engine) and ranks (stage 08's) against
+                        the machine's own ceiling that `plab bench --ceiling` measured in the same
+                        call (data/bench-issue30-ceiling-{cpu,cpu-packed,mpi}-h200.csv)
   stage08-scaling.png   stage 08 on 1-16 ranks: strong scaling at N = 10^6 and weak scaling at
                         10^5 a rank, with the share of time in exchanges (data/bench-stage08-cpu16.csv)
   accuracy.png          run time against error of the stepped model's variants, against stage
@@ -158,6 +161,39 @@ def stage06_cores():
     plt.close(fig)
 
 
+def ceiling():
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.5))
+    panels = ((left, "threads", (("bench-issue30-ceiling-cpu-h200.csv", "o", "call 1"),
+                                 ("bench-issue30-ceiling-cpu-packed-h200.csv", "s", "call 3")),
+               "Stage 06's engine, CPU, N = 10^6", 12, "12x (issue 30)"),
+              (right, "ranks", (("bench-issue30-ceiling-mpi-h200.csv", "o", "call 1"),),
+               "Stage 08's engine, N = 10^6", 0.7 * 16, "70% at 16 ranks (issue 30)"))
+    for ax, count, files, title, goal, goal_label in panels:
+        for name, marker, call in files:
+            data = sorted(rows(name), key=lambda r: int(r["threads"]))
+            one = float(data[0]["step_median_s"])
+            xs = [int(r["threads"]) for r in data]
+            color = ax.plot(xs, [one / float(r["step_median_s"]) for r in data], marker + "-",
+                            label=f"speedup in steps ({call})")[0].get_color()
+            up = [(int(r["threads"]), float(r["ceiling"]), float(r["ceiling_slowest"]))
+                  for r in data if r["ceiling"]]
+            ax.plot([1] + [u[0] for u in up], [1] + [u[1] for u in up], "--", color=color,
+                    label=f"ceiling, the mean copy ({call})")
+            ax.plot([1] + [u[0] for u in up], [1] + [u[2] for u in up], ":", color=color,
+                    label=f"ceiling, the slowest copy ({call})")
+        ax.plot([1, 16], [1, 16], "k-", lw=0.5, label="linear")
+        ax.plot([16], [goal], "k*", ms=10, label=goal_label)
+        ax.set(xscale="log", yscale="log", xlabel=count, ylabel=f"speedup over 1 {count[:-1]}",
+               xticks=[1, 2, 4, 8, 16], xticklabels=["1", "2", "4", "8", "16"], title=title)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle("An H200 machine's 16-core host, 2026-11-29: plab bench --ceiling "
+                 "(copies of the one-thread or one-rank run at once)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(OUT / "ceiling.png", dpi=100)
+    plt.close(fig)
+
+
 def stage08_scaling():
     fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.5))
     data = rows("bench-stage08-cpu16.csv")
@@ -280,6 +316,7 @@ def main():
     stage05_changes()
     stage06_pairs()
     stage06_cores()
+    ceiling()
     stage08_scaling()
     accuracy_frontier(HERE / "data" / "accuracy.csv", OUT / "accuracy.png")
     pairtime_ulps(HERE / "data" / "pairtime-ulps.csv", OUT / "pairtime-ulps.png")
