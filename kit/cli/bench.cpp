@@ -42,6 +42,38 @@ double host_bandwidth(int threads) {
   return best > 0 ? 2.0 * part * threads / best : 0;
 }
 
+/// The copies' time in steps: the median over the repetitions of their mean and of their slowest.
+struct Copies {
+  double mean = 0, slowest = 0;
+};
+
+/// Runs `programs` at once, `runs` times, each writing its run report to the matching `reports`
+/// entry; `ran` checks each exit status (and throws on a failure).
+Copies time_at_once(const std::vector<std::vector<std::string>>& programs,
+                    const std::vector<std::string>& reports, int runs,
+                    const std::function<void(int)>& ran, const std::string& progress) {
+  std::vector<double> mean, slowest;
+  for (int k = 0; k < runs; ++k) {
+    if (stderr_is_terminal())
+      std::fprintf(stderr, "\r  %s, run %d/%d ", progress.c_str(), k + 1, runs);
+    double sum = 0, most = 0;
+    const std::vector<int> status = run_programs(programs);
+    for (std::size_t u = 0; u < reports.size(); ++u) {
+      ran(status[u]);
+      const double at =
+          nlohmann::json::parse(read_file(reports[u])).at("step_seconds").get<double>();
+      sum += at;
+      most = std::max(most, at);
+    }
+    mean.push_back(sum / static_cast<double>(reports.size()));
+    slowest.push_back(most);
+  }
+  if (stderr_is_terminal()) std::fprintf(stderr, "\r%70s\r", "");
+  std::sort(mean.begin(), mean.end());
+  std::sort(slowest.begin(), slowest.end());
+  return {mean[mean.size() / 2], slowest[slowest.size() / 2]};
+}
+
 }  // namespace
 
 void add_bench(CLI::App& app) {
@@ -140,12 +172,13 @@ void add_bench(CLI::App& app) {
         const std::string id = two_digits(raw);
         const std::string program = require_stage(id, impl);
         for (const std::string& schedule : a->schedules) {
-          // The command line of one run on `count` threads (or ranks), its report to `report_to`.
-          const auto run_args = [&](int count, const std::string& report_to) {
+          // The command line of one run on `count` threads (or ranks), its report to `report_to`;
+          // ranks bound to cores as mpirun chooses unless `bound` is false.
+          const auto run_args = [&](int count, const std::string& report_to, bool bound = true) {
             std::vector<std::string> args{program, scene, "--quiet", "--out", "/dev/null",
                                           "--threads", by_ranks ? "1" : std::to_string(count),
                                           "--schedule", schedule, "--report", report_to};
-            return by_ranks ? on_ranks(id, impl, count, args) : args;
+            return by_ranks ? on_ranks(id, impl, count, args, bound) : args;
           };
           const auto check_ran = [&](int rc) {
             if (rc != 0)
@@ -243,37 +276,15 @@ void add_bench(CLI::App& app) {
                 if (std::find(made.begin(), made.end(), reports.back()) == made.end())
                   made.push_back(reports.back());
               }
+              // copies at once, unbound: a run of one rank alone is bound to the first core
               std::vector<std::vector<std::string>> programs;
-              for (const std::string& r : reports) {
-                programs.push_back(run_args(first, r));
-                // mpirun binds a run of one or two ranks to the first cores: copies at once
-                // would all share them
-                if (by_ranks)
-                  programs.back().insert(programs.back().begin() + 1, {"--bind-to", "none"});
-              }
-              std::vector<double> mean_t, slowest_t;
-              for (int k = 0; k < a->runs; ++k) {
-                if (stderr_is_terminal())
-                  std::fprintf(stderr, "\r  stage %s N=%lld: %d copies of the %d-%s run at once, "
-                               "run %d/%d ", id.c_str(), n, copies, first,
-                               by_ranks ? "rank" : "thread", k + 1, a->runs);
-                double sum = 0, most = 0;
-                const std::vector<int> status = run_programs(programs);
-                for (std::size_t u = 0; u < reports.size(); ++u) {
-                  check_ran(status[u]);
-                  const double at = nlohmann::json::parse(read_file(reports[u]))
-                                        .at("step_seconds").get<double>();
-                  sum += at;
-                  most = std::max(most, at);
-                }
-                mean_t.push_back(sum / copies);
-                slowest_t.push_back(most);
-              }
-              if (stderr_is_terminal()) std::fprintf(stderr, "\r%70s\r", "");
-              std::sort(mean_t.begin(), mean_t.end());
-              std::sort(slowest_t.begin(), slowest_t.end());
-              const double mean = mean_t[mean_t.size() / 2];
-              const double slowest = slowest_t[slowest_t.size() / 2];
+              for (const std::string& r : reports) programs.push_back(run_args(first, r, false));
+              char progress[128];
+              std::snprintf(progress, sizeof progress,
+                            "stage %s N=%lld: %d copies of the %d-%s run at once", id.c_str(), n,
+                            copies, first, by_ranks ? "rank" : "thread");
+              const Copies at_once = time_at_once(programs, reports, a->runs, check_ran, progress);
+              const double mean = at_once.mean, slowest = at_once.slowest;
               ceiling = copies * one_thread_steps / mean;
               ceiling_slowest = copies * one_thread_steps / slowest;
               const double in_steps = one_thread_steps / step_median;

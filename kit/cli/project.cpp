@@ -73,7 +73,7 @@ struct MpiScratch {
 }  // namespace
 
 std::vector<std::string> on_ranks(const std::string& id, const std::string& impl, int ranks,
-                                  std::vector<std::string> program_and_args) {
+                                  std::vector<std::string> program_and_args, bool bound) {
   if (stage_declares(id, impl, "needs_mpi") != true)
     throw std::runtime_error("stage " + id + " runs on one process: --ranks is for the stages "
                              "that declare needs_mpi in their stage.json (08)");
@@ -91,6 +91,7 @@ std::vector<std::string> on_ranks(const std::string& id, const std::string& impl
   }
   std::vector<std::string> args{"mpirun", "--quiet", "--oversubscribe", "-np",
                                 std::to_string(ranks)};
+  if (!bound) args.insert(args.begin() + 1, {"--bind-to", "none"});
   args.insert(args.end(), program_and_args.begin(), program_and_args.end());
   return args;
 }

@@ -32,9 +32,11 @@ nlohmann::json stage_declares(const std::string& id, const std::string& impl, co
 /// `program` and its arguments started on `ranks` ranks by mpirun (oversubscribed: more ranks
 /// than cores are fine; as root, with OpenMPI's two confirmations; its session files and
 /// shared-memory segments in a folder of this process's, removed when it ends). For a stage that
-/// declares `needs_mpi`; throws for any other.
+/// declares `needs_mpi`; throws for any other. `bound` false: the ranks not bound to cores
+/// (mpirun binds a run of one or two ranks to the first cores, so several such runs at once would
+/// all share them).
 std::vector<std::string> on_ranks(const std::string& id, const std::string& impl, int ranks,
-                                  std::vector<std::string> program_and_args);
+                                  std::vector<std::string> program_and_args, bool bound = true);
 
 /// `solution` when the kit has `solutions/` (the instructor's copy), `student` otherwise.
 std::string default_impl();
