@@ -9,8 +9,10 @@ its full marks.
 
 The attacks (each a stage's step.cpp; the hidden seed of these gradings is SEED):
   read-golden     find an expected output on disk (beside the scene, up the parents' folders,
-                  the kit's datasets/golden, /autograder) and copy it as its own output
-  run-solution    find any plab-run-* program of the kit and run it on the same scene
+                  the kit's datasets/golden, /autograder, anywhere on the disk) and copy it as
+                  its own output (a candidate is known by its first line, never read whole)
+  run-solution    find any plab-run-* program of the kit (the nearest the scene first) and run it
+                  on the same scene
   include-path    #include the kit's solution by its absolute path (and a relative one)
   call-oracle     the whole step from the kit's own greedy oracle (plab::plan_step(), which the
                   runner links for --explain), declared by hand, its source included when found
@@ -119,6 +121,15 @@ std::string slurp(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
 }
+// A file's first `n` bytes: enough to recognise an expected output by its first line, without
+// reading the whole of a large file (a machine's disk may hold outputs of millions of lines).
+std::string head(const std::string& path, size_t n) {
+  std::ifstream f(path, std::ios::binary);
+  std::string text(n, '\0');
+  f.read(&text[0], static_cast<std::streamsize>(n));
+  text.resize(static_cast<size_t>(f.gcount()));
+  return text;
+}
 // Every file under `dir` (depth-limited), skipping /proc, /sys and /dev.
 void walk(const std::string& dir, int depth, std::vector<std::string>& files) {
   if (depth < 0 || dir == "/proc" || dir == "/sys" || dir == "/dev" || dir == "/usr") return;
@@ -134,6 +145,20 @@ void walk(const std::string& dir, int depth, std::vector<std::string>& files) {
     else if (S_ISREG(st.st_mode)) files.push_back(p);
   }
   closedir(d);
+}
+// The files nearest the scene first: its own folder, then each parent's (a grader's scratch or
+// the kit's build tree holds the expected outputs and the programs), a few levels down each.
+void near_scene(std::string scene, std::vector<std::string>& files) {
+  if (scene.empty()) return;
+  if (scene[0] != '/') {
+    char cwd[4096];
+    if (getcwd(cwd, sizeof cwd)) scene = std::string(cwd) + "/" + scene;
+  }
+  std::string dir = scene.substr(0, scene.rfind('/'));
+  for (int up = 0; up < 5 && !dir.empty(); ++up) {
+    walk(dir, 3, files);
+    dir = dir.substr(0, dir.rfind('/'));
+  }
 }
 }  // namespace
 """
@@ -155,8 +180,10 @@ void step(const Box&, Particles& p) {
   // The expected output starts with the scene's first particle at step 0.
   char want[128];
   std::snprintf(want, sizeof want, "0 0 %.8f %.8f", p.x[0], p.y[0]);
+  const auto a = my_args();
   const std::string out = arg_after("--out");
   std::vector<std::string> files;
+  near_scene(a.size() > 1 ? a[1] : "", files);
   for (const char* root : {"/", "/autograder", "KIT", "/tmp", "/plab", "/proc/1/cwd"})
     walk(root, 9, files);
   for (int pid : {getppid(), 1}) walk("/proc/" + std::to_string(pid) + "/cwd", 6, files);
@@ -164,9 +191,8 @@ void step(const Box&, Particles& p) {
   for (const auto& f : files) {
     if (f.size() < 4 || f.compare(f.size() - 4, 4, ".out") != 0) continue;
     ++seen;
-    const std::string text = slurp(f);
-    if (text.compare(0, std::strlen(want), want) == 0 && !out.empty()) {
-      std::ofstream(out) << text;
+    if (head(f, std::strlen(want)) == want && !out.empty()) {
+      std::ofstream(out) << slurp(f);
       std::fprintf(stderr, "copied %s\n", f.c_str());
       _exit(0);
     }
@@ -182,6 +208,7 @@ void step(const Box&, Particles&) {
   auto a = my_args();
   const std::string scene = a.size() > 1 ? a[1] : "", out = arg_after("--out");
   std::vector<std::string> files;
+  near_scene(scene, files);
   for (const char* root : {"/", "/autograder", "KIT", "/proc/1/cwd", "/proc/self/cwd"})
     walk(root, 9, files);
   // the parents' working folders: the kit's build tree is near them
@@ -325,12 +352,13 @@ int copy_before_main() {
   char want[128] = "no particle line";
   if (scene >> id >> x >> y) std::snprintf(want, sizeof want, "0 0 %.8f %.8f", x, y);
   std::vector<std::string> files;
+  near_scene(a[1], files);
   for (const char* root : {"/", "/autograder", "KIT", "/tmp", "/plab", "/proc/1/cwd"})
     walk(root, 9, files);
   for (int pid : {getppid(), 1}) walk("/proc/" + std::to_string(pid) + "/cwd", 6, files);
   for (const auto& f : files)
     if (f.size() > 4 && f.compare(f.size() - 4, 4, ".out") == 0 &&
-        slurp(f).compare(0, std::strlen(want), want) == 0) {
+        head(f, std::strlen(want)) == want) {
       std::ofstream(out) << slurp(f);
       std::fprintf(stderr, "before-main: copied %s\n", f.c_str());
       _exit(0);
@@ -617,6 +645,10 @@ def case_control():
         most = sum(t["max_score"] for t in correctness(tests, stage).values())
         check("control", got > most / 2, f"with --no-sandbox, {attack} (stage {stage}) wins "
               f"{got} of {most} correctness points")
+        if got <= most / 2:  # why it lost: the first tests it failed, in the grader's words
+            lost = [f"{n}: {t['output'][:200]}" for n, t in correctness(tests, stage).items()
+                    if t["score"] < t["max_score"]]
+            print("     lost " + "\n     lost ".join(lost[:4]), flush=True)
 
 
 def patched(name, sid, source, edits, skip_why):
