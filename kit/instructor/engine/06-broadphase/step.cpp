@@ -11,6 +11,7 @@
 //            counting sort by row, then by column within each row: sort_rows()), then test each
 //            against the rest of its row and the next row within its reach (a fast particle:
 //            every cell within its search radius) with sweep::close_in_slab() (search_cells());
+//            slab k + 1 is sorted while slab k is searched, in two sets of arrays that take turns;
 //            a small scene with at least two slabs a thread: each thread takes whole slabs
 //            alone instead (slab_alone(), given: one counting sort by cell, then the same search);
 //         2. narrow phase: model.md's pair time for each pair that passed;
@@ -98,23 +99,31 @@ struct Entries {
   }
 };
 
+/// What the search of a slab reads, written by its sort: per entry, in cell order, its midpoint
+/// position (rounded to float: the entry's cell is the rounded one's) and its velocity rounded to
+/// float (padded by kLanesSingle), and where each cell starts.
+struct Sorted {
+  Buffer<float> x, y;      //!< midpoint position
+  Buffer<float> vx, vy;    //!< velocity
+  std::vector<int> start;  //!< cell c holds entries [start[c], start[c + 1])
+};
+
 /// The slab that every thread works on, one at a time. Slab k's entries are sorted from slab
 /// k - 1's (two sets that take turns), which are nearly in order already: a slow particle moves at
 /// most a row from one slab to the next, so the sort's writes stay close together, and a thread
 /// sorts, one slab after the other, about the same particles. What the threads share between two
-/// barriers comes in two copies, one for even slabs and one for odd.
+/// barriers comes in two copies, one for even slabs and one for odd: slab k + 1 is sorted while
+/// slab k is searched.
 struct Slab {
   Entries set[2];                   //!< slab k's entries are set[(k + 1) % 2], its input set[k % 2]
-  Buffer<float> x, y;               //!< per entry of the slab: midpoint position, rounded to float
-                                    //!< (the entry's cell is the rounded one's; padded by kLanesSingle)
-  Buffer<float> vx, vy;             //!< ... its velocity, rounded to float (what the search tests)
-  std::vector<int> start;           //!< cell c holds entries [start[c], start[c + 1])
+  Sorted sorted[2];                 //!< slab k's search reads sorted[k % 2]
   std::vector<int> row_start[2];    //!< row r of slab k holds entries [row_start[k % 2][r], ... [r + 1])
   std::vector<int> counts[2];       //!< slab k's entries per thread and row (count_stride() a thread)
   Buffer<int> from;                 //!< per entry, grouped by row: the input entry it comes from
   std::vector<int> order;           //!< every particle, in the cell order of the last step's slab 0
-  /// Room for `n` particles in grid `g` sorted by `threads` threads.
-  void reserve(int n, const sweep::Grid& g, int threads);
+  /// Room for `n` particles in grid `g` sorted by `threads` threads (`both`: in both sets of
+  /// sorted arrays, the team's; a thread alone uses sorted[0] only).
+  void reserve(int n, const sweep::Grid& g, int threads, bool both = true);
 };
 
 /// What the search of a slab reads: its entries in cell order, one array per field, midpoints and
@@ -152,12 +161,15 @@ inline std::size_t count_stride(int rows) {
   return (static_cast<std::size_t>(rows) + 1 + 31) / 32 * 32;
 }
 
-void Slab::reserve(int n, const sweep::Grid& g, int threads) {
+void Slab::reserve(int n, const sweep::Grid& g, int threads, bool both) {
   for (Entries& e : set) e.reserve(n);
-  for (auto* v : {&x, &y, &vx, &vy}) resize_padded(*v, n + kLanesSingle, kLanesSingle);
+  for (int u = 0; u < (both ? 2 : 1); ++u) {
+    Sorted& o = sorted[u];
+    for (auto* v : {&o.x, &o.y, &o.vx, &o.vy}) resize_padded(*v, n + kLanesSingle, kLanesSingle);
+    o.start.resize(static_cast<std::size_t>(g.cells()) + 1);
+  }
   from.resize(n);
   order.resize(n);
-  start.resize(static_cast<std::size_t>(g.cells()) + 1);
   for (int u = 0; u < 2; ++u) {
     row_start[u].resize(g.rows + 1);
     counts[u].resize(static_cast<std::size_t>(threads) * count_stride(g.rows));
@@ -253,9 +265,10 @@ inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, i
                       const sweep::Grid& g, int* next_count) {
   const double tm = sweep::slab_mid(k, g);
   const std::vector<int>& row_start = s.row_start[k % 2];
+  Sorted& o = s.sorted[k % 2];
   for (int row = r0; row < r1; ++row) {
     const int lo = row_start[row], hi = row_start[row + 1];
-    int* start = &s.start[static_cast<std::size_t>(row) * g.columns];
+    int* start = &o.start[static_cast<std::size_t>(row) * g.columns];
     std::fill(start, start + g.columns, 0);
     for (int e = lo; e < hi; ++e) ++start[in.column[s.from[e]]];  // count
     for (int c = 0, at = lo; c < g.columns; ++c) {                 // prefix sums
@@ -273,10 +286,10 @@ inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, i
       out.vx[to] = in.vx[j];
       out.vy[to] = in.vy[j];
       out.reach[to] = in.reach[j];
-      s.x[to] = midpoint(in.x0[j], in.vx[j], tm);
-      s.y[to] = midpoint(in.y0[j], in.vy[j], tm);
-      s.vx[to] = static_cast<float>(in.vx[j]);
-      s.vy[to] = static_cast<float>(in.vy[j]);
+      o.x[to] = midpoint(in.x0[j], in.vx[j], tm);
+      o.y[to] = midpoint(in.y0[j], in.vy[j], tm);
+      o.vx[to] = static_cast<float>(in.vx[j]);
+      o.vy[to] = static_cast<float>(in.vy[j]);
       if (k == 0) s.order[to] = in.id[j];
       if (next_count) count_entry(out, to, k + 1, g, next_count);
     }
@@ -285,7 +298,7 @@ inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, i
   }
   // Where the last cell ends: written by the one thread that sorted the last row (threads with
   // no rows may also have r1 == g.rows).
-  if (r0 < r1 && r1 == g.rows) s.start[g.cells()] = row_start[g.rows];
+  if (r0 < r1 && r1 == g.rows) o.start[g.cells()] = row_start[g.rows];
 }
 
 /// Files entry `a` with every entry of [from, to) but itself that passes close_in_slab_single()
@@ -384,7 +397,8 @@ inline void slab_alone(const Box& box, const ParticlesOf<Real>& p, Slab& o, Mine
                        const sweep::Single& single) {
   const double tm = sweep::slab_mid(k, g);
   Buffer<int>& cell = o.from;  // per input entry: its cell, or -1
-  int* start = o.start.data();
+  Sorted& to_search = o.sorted[0];
+  int* start = to_search.start.data();
   std::fill(start, start + g.cells() + 1, 0);
   for (int j = 0; j < n; ++j) {  // count
     cell[j] = in.last[j] < k ? -1
@@ -405,18 +419,18 @@ inline void slab_alone(const Box& box, const ParticlesOf<Real>& p, Slab& o, Mine
     out.vx[to] = in.vx[j];
     out.vy[to] = in.vy[j];
     out.reach[to] = in.reach[j];
-    o.x[to] = midpoint(in.x0[j], in.vx[j], tm);
-    o.y[to] = midpoint(in.y0[j], in.vy[j], tm);
-    o.vx[to] = static_cast<float>(in.vx[j]);
-    o.vy[to] = static_cast<float>(in.vy[j]);
+    to_search.x[to] = midpoint(in.x0[j], in.vx[j], tm);
+    to_search.y[to] = midpoint(in.y0[j], in.vy[j], tm);
+    to_search.vx[to] = static_cast<float>(in.vx[j]);
+    to_search.vy[to] = static_cast<float>(in.vy[j]);
     if (k == 0) o.order[to] = in.id[j];
   }
   for (int c = g.cells(); c > 0; --c) start[c] = start[c - 1];
   start[0] = 0;
   std::vector<int>& row_start = o.row_start[0];
   for (int r = 0; r <= g.rows; ++r) row_start[r] = start[static_cast<std::size_t>(r) * g.columns];
-  const View v{o.x.data(),       o.y.data(), o.vx.data(),      o.vy.data(), single,
-               out.reach.data(), start,      row_start.data()};
+  const View v{to_search.x.data(), to_search.y.data(), to_search.vx.data(),
+               to_search.vy.data(), single, out.reach.data(), start, row_start.data()};
   my.hits.clear();
   search(v, my.hits, 0, taking, g);
   narrow(box, p, out, my.hits, my.found);
@@ -491,7 +505,8 @@ PhaseClock phases;
 
 /// One step in reals of type `Real`: `double` is model.md's step, `float` the variant that
 /// `plab accuracy` measures (the broad phase always works in double). One parallel region: every
-/// thread works on every slab in turn (two barriers a slab), or, in a small scene with at least two
+/// thread works on every slab in turn (two barriers a slab; slab k + 1's sort in the phase of slab
+/// k's search), or, in a small scene with at least two
 /// slabs a thread (whole_slabs()), each thread on whole slabs alone; then all on the selection.
 template <class Real>
 void step_in(const Box& box, ParticlesOf<Real>& p) {
@@ -581,7 +596,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
       s.reserve(n, g, threads);
       for (Mine& m : mine) {
         m.next.resize(g.rows + 1);
-        if (alone && &m - mine.data() < threads) m.own.reserve(n, g, 1);
+        if (alone && &m - mine.data() < threads) m.own.reserve(n, g, 1, false);
       }
       phases.lap(t, Part::kChoose);
     }
@@ -622,17 +637,16 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
       phases.lap(t, Part::kGroup);
 #pragma omp barrier
       phases.lap(t, Part::kWait);
-      for (int k = 0; k < g.slabs; ++k) {
-        const Entries& in = s.set[k % 2];
-        Entries& out = s.set[(k + 1) % 2];
-        // This thread's rows: those that start in its share of the entries. Sorting them files
-        // their entries for slab k + 1, which this thread then groups by row.
+      // Slab k's sort (sort_rows()) by this thread: the rows that start in its share of the
+      // `entries` that take part; it files their entries for slab k + 1, which this thread then
+      // groups by row (group_rows(), from my.lo to my.hi).
+      const auto sort_slab = [&](int k, int entries) {
         const std::vector<int>& row_start = s.row_start[k % 2];
         const auto row_at = [&](int u) {
           return u == threads ? g.rows
                               : static_cast<int>(std::lower_bound(row_start.begin(),
                                                                   row_start.begin() + g.rows,
-                                                                  share(taking, u, threads)) -
+                                                                  share(entries, u, threads)) -
                                                  row_start.begin());
         };
         const int r0 = row_at(t), r1 = row_at(t + 1);
@@ -641,18 +655,34 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
           next_count = &s.counts[(k + 1) % 2][static_cast<std::size_t>(t) * count_stride(g.rows)];
           std::fill(next_count, next_count + g.rows + 1, 0);
         }
-        sort_rows(s, in, out, k, r0, r1, g, next_count);
+        sort_rows(s, s.set[k % 2], s.set[(k + 1) % 2], k, r0, r1, g, next_count);
         my.lo = row_start[r0];
         my.hi = row_start[r1];
         phases.lap(t, Part::kSort);
+      };
+      sort_slab(0, taking);
 #pragma omp barrier
-        phases.lap(t, Part::kWait);
-        const int next_taking = k + 1 < g.slabs ? place_rows(s, my.next, k + 1, g, t, threads) : 0;
-        // The search (each pair that passes, then the narrow phase at once), in chunks of entries
-        // taken as threads come free; then this thread groups slab k + 1's entries by row. No
-        // barrier between: the grouping touches nothing the search reads.
-        const View v{s.x.data(),       s.y.data(),     s.vx.data(),     s.vy.data(), single,
-                     out.reach.data(), s.start.data(), row_start.data()};
+      phases.lap(t, Part::kWait);
+      for (int k = 0; k < g.slabs; ++k) {
+        // Slab k + 1's rows (from the counts slab k's sort filed), then, in one phase, slab k + 1's
+        // sort (a static share of rows a thread) and slab k's search (each pair that passes, then
+        // the narrow phase at once; in chunks of entries taken as threads come free, so that a
+        // thread whose sort took longer searches less). Two sets of arrays take turns: the sort
+        // writes what the search of slab k does not read.
+        int next_taking = 0;
+        if (k + 1 < g.slabs) {
+          next_taking = place_rows(s, my.next, k + 1, g, t, threads);
+          group_rows(s, my, s.set[(k + 1) % 2], k + 1, g);
+          phases.lap(t, Part::kGroup);
+#pragma omp barrier
+          phases.lap(t, Part::kWait);
+          sort_slab(k + 1, next_taking);
+        }
+        const Entries& out = s.set[(k + 1) % 2];
+        const Sorted& o = s.sorted[k % 2];
+        const View v{o.x.data(),       o.y.data(),       o.vx.data(),
+                     o.vy.data(),      single,           out.reach.data(),
+                     o.start.data(),   s.row_start[k % 2].data()};
 #pragma omp for schedule(dynamic, 1) nowait
         for (int from = 0; from < taking; from += kChunk) {
           my.hits.clear();
@@ -660,9 +690,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
           narrow(box, p, out, my.hits, my.found);  // the pairs' times, at once
         }
         phases.lap(t, Part::kSearch);
-        if (k + 1 < g.slabs) group_rows(s, my, out, k + 1, g);
         taking = next_taking;
-        phases.lap(t, Part::kGroup);
 #pragma omp barrier
         phases.lap(t, Part::kWait);
       }
