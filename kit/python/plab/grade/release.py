@@ -36,11 +36,13 @@ import tempfile
 # README's own source (it becomes README.md), the instructor-only code, the instructor's README
 # (replaced), the instructor's pages (the measurement logs of the reference solutions and of the
 # kit's engine: the handouts ask the student to measure) and the similarity test's submissions
-# (independent stage 03 solutions), the course guide (its data and its writer).
+# (independent stage 03 solutions), the course guide (its data and its writer), the engine's
+# own checks.
 INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "README.md",
                    "handouts/measurements.md", "handouts/engine.md", "handouts/engine-gpu.md",
                    "handouts/engine-08.md", "tests/similar/", "kit/guide/",
-                   "kit/python/plab/guide.py", "tools/engine-modes.sh")
+                   "kit/python/plab/guide.py", "tools/engine-modes.sh",
+                   "tests/tsan_engine_check.py")
 # Files that belong to nobody's copy even when tracked by mistake: logs, build folders, scratch.
 SCRATCH = ("*.log", "*.partial", "*.orig", "*.rej", "*.swp", "*~", "*.pyc", "__pycache__/*",
            "build/*", "build-*/*", ".configure.log")
