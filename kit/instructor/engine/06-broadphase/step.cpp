@@ -121,9 +121,9 @@ struct Slab {
   std::vector<int> counts[2];       //!< slab k's entries per thread and row (count_stride() a thread)
   Buffer<int> from;                 //!< per entry, grouped by row: the input entry it comes from
   std::vector<int> order;           //!< every particle, in the cell order of the last step's slab 0
-  /// Room for `n` particles in grid `g` sorted by `threads` threads (`both`: in both sets of
-  /// sorted arrays, the team's; a thread alone uses sorted[0] only).
-  void reserve(int n, const sweep::Grid& g, int threads, bool both = true);
+  /// Room for `n` particles in grid `g` sorted by `threads` threads. A thread alone
+  /// (slab_alone()) uses sorted[0] only; sorted[1]'s pages stay unwritten, so never mapped.
+  void reserve(int n, const sweep::Grid& g, int threads);
 };
 
 /// What the search of a slab reads: its entries in cell order, one array per field, midpoints and
@@ -161,10 +161,9 @@ inline std::size_t count_stride(int rows) {
   return (static_cast<std::size_t>(rows) + 1 + 31) / 32 * 32;
 }
 
-void Slab::reserve(int n, const sweep::Grid& g, int threads, bool both) {
+void Slab::reserve(int n, const sweep::Grid& g, int threads) {
   for (Entries& e : set) e.reserve(n);
-  for (int u = 0; u < (both ? 2 : 1); ++u) {
-    Sorted& o = sorted[u];
+  for (Sorted& o : sorted) {
     for (auto* v : {&o.x, &o.y, &o.vx, &o.vy}) resize_padded(*v, n + kLanesSingle, kLanesSingle);
     o.start.resize(static_cast<std::size_t>(g.cells()) + 1);
   }
@@ -596,7 +595,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
       s.reserve(n, g, threads);
       for (Mine& m : mine) {
         m.next.resize(g.rows + 1);
-        if (alone && &m - mine.data() < threads) m.own.reserve(n, g, 1, false);
+        if (alone && &m - mine.data() < threads) m.own.reserve(n, g, 1);
       }
       phases.lap(t, Part::kChoose);
     }

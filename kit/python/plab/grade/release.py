@@ -42,7 +42,7 @@ INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "REA
                    "handouts/measurements.md", "handouts/engine.md", "handouts/engine-gpu.md",
                    "handouts/engine-08.md", "tests/similar/", "kit/guide/",
                    "kit/python/plab/guide.py", "tools/engine-modes.sh",
-                   "tests/tsan_engine_check.py", "tests/tsan_sampling_check.py")
+                   "tests/tsan_runs_check.py")
 # Files that belong to nobody's copy even when tracked by mistake: logs, build folders, scratch.
 SCRATCH = ("*.log", "*.partial", "*.orig", "*.rej", "*.swp", "*~", "*.pyc", "__pycache__/*",
            "build/*", "build-*/*", ".configure.log")
