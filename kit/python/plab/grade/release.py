@@ -36,8 +36,8 @@ import tempfile
 # README's own source (it becomes README.md), the instructor-only code, the instructor's README
 # (replaced), the instructor's pages (the measurement logs of the reference solutions and of the
 # kit's engine: the handouts ask the student to measure) and the similarity test's submissions
-# (independent stage 03 solutions), the course guide (its data and its writer), the engine's
-# own checks.
+# (independent stage 03 solutions), the course guide (its data and its writer), the
+# instructors' TSan runs of the engine and the solutions (tests/tsan_runs_check.py).
 INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "README.md",
                    "handouts/measurements.md", "handouts/engine.md", "handouts/engine-gpu.md",
                    "handouts/engine-08.md", "tests/similar/", "kit/guide/",
