@@ -49,6 +49,7 @@ constexpr double kQuantile = 0.9;  //!< the fastest 10% search wider (sweep::cho
 constexpr double kAlpha = 0.3;     //!< slabs per sqrt(N) v_cut / L, measured best on the report's scene
 constexpr int kChunk = 256;        //!< entries a thread searches at a time (dynamic schedule)
 constexpr int kSmall = 1 << 15;    //!< up to this many particles, a thread may take whole slabs
+constexpr int kAhead = 24;         //!< loops that read particles out of order prefetch this far ahead
 
 /// An allocator that leaves the elements a resize adds unwritten (default-initialised), so that
 /// a buffer's pages are first written, and so mapped by the system, by the threads that use it,
@@ -244,6 +245,14 @@ inline void gather(Entries& first, const ParticlesOf<Real>& p, const std::vector
                    const std::vector<int>& order, int lo, int hi, const sweep::Grid& g,
                    int* count) {
   for (int j = lo; j < hi; ++j) {
+    if (j + kAhead < hi) {
+      const int f = order[j + kAhead];
+      __builtin_prefetch(&p.x[f]);
+      __builtin_prefetch(&p.y[f]);
+      __builtin_prefetch(&p.vx[f]);
+      __builtin_prefetch(&p.vy[f]);
+      __builtin_prefetch(&end[f]);
+    }
     const int i = order[j];
     first.id[j] = i;
     first.last[j] = sweep::last_slab(end[i], g);
@@ -376,13 +385,20 @@ void search(const View& s, std::vector<std::pair<int, int>>& hits, int from, int
 }
 
 /// The narrow phase: model.md's pair time of each entry pair in `hits` (entries of `out`), kept in
-/// `found` if it is in the step (the plan drops pairs after walls).
+/// `found` if it is in the step (the plan drops pairs after walls). It reads the particles' values
+/// from the entries, which hold them exactly (Real's values widened to double), in cell order:
+/// a pair's two entries are close together, where the particles' own arrays are in scene order,
+/// which is random in space.
 template <class Real>
-inline void narrow(const Box& box, const ParticlesOf<Real>& p, const Entries& out,
-                   const std::vector<std::pair<int, int>>& hits, std::vector<model::Event>& found) {
-  for (const auto& [a, b] : hits) {
-    const model::Event e =
-        pair_candidate(box, p, std::min(out.id[a], out.id[b]), std::max(out.id[a], out.id[b]));
+inline void narrow(const Box& box, const Entries& out, const std::vector<std::pair<int, int>>& hits,
+                   std::vector<model::Event>& found) {
+  for (auto [a, b] : hits) {
+    if (out.id[b] < out.id[a]) std::swap(a, b);  // the lower index first, as pair_candidate()
+    const Real t = model::pair_time(
+        static_cast<Real>(out.x0[a]), static_cast<Real>(out.y0[a]), static_cast<Real>(out.vx[a]),
+        static_cast<Real>(out.vy[a]), static_cast<Real>(out.x0[b]), static_cast<Real>(out.y0[b]),
+        static_cast<Real>(out.vx[b]), static_cast<Real>(out.vy[b]), static_cast<Real>(box.r));
+    const model::Event e = model::pair_event_key(t, out.id[a], out.id[b]);
     if (model::in_step(e.t)) found.push_back(e);
   }
 }
@@ -391,7 +407,7 @@ inline void narrow(const Box& box, const ParticlesOf<Real>& p, const Entries& ou
 /// of slab 0's input `in` (the team's, read only) into `o`, the search, and the pairs' times (into
 /// `my.found`). One level and one move an entry: the slab is small enough to stay in cache.
 template <class Real>
-inline void slab_alone(const Box& box, const ParticlesOf<Real>& p, Slab& o, Mine& my,
+inline void slab_alone(const Box& box, Slab& o, Mine& my,
                        const Entries& in, int n, int k, const sweep::Grid& g,
                        const sweep::Single& single) {
   const double tm = sweep::slab_mid(k, g);
@@ -415,6 +431,8 @@ inline void slab_alone(const Box& box, const ParticlesOf<Real>& p, Slab& o, Mine
     }
     const int to = start[cell[j]]++;
     out.id[to] = in.id[j];
+    out.x0[to] = in.x0[j];
+    out.y0[to] = in.y0[j];
     out.vx[to] = in.vx[j];
     out.vy[to] = in.vy[j];
     out.reach[to] = in.reach[j];
@@ -432,7 +450,7 @@ inline void slab_alone(const Box& box, const ParticlesOf<Real>& p, Slab& o, Mine
                to_search.vy.data(), single, out.reach.data(), start, row_start.data()};
   my.hits.clear();
   search(v, my.hits, 0, taking, g);
-  narrow(box, p, out, my.hits, my.found);
+  narrow<Real>(box, out, my.hits, my.found);
 }
 
 }  // namespace
@@ -611,7 +629,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
       phases.lap(t, Part::kWait);
 #pragma omp for schedule(dynamic, 1) nowait
       for (int k = 0; k < g.slabs; ++k) {
-        slab_alone(box, p, my.own, my, in, n, k, g, single);
+        slab_alone<Real>(box, my.own, my, in, n, k, g, single);
         my.first |= (k == 0);
       }
       phases.lap(t, Part::kSearch);  // the slabs' sorts and searches
@@ -686,7 +704,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
         for (int from = 0; from < taking; from += kChunk) {
           my.hits.clear();
           search(v, my.hits, from, std::min(from + kChunk, taking), g);
-          narrow(box, p, out, my.hits, my.found);  // the pairs' times, at once
+          narrow<Real>(box, out, my.hits, my.found);  // the pairs' times, at once
         }
         phases.lap(t, Part::kSearch);
         taking = next_taking;
@@ -699,7 +717,19 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
     sparse_greedy_plan_in_team(my.found, wall, plan, selection);
     phases.lap(t, Part::kSelect);
 #pragma omp for schedule(static)
-    for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);
+    for (int i = 0; i < n; ++i) {
+      if (i + kAhead < n) {  // a pair's other particle is anywhere in the arrays
+        const int j = plan.partner[i + kAhead];
+        if (j > i + kAhead) {
+          __builtin_prefetch(&p.x[j], 1);
+          __builtin_prefetch(&p.y[j], 1);
+          __builtin_prefetch(&p.vx[j], 1);
+          __builtin_prefetch(&p.vy[j], 1);
+          __builtin_prefetch(&p.pc[j], 1);
+        }
+      }
+      apply_one(box, p, plan, i);
+    }
     phases.lap(t, Part::kApply);
   }
   phases.end(region_from);
