@@ -270,7 +270,7 @@ void share_halo(const Ranks& r, const Box& box, const Scene& sc, Local& s) {
   for (int& start : s.ghosts_from) start += s.owned;
 }
 
-constexpr double kAlpha = 0.3;  //!< time slabs per sqrt(density) v_cut: stage 06's measured best
+constexpr double kAlpha = 0.2;  //!< time slabs per sqrt(density) v_cut: stage 06's measured best
 
 /// The space-time grid of stage 06 (sweep::choose(): reach, margin, v_cut) fitted to the
 /// rectangle that the paths here cover, [x0, x0 + w) x [y0, y0 + h), instead of the whole box: a
