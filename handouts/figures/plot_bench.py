@@ -163,10 +163,12 @@ def stage06_cores():
 
 def ceiling():
     fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.5))
-    panels = ((left, "threads", (("bench-issue30-ceiling-cpu-h200.csv", "o", "call 1"),
-                                 ("bench-issue30-ceiling-cpu-packed-h200.csv", "s", "call 3")),
+    panels = ((left, "threads", (("bench-issue30-ceiling-cpu-h200.csv", "o", "11-29, call 1"),
+                                 ("bench-issue30-ceiling-cpu-packed-h200.csv", "s", "11-29, call 3"),
+                                 ("bench-issue30-ceiling-cpu-h200-3.csv", "^", "11-30")),
                "Stage 06's engine, CPU, N = 10^6", 12, "12x (issue 30)"),
-              (right, "ranks", (("bench-issue30-ceiling-mpi-h200.csv", "o", "call 1"),),
+              (right, "ranks", (("bench-issue30-ceiling-mpi-h200.csv", "o", "11-29, call 1"),
+                                ("bench-issue30-ceiling-mpi-h200-2.csv", "^", "11-30")),
                "Stage 08's engine, N = 10^6", 0.7 * 16, "70% at 16 ranks (issue 30)"))
     for ax, count, files, title, goal, goal_label in panels:
         for name, marker, call in files:
@@ -187,7 +189,7 @@ def ceiling():
                xticks=[1, 2, 4, 8, 16], xticklabels=["1", "2", "4", "8", "16"], title=title)
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
-    fig.suptitle("An H200 machine's 16-core host, 2026-11-29: plab bench --ceiling "
+    fig.suptitle("H200 machines' 16-core hosts, 2026-11-29 and 11-30: plab bench --ceiling "
                  "(copies of the one-thread or one-rank run at once)", fontsize=9)
     fig.tight_layout()
     fig.savefig(OUT / "ceiling.png", dpi=100)

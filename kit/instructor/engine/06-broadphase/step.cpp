@@ -46,7 +46,7 @@ using lanes::Isa;
 using lanes::kLanes;        // the int and double arrays' padding
 using lanes::kLanesSingle;  // close_in_slab_single() is evaluated for this many entries at a time
 constexpr double kQuantile = 0.9;  //!< the fastest 10% search wider (sweep::choose())
-constexpr double kAlpha = 0.2;     //!< slabs per sqrt(N) v_cut / L, measured best on the report's scene
+constexpr double kAlpha = 0.2;     //!< slabs per sqrt(N) v_cut / L, measured best from N = 10^4 to 10^6 (engine.md)
 constexpr int kChunk = 256;        //!< entries a thread searches at a time (dynamic schedule)
 constexpr int kSmall = 1 << 15;    //!< up to this many particles, a thread may take whole slabs
 constexpr int kAhead = 24;         //!< loops that read particles out of order prefetch this far ahead

@@ -270,13 +270,13 @@ void share_halo(const Ranks& r, const Box& box, const Scene& sc, Local& s) {
   for (int& start : s.ghosts_from) start += s.owned;
 }
 
-constexpr double kAlpha = 0.2;  //!< time slabs per sqrt(density) v_cut: stage 06's measured best
+constexpr double kAlpha = 0.2;  //!< time slabs per sqrt(density) v_cut: stage 06's engine's (engine.md)
 
 /// The space-time grid of stage 06 (sweep::choose(): reach, margin, v_cut) fitted to the
 /// rectangle that the paths here cover, [x0, x0 + w) x [y0, y0 + h), instead of the whole box: a
 /// rank's particles lie in a slab and its halo. The time slabs are those stage 06 chooses for the
 /// whole scene, \f$K = \lceil \alpha \sqrt N\, v_{cut} / L \rceil\f$ with its \f$\alpha =
-/// 0.3\f$ (they follow the density, \f$\sqrt{N / L^2}\f$, which a rank shares with the scene,
+/// 0.2\f$ (they follow the density, \f$\sqrt{N / L^2}\f$, which a rank shares with the scene,
 /// not its own count of particles), with this rank's \f$v_{cut}\f$. Cells are at least a slow
 /// particle's reach, about 4n of them.
 LocalGrid fit_grid(const Box& box, const Scene& sc, const Particles& p,
