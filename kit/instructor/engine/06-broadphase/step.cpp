@@ -238,6 +238,16 @@ inline bool whole_slabs(int n, const sweep::Grid& g, int threads) {
   return n <= kSmall && g.slabs >= 2 * threads;
 }
 
+/// Prefetches particle `i`'s position and velocity (`kWrite`: to be written), for loops that
+/// read the particles out of index order, kAhead places before they get there.
+template <bool kWrite, class Real>
+inline void prefetch_motion(const ParticlesOf<Real>& p, int i) {
+  __builtin_prefetch(&p.x[i], kWrite);
+  __builtin_prefetch(&p.y[i], kWrite);
+  __builtin_prefetch(&p.vx[i], kWrite);
+  __builtin_prefetch(&p.vy[i], kWrite);
+}
+
 /// Slab 0's input, entries [lo, hi): the particles in `order` (the last step's slab-0 order),
 /// each with its last slab and its search; each filed for slab 0 when `count` is given.
 template <class Real>
@@ -247,10 +257,7 @@ inline void gather(Entries& first, const ParticlesOf<Real>& p, const std::vector
   for (int j = lo; j < hi; ++j) {
     if (j + kAhead < hi) {
       const int f = order[j + kAhead];
-      __builtin_prefetch(&p.x[f]);
-      __builtin_prefetch(&p.y[f]);
-      __builtin_prefetch(&p.vx[f]);
-      __builtin_prefetch(&p.vy[f]);
+      prefetch_motion<false>(p, f);
       __builtin_prefetch(&end[f]);
     }
     const int i = order[j];
@@ -721,10 +728,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
       if (i + kAhead < n) {  // a pair's other particle is anywhere in the arrays
         const int j = plan.partner[i + kAhead];
         if (j > i + kAhead) {
-          __builtin_prefetch(&p.x[j], 1);
-          __builtin_prefetch(&p.y[j], 1);
-          __builtin_prefetch(&p.vx[j], 1);
-          __builtin_prefetch(&p.vy[j], 1);
+          prefetch_motion<true>(p, j);
           __builtin_prefetch(&p.pc[j], 1);
         }
       }
