@@ -43,7 +43,6 @@ namespace plab {
 namespace {
 
 using lanes::Isa;
-using lanes::kLanes;        // the int and double arrays' padding
 using lanes::kLanesSingle;  // close_in_slab_single() is evaluated for this many entries at a time
 constexpr double kQuantile = 0.9;  //!< the fastest 10% search wider (sweep::choose())
 constexpr double kAlpha = 0.2;     //!< slabs per sqrt(N) v_cut / L, measured best from N = 10^4 to 10^6 (engine.md)
@@ -89,13 +88,13 @@ struct Entries {
   Buffer<int> id;               //!< the particle
   Buffer<int> last;             //!< its last slab (sweep::last_slab())
   Buffer<double> x0, y0;        //!< its start-of-step position
-  Buffer<double> vx, vy;        //!< its velocity (padded by kLanes)
+  Buffer<double> vx, vy;        //!< its velocity
   Buffer<sweep::PackedSearch> reach;  //!< what it searches (sweep::search_of())
   Buffer<int> row, column;      //!< its row (-1: takes no part) and column in the next slab
-  /// Room for `n` entries (and kLanes of padding).
+  /// Room for `n` entries.
   void reserve(int n) {
-    for (auto* v : {&id, &last, &row, &column}) resize_padded(*v, n + kLanes, kLanes);
-    for (auto* v : {&x0, &y0, &vx, &vy}) resize_padded(*v, n + kLanes, kLanes);
+    for (auto* v : {&id, &last, &row, &column}) v->resize(n);
+    for (auto* v : {&x0, &y0, &vx, &vy}) v->resize(n);
     reach.resize(n);
   }
 };

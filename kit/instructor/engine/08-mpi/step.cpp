@@ -313,22 +313,29 @@ LocalGrid fit_grid(const Box& box, const Scene& sc, const Particles& p,
 }
 
 /// One time slab's entries, in cell order: the particles that take part, by the cell of their
-/// midpoint positions (shifted by the grid's origin), the owned ones first in each cell.
+/// midpoint positions (shifted by the grid's origin, rounded to float: the entry's cell is the
+/// rounded midpoint's, as in stage 06's engine), the owned ones first in each cell.
 struct Entries {
   std::vector<int> start;            //!< cell c holds entries [start[c], start[c + 1])
   std::vector<int> owned_end;        //!< cell c's owned entries are [start[c], owned_end[c])
   std::vector<int> cell;             //!< per particle: its cell in this slab
   std::vector<int> id;               //!< per entry: the particle (local index)
-  std::vector<double> x, y, vx, vy;  //!< per entry: shifted midpoint position, velocity (padded
-                                     //!< by lanes::kLanes for the pair test's loads)
-  std::vector<sweep::Search> reach;  //!< per entry: what it searches (sweep::search_of())
+  std::vector<float> x, y, vx, vy;   //!< per entry: shifted midpoint position, velocity, rounded
+                                     //!< to float (padded by lanes::kLanesSingle for the loads)
+  std::vector<sweep::PackedSearch> reach;  //!< per entry: what it searches (sweep::search_of())
   int owned_from = 0;                //!< the first column that holds an owned entry
   int owned_to = -1;                 //!< the last one (owned_to < owned_from: none)
 };
 
+/// Particle i's midpoint in slab time `tm`, shifted by the grid's origin and rounded to float:
+/// what the search reads, and so what the entry is sorted by.
+inline float shifted_midpoint(double x, double v, double tm, double origin) {
+  return static_cast<float>((x + tm * v) - origin);
+}
+
 /// Slab k's counting sort of the particles that take part in it (first[i] <= k <= last[i]).
 void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& first,
-         const std::vector<int>& last, const std::vector<sweep::Search>& reach, int k,
+         const std::vector<int>& last, const std::vector<sweep::PackedSearch>& reach, int k,
          const LocalGrid& lg) {
   const sweep::Grid& g = lg.g;
   const int n = static_cast<int>(p.size());
@@ -339,13 +346,14 @@ void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& firs
   int m = 0;
   for (int i = 0; i < n; ++i) {
     if (last[i] < k || first[i] > k) continue;
-    e.cell[i] = sweep::cell_of((p.x[i] + tm * p.vx[i]) - lg.x0, (p.y[i] + tm * p.vy[i]) - lg.y0, g);
+    e.cell[i] = sweep::cell_of(shifted_midpoint(p.x[i], p.vx[i], tm, lg.x0),
+                               shifted_midpoint(p.y[i], p.vy[i], tm, lg.y0), g);
     ++e.start[e.cell[i] + 1];
     if (i < owned) ++e.owned_end[e.cell[i]];
     ++m;
   }
   for (int c = 0; c < g.cells(); ++c) e.start[c + 1] += e.start[c];
-  for (auto* v : {&e.x, &e.y, &e.vx, &e.vy}) v->resize(m + lanes::kLanes);
+  for (auto* v : {&e.x, &e.y, &e.vx, &e.vy}) v->resize(m + lanes::kLanesSingle);
   e.id.resize(m);
   e.reach.resize(m);
   e.owned_from = g.columns;
@@ -356,10 +364,10 @@ void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& firs
     const int at = e.start[e.cell[i]]++;
     e.id[at] = i;
     e.reach[at] = reach[i];
-    e.x[at] = (p.x[i] + tm * p.vx[i]) - lg.x0;
-    e.y[at] = (p.y[i] + tm * p.vy[i]) - lg.y0;
-    e.vx[at] = p.vx[i];
-    e.vy[at] = p.vy[i];
+    e.x[at] = shifted_midpoint(p.x[i], p.vx[i], tm, lg.x0);
+    e.y[at] = shifted_midpoint(p.y[i], p.vy[i], tm, lg.y0);
+    e.vx[at] = static_cast<float>(p.vx[i]);
+    e.vy[at] = static_cast<float>(p.vy[i]);
     if (i < owned) {
       const int column = e.cell[i] % g.columns;
       e.owned_from = std::min(e.owned_from, column);
@@ -371,24 +379,23 @@ void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& firs
   for (int c = 0; c < g.cells(); ++c) e.owned_end[c] += e.start[c];
 }
 
-/// Files owned entry `a` with every entry of [from, to) but itself that passes
-/// sweep::close_in_slab() (lanes::for_each_close(), with kIsa's vectors).
-template <lanes::Isa kIsa>
-void test_range(const Entries& e, int a, int from, int to, const sweep::Grid& g,
-                std::vector<std::pair<int, int>>& hits) {
-  lanes::for_each_close<kIsa>({e.x.data(), e.y.data(), e.vx.data(), e.vy.data()}, a, from, to, g,
-                              [&](int b) {
-                                if (b != a) hits.emplace_back(e.id[a], e.id[b]);
-                              });
-}
+/// What a slab's search needs besides its entries: the grid, the single-precision test's
+/// constants (sweep::single_of(): a superset of the pairs sweep::close_in_slab() passes on the
+/// unrounded values, as in stage 06's engine), and where the pairs that pass go.
+struct SearchOf {
+  const sweep::Grid& g;                     //!< the grid (rows, columns)
+  const sweep::Single& single;              //!< the test's constants
+  std::vector<std::pair<int, int>>& hits;  //!< pairs of particles (local indices) that passed
+};
 
-/// Files ghost entry `a` with every owned entry of [from, to) that passes
-/// sweep::close_in_slab().
+/// Files entry `a` with every entry of [from, to) (but itself) that passes
+/// sweep::close_in_slab_single() (lanes::for_each_close_single(), with kIsa's vectors).
 template <lanes::Isa kIsa>
-void test_owned(const Entries& e, int a, int from, int to, const sweep::Grid& g,
-                std::vector<std::pair<int, int>>& hits) {
-  lanes::for_each_close<kIsa>({e.x.data(), e.y.data(), e.vx.data(), e.vy.data()}, a, from, to, g,
-                              [&](int b) { hits.emplace_back(e.id[a], e.id[b]); });
+void test_range(const Entries& e, int a, int from, int to, SearchOf& to_file) {
+  lanes::for_each_close_single<kIsa>({e.x.data(), e.y.data(), e.vx.data(), e.vy.data()}, a, from,
+                                     to, to_file.single, [&](int b) {
+                                       if (b != a) to_file.hits.emplace_back(e.id[a], e.id[b]);
+                                     });
 }
 
 /// Slab k's search (stage 06's, sweep::search_of()): a slow entry against the later entries of
@@ -397,35 +404,36 @@ void test_owned(const Entries& e, int a, int from, int to, const sweep::Grid& g,
 /// owned entries of those cells (first in each cell), in the columns that hold any: pairs of two
 /// ghosts no rank needs, and an owned entry before a ghost in its cell finds it itself.
 template <lanes::Isa kIsa>
-void search_cells(const Entries& e, int owned, const sweep::Grid& g,
-                  std::vector<std::pair<int, int>>& hits) {
+void search_cells(const Entries& e, int owned, SearchOf& to_file) {
+  const sweep::Grid& g = to_file.g;
   const int columns = g.columns;
   for (int row = 0, a = 0; row < g.rows; ++row) {
     for (const int end = e.start[(row + 1) * columns]; a < end; ++a) {
-      const sweep::Search q = e.reach[a];
+      const sweep::PackedSearch q = e.reach[a];
+      const double d = q.d();
       int x0, x1;
-      sweep::columns_within(e.x[a], q.d, g, x0, x1);
+      sweep::columns_within(e.x[a], d, g, x0, x1);
       if (e.id[a] >= owned) {  // a ghost
         x0 = std::max(x0, e.owned_from);
         x1 = std::min(x1, e.owned_to);
         int y0 = row, y1 = std::min(row + 1, g.rows - 1);
-        if (q.fast) sweep::rows_within(e.y[a], q.d, g, y0, y1);
+        if (q.fast()) sweep::rows_within(e.y[a], d, g, y0, y1);
         const int own = e.cell[e.id[a]] % columns;
         for (int y = y0; y <= y1; ++y)
-          for (int c = (!q.fast && y == row) ? std::max(x0, own + 1) : x0; c <= x1; ++c)
-            test_owned<kIsa>(e, a, e.start[y * columns + c], e.owned_end[y * columns + c], g, hits);
+          for (int c = (!q.fast() && y == row) ? std::max(x0, own + 1) : x0; c <= x1; ++c)
+            test_range<kIsa>(e, a, e.start[y * columns + c], e.owned_end[y * columns + c], to_file);
         continue;
       }
-      if (!q.fast) {
-        test_range<kIsa>(e, a, a + 1, e.start[row * columns + x1 + 1], g, hits);
+      if (!q.fast()) {
+        test_range<kIsa>(e, a, a + 1, e.start[row * columns + x1 + 1], to_file);
         if (row + 1 < g.rows)
-          test_range<kIsa>(e, a, e.start[(row + 1) * columns + x0], e.start[(row + 1) * columns + x1 + 1],
-                     g, hits);
+          test_range<kIsa>(e, a, e.start[(row + 1) * columns + x0],
+                           e.start[(row + 1) * columns + x1 + 1], to_file);
       } else {  // a pair found twice is harmless
         int y0, y1;
-        sweep::rows_within(e.y[a], q.d, g, y0, y1);
+        sweep::rows_within(e.y[a], d, g, y0, y1);
         for (int y = y0; y <= y1; ++y)
-          test_range<kIsa>(e, a, e.start[y * columns + x0], e.start[y * columns + x1 + 1], g, hits);
+          test_range<kIsa>(e, a, e.start[y * columns + x0], e.start[y * columns + x1 + 1], to_file);
       }
     }
   }
@@ -433,15 +441,16 @@ void search_cells(const Entries& e, int owned, const sweep::Grid& g,
 
 #if PLAB_AVX2
 /// search_cells() with AVX-512.
-__attribute__((target("avx512f"), flatten)) void search_avx512(
-    const Entries& e, int owned, const sweep::Grid& g, std::vector<std::pair<int, int>>& hits) {
-  search_cells<lanes::Isa::kAvx512>(e, owned, g, hits);
+__attribute__((target("avx512f"), flatten)) void search_avx512(const Entries& e, int owned,
+                                                                SearchOf& to_file) {
+  search_cells<lanes::Isa::kAvx512>(e, owned, to_file);
 }
 
-/// search_cells() with AVX2.
-__attribute__((target("avx2"), flatten)) void search_avx2(
-    const Entries& e, int owned, const sweep::Grid& g, std::vector<std::pair<int, int>>& hits) {
-  search_cells<lanes::Isa::kAvx2>(e, owned, g, hits);
+/// search_cells() with AVX2 (the single-precision test's portable loop, which the compiler may
+/// vectorise for it).
+__attribute__((target("avx2"), flatten)) void search_avx2(const Entries& e, int owned,
+                                                          SearchOf& to_file) {
+  search_cells<lanes::Isa::kAvx2>(e, owned, to_file);
 }
 #endif
 
@@ -450,13 +459,12 @@ __attribute__((target("avx2"), flatten)) void search_avx2(
 lanes::Isa isa_in_use = lanes::Isa::kPortable;
 
 /// Slab k's search with the chosen vectors (search_cells()).
-void search(const Entries& e, int owned, const sweep::Grid& g,
-            std::vector<std::pair<int, int>>& hits) {
+void search(const Entries& e, int owned, SearchOf& to_file) {
 #if PLAB_AVX2
-  if (isa_in_use == lanes::Isa::kAvx512) return search_avx512(e, owned, g, hits);
-  if (isa_in_use == lanes::Isa::kAvx2) return search_avx2(e, owned, g, hits);
+  if (isa_in_use == lanes::Isa::kAvx512) return search_avx512(e, owned, to_file);
+  if (isa_in_use == lanes::Isa::kAvx2) return search_avx2(e, owned, to_file);
 #endif
-  search_cells<lanes::Isa::kPortable>(e, owned, g, hits);
+  search_cells<lanes::Isa::kPortable>(e, owned, to_file);
 }
 
 /// When the gap between a ghost at `x` moving at `v` and the range [lo, hi] that grows at `speed`
@@ -501,10 +509,10 @@ void find_candidates(const Box& box, const Ranks& r, const Scene& sc, const Loca
   }
   const LocalGrid lg = fit_grid(box, sc, p, end, scratch);
   std::vector<int> first(n, 0), last(n);
-  std::vector<sweep::Search> reach(n);
+  std::vector<sweep::PackedSearch> reach(n);
   for (int i = 0; i < n; ++i) {
     last[i] = sweep::last_slab(end[i], lg.g);
-    reach[i] = sweep::search_of(p.vx[i], p.vy[i], lg.g);
+    reach[i] = sweep::PackedSearch::of(sweep::search_of(p.vx[i], p.vy[i], lg.g));
     if (i >= s.owned)
       first[i] = first_slab(box, sc, r.rank, p.x[i], p.y[i], p.vx[i], p.vy[i], lg.g);
   }
@@ -517,9 +525,13 @@ void find_candidates(const Box& box, const Ranks& r, const Scene& sc, const Loca
   }
   Entries e;
   std::vector<std::pair<int, int>> hits;
+  // Every speed is at most the largest |vx| and |vy| of the scene's particles together.
+  const sweep::Single single =
+      sweep::single_of(lg.g, box.L, std::hypot(sc.vx, sc.vy) * (1 + 1e-6));
+  SearchOf to_file{lg.g, single, hits};
   for (int k = 0; k < lg.g.slabs; ++k) {
     bin(e, p, s.owned, first, last, reach, k, lg);
-    search(e, s.owned, lg.g, hits);
+    search(e, s.owned, to_file);
   }
   for (auto& [a, b] : hits)
     if (a > b) std::swap(a, b);
