@@ -12,6 +12,7 @@
 #include <omp.h>
 #endif
 
+#include "plab/close_lanes.hpp"
 #include "plab/greedy.hpp"
 #include "plab/model.hpp"
 #include "plab/plan.hpp"
@@ -397,4 +398,68 @@ TEST(Sweep, SingleIsTight) {
   EXPECT_GT(both, 1000);
   EXPECT_LT(only_single, both / 20 + 10) << "the float test passes " << only_single
                                           << " pairs the double test does not, of " << both;
+}
+
+// The CPU engines test one entry against sixteen at a time with the allowance's constant part
+// computed once for the entry, for any partner (lanes::base_of(): its own |vx| + |vy| plus
+// Single::s_most). Every pair the pairwise test passes must pass there too, on every vector path,
+// at the report's scales and where the allowance's part that grows with the speeds is most of it
+// (a reach of 10^-3 against speeds of 10^6); and at the report's scales it passes hardly more.
+TEST(Sweep, LanesPassEveryPairThePairTestPasses) {
+  namespace sweep = plab::sweep;
+  namespace lanes = plab::lanes;
+  constexpr int kN = lanes::kLanesSingle;
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<double> u(0, 1);
+  struct Scale {
+    double L, r, speed, half;
+  };
+  for (const Scale sc : {Scale{2e5, 1, 5000, 0.1}, Scale{1e4, 1e-3, 1e6, 0.5}}) {
+    sweep::Grid g;
+    g.half = sc.half;
+    g.margin = 1e-6 * (sc.L + 2 * sc.speed + sc.r);
+    g.reach = 2 * sc.r + g.margin;
+    const sweep::Single single = sweep::single_of(g, sc.L, 2 * sc.speed);
+    ASSERT_TRUE(std::isfinite(single.rr));
+    std::vector<float> x(2 * kN), y(2 * kN), vx(2 * kN), vy(2 * kN);
+    const lanes::SingleFields f{x.data(), y.data(), vx.data(), vy.data()};
+    long pair_passes = 0, lanes_only = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+      // Entry 0 and sixteen partners whose closest approach in the slab lies within a few
+      // reaches of it: most near the allowance's edge.
+      const double px = sc.L * u(rng), py = sc.L * u(rng);
+      const double pvx = sc.speed * (2 * u(rng) - 1), pvy = sc.speed * (2 * u(rng) - 1);
+      x[0] = float(px), y[0] = float(py), vx[0] = float(pvx), vy[0] = float(pvy);
+      for (int b = 1; b <= kN; ++b) {
+        const double wx = sc.speed * (2 * u(rng) - 1), wy = sc.speed * (2 * u(rng) - 1);
+        const double s = sc.half * (2 * u(rng) - 1), gap = g.reach * (0.95 + 0.3 * u(rng));
+        const double angle = 2 * M_PI * u(rng);
+        // at slab time s the partner is `gap` from entry 0: its midpoint is that point less s w
+        const double dx = gap * std::cos(angle), dy = gap * std::sin(angle);
+        x[b] = float(px + dx - s * (wx - pvx)), y[b] = float(py + dy - s * (wy - pvy));
+        vx[b] = float(wx), vy[b] = float(wy);
+      }
+      const float base = lanes::base_of(f, 0, single);
+      const unsigned portable = lanes::close_lanes_single(f, 0, base, 1, single);
+#if PLAB_AVX2
+      if (__builtin_cpu_supports("avx512f")) {
+        ASSERT_EQ(lanes::close_lanes_single_avx512(f, 0, base, 1, single), portable);
+      }
+#endif
+      for (int b = 1; b <= kN; ++b) {
+        const float s = std::fabs(vx[0]) + std::fabs(vy[0]) + (std::fabs(vx[b]) + std::fabs(vy[b]));
+        const bool pair = sweep::close_in_slab_single(x[0] - x[b], y[0] - y[b], vx[0] - vx[b],
+                                                      vy[0] - vy[b], s, single);
+        const bool lane = (portable >> (b - 1)) & 1u;
+        ASSERT_TRUE(!pair || lane) << "L " << sc.L << " r " << sc.r << ": a pair the pair test "
+                                   << "passes is dropped by the lanes (entry " << b << ")";
+        pair_passes += pair;
+        lanes_only += lane && !pair;
+      }
+    }
+    EXPECT_GT(pair_passes, 10000) << "L " << sc.L;
+    if (sc.r == 1) {  // the report's scales: the bound on the partner's speed costs nothing
+      EXPECT_LT(lanes_only, pair_passes / 100) << lanes_only << " more of " << pair_passes;
+    }
+  }
 }

@@ -195,6 +195,12 @@ struct Single {
   float k1 = 0;     //!< times s: 4uah, rounded up
   float k2 = 0;     //!< times s^2: 4u^2h^2, rounded up
   float slack = 0;  //!< 64u: the allowance's part that grows with the pair's lengths
+  float s_most = 0;  //!< \f$|v_x| + |v_y|\f$ of any entry, rounded up: what a test of one entry
+                     //!< against many can take for the partner's part of `s`
+  /// The allowance's part that does not grow with the pair's lengths, for a pair whose `s` is at
+  /// most `s`: \f$(a + 2uhs)^2\f$ (as `rr + s (k1 + k2 s)`). It grows with `s`, as does its
+  /// rounding, so any upper bound of the pair's `s` gives an allowance at least as wide.
+  PLAB_HD float base(float s) const { return rr + s * (k1 + k2 * s); }
 };
 
 /// `x` rounded up to a float.
@@ -219,23 +225,31 @@ inline Single single_of(const Grid& g, double L, double vbound) {
   s.rr = comfortable ? float_up(a * a * spare) : HUGE_VALF;
   s.k1 = float_up(4 * u * a * h * spare);
   s.k2 = float_up(4 * u * u * h * h * spare);
+  s.s_most = float_up(std::sqrt(2.0) * vbound * (1 + 1e-9));
   return s;
 }
 
-/// close_in_slab() on float midpoints and velocities (Single): `d` and `w` as there, `s` the
-/// pair's \f$|v_x| + |v_y|\f$ summed over both particles.
-PLAB_HD inline bool close_in_slab_single(float dx, float dy, float wx, float wy, float s,
+/// close_in_slab_single() with the allowance's constant part given: `base` at least
+/// Single::base() of the pair's `s` (a test of one entry against many computes it once).
+PLAB_HD inline bool close_in_slab_within(float dx, float dy, float wx, float wy, float base,
                                          const Single& c) {
   const float dd = dx * dx + dy * dy;
   const float ww = wx * wx + wy * wy;
   const float q = fabsf(dx * wx + dy * wy);
   const float hw = c.half2 * ww;
-  const float allow = (c.rr + s * (c.k1 + c.k2 * s)) + c.slack * (dd + hw);
+  const float allow = base + c.slack * (dd + hw);
   const bool tiny = ww < 0x1p-60f;  // products could go subnormal: close (never dropped)
   const bool inside = q <= c.half * ww;
   const bool near_inside = !(dd * ww - q * q > allow * ww);
   const bool near_end = !((dd - 2 * c.half * q) + hw > allow);
   return tiny | (inside & near_inside) | (!inside & near_end);
+}
+
+/// close_in_slab() on float midpoints and velocities (Single): `d` and `w` as there, `s` the
+/// pair's \f$|v_x| + |v_y|\f$ summed over both particles (or more).
+PLAB_HD inline bool close_in_slab_single(float dx, float dy, float wx, float wy, float s,
+                                         const Single& c) {
+  return close_in_slab_within(dx, dy, wx, wy, c.base(s), c);
 }
 
 /// Chooses the grid for `active` particles, most no faster than `v_cut`, the fastest `vmax`, in a
