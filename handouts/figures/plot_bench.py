@@ -14,7 +14,7 @@ DIR, by default beside itself; `plab docs` writes them into build/docs/figures)
                         (data/bench-stage06-cpu16.csv, data/bench-engine-selection-h200.csv)
   ceiling.png           speedup on 1-16 threads (stage 06's engine) and ranks (stage 08's) against
                         the machine's own ceiling that `plab bench --ceiling` measured in the same
-                        call (data/bench-issue30-ceiling-{cpu,cpu-packed,mpi}-h200.csv)
+                        call (data/bench-issue30-ceiling-{cpu,cpu-packed,mpi}-h200*.csv)
   stage08-scaling.png   stage 08 on 1-16 ranks: strong scaling at N = 10^6 and weak scaling at
                         10^5 a rank, with the share of time in exchanges (data/bench-stage08-cpu16.csv)
   accuracy.png          run time against error of the stepped model's variants, against stage
@@ -165,18 +165,22 @@ def ceiling():
     fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.5))
     panels = ((left, "threads", (("bench-issue30-ceiling-cpu-h200.csv", "o", "11-29, call 1"),
                                  ("bench-issue30-ceiling-cpu-packed-h200.csv", "s", "11-29, call 3"),
-                                 ("bench-issue30-ceiling-cpu-h200-3.csv", "^", "11-30")),
+                                 ("bench-issue30-ceiling-cpu-h200-3.csv", "^", "11-30"),
+                                 ("bench-issue30-ceiling-cpu-h200-4.csv", "v", "11-30 (2)")),
                "Stage 06's engine, CPU, N = 10^6", 12, "12x (issue 30)"),
               (right, "ranks", (("bench-issue30-ceiling-mpi-h200.csv", "o", "11-29, call 1"),
-                                ("bench-issue30-ceiling-mpi-h200-2.csv", "^", "11-30")),
+                                ("bench-issue30-ceiling-mpi-h200-2.csv", "^", "11-30"),
+                                ("bench-issue30-ceiling-mpi-h200-3.csv", "v", "11-30 (2)")),
                "Stage 08's engine, N = 10^6", 0.7 * 16, "70% at 16 ranks (issue 30)"))
+    # one colour a device call, the same in both panels
+    call_color = {"11-29, call 1": "C0", "11-29, call 3": "C1", "11-30": "C2", "11-30 (2)": "C3"}
     for ax, count, files, title, goal, goal_label in panels:
         for name, marker, call in files:
             data = sorted(rows(name), key=lambda r: int(r["threads"]))
             one = float(data[0]["step_median_s"])
             xs = [int(r["threads"]) for r in data]
             color = ax.plot(xs, [one / float(r["step_median_s"]) for r in data], marker + "-",
-                            label=f"speedup in steps ({call})")[0].get_color()
+                            color=call_color[call], label=f"speedup in steps ({call})")[0].get_color()
             up = [(int(r["threads"]), float(r["ceiling"]), float(r["ceiling_slowest"]))
                   for r in data if r["ceiling"]]
             ax.plot([1] + [u[0] for u in up], [1] + [u[1] for u in up], "--", color=color,

@@ -23,8 +23,10 @@ struct LocalGrid {
 /// every pair of particles of `s` (owned and ghosts, not two ghosts) that passes
 /// sweep::close_in_slab() in a time slab k with first[i] <= k <= last[i] for both, found by the
 /// grid `lg`, gets model.md's pair time (lower scene index first); those in the step go to
-/// `found` as FoundPair{t, i, j} with local indices i < j, in increasing (i, j), each once:
-/// exactly the list step.cpp's own search gives.
+/// `found` as FoundPair{t, i, j} with local indices i < j, in increasing (i, j), each once: the
+/// list step.cpp's own search gives, but for the pairs its float test passes in excess (a few, in
+/// the step only after a wall, which the rounds never choose): both lists hold every pair that
+/// meets in the step before both walls, so the output is the same.
 using PairSearch = void (*)(const Box& box, const Ranks& r, const LocalGrid& lg, const Local& s,
                             const std::vector<int>& first, const std::vector<int>& last,
                             std::vector<FoundPair>& found);
