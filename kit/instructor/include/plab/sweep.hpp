@@ -23,6 +23,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <vector>
 
@@ -205,6 +206,7 @@ struct Single {
 
 /// `x` rounded up to a float.
 inline float float_up(double x) {
+  if (!(x <= FLT_MAX)) return x == x ? HUGE_VALF : static_cast<float>(x);  // past float's range
   float f = static_cast<float>(x);
   if (static_cast<double>(f) < x) f = std::nextafter(f, HUGE_VALF);
   return f;
