@@ -180,10 +180,6 @@ inline int share(int count, int t, int threads) {
   return static_cast<int>(static_cast<long long>(count) * t / threads);
 }
 
-/// A midpoint coordinate, from the start `x0` and the velocity `v` at slab time `tm`, rounded to
-/// float: what the search reads, and so what the entry is sorted by.
-inline float midpoint(double x0, double v, double tm) { return static_cast<float>(x0 + tm * v); }
-
 /// Files entry `e` of `in` for slab k: its row and column by its midpoint position (row -1 when it
 /// takes no part, last < k), counted in `count` (one per row, then one for those dropped).
 inline void count_entry(Entries& in, int e, int k, const sweep::Grid& g, int* count) {
@@ -193,8 +189,8 @@ inline void count_entry(Entries& in, int e, int k, const sweep::Grid& g, int* co
     return;
   }
   const double tm = sweep::slab_mid(k, g);
-  in.row[e] = sweep::row_of(midpoint(in.y0[e], in.vy[e], tm), g);
-  in.column[e] = sweep::column_of(midpoint(in.x0[e], in.vx[e], tm), g);
+  in.row[e] = sweep::row_of(sweep::rounded_midpoint(in.y0[e], in.vy[e], tm), g);
+  in.column[e] = sweep::column_of(sweep::rounded_midpoint(in.x0[e], in.vx[e], tm), g);
   ++count[in.row[e]];
 }
 
@@ -300,8 +296,8 @@ inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, i
       out.vx[to] = in.vx[j];
       out.vy[to] = in.vy[j];
       out.reach[to] = in.reach[j];
-      o.x[to] = midpoint(in.x0[j], in.vx[j], tm);
-      o.y[to] = midpoint(in.y0[j], in.vy[j], tm);
+      o.x[to] = sweep::rounded_midpoint(in.x0[j], in.vx[j], tm);
+      o.y[to] = sweep::rounded_midpoint(in.y0[j], in.vy[j], tm);
       o.vx[to] = static_cast<float>(in.vx[j]);
       o.vy[to] = static_cast<float>(in.vy[j]);
       if (k == 0) s.order[to] = in.id[j];
@@ -423,8 +419,8 @@ inline void slab_alone(const Box& box, Slab& o, Mine& my,
   std::fill(start, start + g.cells() + 1, 0);
   for (int j = 0; j < n; ++j) {  // count
     cell[j] = in.last[j] < k ? -1
-                             : sweep::cell_of(midpoint(in.x0[j], in.vx[j], tm),
-                                              midpoint(in.y0[j], in.vy[j], tm), g);
+                             : sweep::cell_of(sweep::rounded_midpoint(in.x0[j], in.vx[j], tm),
+                                              sweep::rounded_midpoint(in.y0[j], in.vy[j], tm), g);
     if (cell[j] >= 0) ++start[cell[j] + 1];
   }
   for (int c = 0; c < g.cells(); ++c) start[c + 1] += start[c];
@@ -442,8 +438,8 @@ inline void slab_alone(const Box& box, Slab& o, Mine& my,
     out.vx[to] = in.vx[j];
     out.vy[to] = in.vy[j];
     out.reach[to] = in.reach[j];
-    to_search.x[to] = midpoint(in.x0[j], in.vx[j], tm);
-    to_search.y[to] = midpoint(in.y0[j], in.vy[j], tm);
+    to_search.x[to] = sweep::rounded_midpoint(in.x0[j], in.vx[j], tm);
+    to_search.y[to] = sweep::rounded_midpoint(in.y0[j], in.vy[j], tm);
     to_search.vx[to] = static_cast<float>(in.vx[j]);
     to_search.vy[to] = static_cast<float>(in.vy[j]);
     if (k == 0) o.order[to] = in.id[j];

@@ -327,12 +327,6 @@ struct Entries {
   int owned_to = -1;                 //!< the last one (owned_to < owned_from: none)
 };
 
-/// Particle i's midpoint in slab time `tm`, shifted by the grid's origin and rounded to float:
-/// what the search reads, and so what the entry is sorted by.
-inline float shifted_midpoint(double x, double v, double tm, double origin) {
-  return static_cast<float>((x + tm * v) - origin);
-}
-
 /// Slab k's counting sort of the particles that take part in it (first[i] <= k <= last[i]).
 void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& first,
          const std::vector<int>& last, const std::vector<sweep::PackedSearch>& reach, int k,
@@ -346,8 +340,8 @@ void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& firs
   int m = 0;
   for (int i = 0; i < n; ++i) {
     if (last[i] < k || first[i] > k) continue;
-    e.cell[i] = sweep::cell_of(shifted_midpoint(p.x[i], p.vx[i], tm, lg.x0),
-                               shifted_midpoint(p.y[i], p.vy[i], tm, lg.y0), g);
+    e.cell[i] = sweep::cell_of(sweep::rounded_midpoint(p.x[i], p.vx[i], tm, lg.x0),
+                               sweep::rounded_midpoint(p.y[i], p.vy[i], tm, lg.y0), g);
     ++e.start[e.cell[i] + 1];
     if (i < owned) ++e.owned_end[e.cell[i]];
     ++m;
@@ -364,8 +358,8 @@ void bin(Entries& e, const Particles& p, int owned, const std::vector<int>& firs
     const int at = e.start[e.cell[i]]++;
     e.id[at] = i;
     e.reach[at] = reach[i];
-    e.x[at] = shifted_midpoint(p.x[i], p.vx[i], tm, lg.x0);
-    e.y[at] = shifted_midpoint(p.y[i], p.vy[i], tm, lg.y0);
+    e.x[at] = sweep::rounded_midpoint(p.x[i], p.vx[i], tm, lg.x0);
+    e.y[at] = sweep::rounded_midpoint(p.y[i], p.vy[i], tm, lg.y0);
     e.vx[at] = static_cast<float>(p.vx[i]);
     e.vy[at] = static_cast<float>(p.vy[i]);
     if (i < owned) {

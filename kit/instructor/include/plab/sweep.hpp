@@ -231,6 +231,14 @@ inline Single single_of(const Grid& g, double L, double vbound) {
   return s;
 }
 
+/// A midpoint coordinate of the float search: the start `x` moved by `v` to slab time `tm`, less
+/// `origin` (a rank's grid origin in stage 08's engine; 0 in stage 06's, where it changes nothing),
+/// rounded to float. The entry is sorted by it and the search reads it, so the two agree; Single's
+/// bounds hold while it lies within \f$L + h|v|\f$ of 0.
+PLAB_HD inline float rounded_midpoint(double x, double v, double tm, double origin = 0) {
+  return static_cast<float>((x + tm * v) - origin);
+}
+
 /// close_in_slab_single() with the allowance's constant part given: `base` at least
 /// Single::base() of the pair's `s` (a test of one entry against many computes it once).
 PLAB_HD inline bool close_in_slab_within(float dx, float dy, float wx, float wy, float base,
