@@ -121,6 +121,7 @@ struct Slab {
   std::vector<int> counts[2];       //!< slab k's entries per thread and row (count_stride() a thread)
   Buffer<int> from;                 //!< per entry, grouped by row: the input entry it comes from
   std::vector<int> order;           //!< every particle, in the cell order of the last step's slab 0
+  Buffer<int> place;                //!< per particle that takes part: its place in this step's slab 0
   /// Room for `n` particles in grid `g` sorted by `threads` threads. A thread alone
   /// (slab_alone()) uses sorted[0] only; sorted[1]'s pages stay unwritten, so never mapped.
   void reserve(int n, const sweep::Grid& g, int threads);
@@ -169,6 +170,7 @@ void Slab::reserve(int n, const sweep::Grid& g, int threads) {
   }
   from.resize(n);
   order.resize(n);
+  place.resize(n);
   for (int u = 0; u < 2; ++u) {
     row_start[u].resize(g.rows + 1);
     counts[u].resize(static_cast<std::size_t>(threads) * count_stride(g.rows));
@@ -270,7 +272,8 @@ inline void gather(Entries& first, const ParticlesOf<Real>& p, const std::vector
 /// Slab k's counting sort by column, one row at a time (this thread's rows, [r0, r1)): each row's
 /// group into `out` in cell order, with each entry's midpoint position, and `start` of the row's
 /// cells. Each entry is filed for slab k + 1 on the way (count_entry(), into `next_count`); in
-/// slab 0, the particles in their new order also go to `order` (the next step's).
+/// slab 0, the particles in their new order also go to `order` (the next step's), and each
+/// particle's place in it to `place` (the selection's numbering: plan_team.hpp).
 inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, int r1,
                       const sweep::Grid& g, int* next_count) {
   const double tm = sweep::slab_mid(k, g);
@@ -300,7 +303,10 @@ inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, i
       o.y[to] = sweep::rounded_midpoint(in.y0[j], in.vy[j], tm);
       o.vx[to] = static_cast<float>(in.vx[j]);
       o.vy[to] = static_cast<float>(in.vy[j]);
-      if (k == 0) s.order[to] = in.id[j];
+      if (k == 0) {
+        s.order[to] = in.id[j];
+        s.place[in.id[j]] = to;
+      }
       if (next_count) count_entry(out, to, k + 1, g, next_count);
     }
     for (int c = g.columns - 1; c > 0; --c) start[c] = start[c - 1];
@@ -407,11 +413,12 @@ inline void narrow(const Box& box, const Entries& out, const std::vector<std::pa
 
 /// Slab k alone, by one thread in its own buffers `o` (whole_slabs()): a counting sort by cell
 /// of slab 0's input `in` (the team's, read only) into `o`, the search, and the pairs' times (into
-/// `my.found`). One level and one move an entry: the slab is small enough to stay in cache.
+/// `my.found`). One level and one move an entry: the slab is small enough to stay in cache. Slab
+/// 0's sort also writes each particle's place in its order to `place` (the team's: plan_team.hpp).
 template <class Real>
 inline void slab_alone(const Box& box, Slab& o, Mine& my,
                        const Entries& in, int n, int k, const sweep::Grid& g,
-                       const sweep::Single& single) {
+                       const sweep::Single& single, int* place) {
   const double tm = sweep::slab_mid(k, g);
   Buffer<int>& cell = o.from;  // per input entry: its cell, or -1
   Sorted& to_search = o.sorted[0];
@@ -442,7 +449,10 @@ inline void slab_alone(const Box& box, Slab& o, Mine& my,
     to_search.y[to] = sweep::rounded_midpoint(in.y0[j], in.vy[j], tm);
     to_search.vx[to] = static_cast<float>(in.vx[j]);
     to_search.vy[to] = static_cast<float>(in.vy[j]);
-    if (k == 0) o.order[to] = in.id[j];
+    if (k == 0) {
+      o.order[to] = in.id[j];
+      place[in.id[j]] = to;
+    }
   }
   for (int c = g.cells(); c > 0; --c) start[c] = start[c - 1];
   start[0] = 0;
@@ -631,7 +641,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
       phases.lap(t, Part::kWait);
 #pragma omp for schedule(dynamic, 1) nowait
       for (int k = 0; k < g.slabs; ++k) {
-        slab_alone<Real>(box, my.own, my, in, n, k, g, single);
+        slab_alone<Real>(box, my.own, my, in, n, k, g, single, s.place.data());
         my.first |= (k == 0);
       }
       phases.lap(t, Part::kSearch);  // the slabs' sorts and searches
@@ -716,7 +726,9 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
     }
 
     // 3. Selection (model.md's greedy rule over the sparse candidates) and apply, by the team.
-    sparse_greedy_plan_in_team(my.found, wall, plan, selection);
+    // (the rounds' arrays by slab 0's cell order: a thread's pairs, from runs of cells, then read
+    // and write nearby places)
+    sparse_greedy_plan_in_team(my.found, wall, plan, selection, s.place.data());
     phases.lap(t, Part::kSelect);
 #pragma omp for schedule(static)
     for (int i = 0; i < n; ++i) {
