@@ -86,6 +86,7 @@ void resize_padded(Buffer<T>& v, std::size_t size, std::size_t padding) {
 /// A slab's entries, one array per field: the particles that take part, in cell order.
 struct Entries {
   Buffer<int> id;               //!< the particle
+  Buffer<int> place;            //!< its place for the selection (plab::Candidate): slab 0's entry
   Buffer<int> last;             //!< its last slab (sweep::last_slab())
   Buffer<double> x0, y0;        //!< its start-of-step position
   Buffer<double> vx, vy;        //!< its velocity
@@ -93,7 +94,7 @@ struct Entries {
   Buffer<int> row, column;      //!< its row (-1: takes no part) and column in the next slab
   /// Room for `n` entries.
   void reserve(int n) {
-    for (auto* v : {&id, &last, &row, &column}) v->resize(n);
+    for (auto* v : {&id, &place, &last, &row, &column}) v->resize(n);
     for (auto* v : {&x0, &y0, &vx, &vy}) v->resize(n);
     reach.resize(n);
   }
@@ -121,7 +122,6 @@ struct Slab {
   std::vector<int> counts[2];       //!< slab k's entries per thread and row (count_stride() a thread)
   Buffer<int> from;                 //!< per entry, grouped by row: the input entry it comes from
   std::vector<int> order;           //!< every particle, in the cell order of the last step's slab 0
-  Buffer<int> place;                //!< per particle that takes part: its place in this step's slab 0
   /// Room for `n` particles in grid `g` sorted by `threads` threads. A thread alone
   /// (slab_alone()) uses sorted[0] only; sorted[1]'s pages stay unwritten, so never mapped.
   void reserve(int n, const sweep::Grid& g, int threads);
@@ -145,7 +145,7 @@ struct View {
 /// move with every pair found).
 struct alignas(128) Mine {
   std::vector<std::pair<int, int>> hits;  //!< entry pairs that passed close_in_slab()
-  std::vector<model::Event> found;        //!< pair candidates
+  std::vector<Candidate> found;           //!< pair candidates, with their particles' places
   std::vector<int> next;                  //!< per row: where this thread's next entry goes
   int lo = 0, hi = 0;                     //!< the input entries this thread groups by row
   int active = 0;                         //!< particles of its share that take part
@@ -170,7 +170,6 @@ void Slab::reserve(int n, const sweep::Grid& g, int threads) {
   }
   from.resize(n);
   order.resize(n);
-  place.resize(n);
   for (int u = 0; u < 2; ++u) {
     row_start[u].resize(g.rows + 1);
     counts[u].resize(static_cast<std::size_t>(threads) * count_stride(g.rows));
@@ -273,7 +272,7 @@ inline void gather(Entries& first, const ParticlesOf<Real>& p, const std::vector
 /// group into `out` in cell order, with each entry's midpoint position, and `start` of the row's
 /// cells. Each entry is filed for slab k + 1 on the way (count_entry(), into `next_count`); in
 /// slab 0, the particles in their new order also go to `order` (the next step's), and each
-/// particle's place in it to `place` (the selection's numbering: plan_team.hpp).
+/// entry's place there is its place for the selection (plab::Candidate), carried to later slabs.
 inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, int r1,
                       const sweep::Grid& g, int* next_count) {
   const double tm = sweep::slab_mid(k, g);
@@ -293,6 +292,7 @@ inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, i
       const int j = s.from[e];
       const int to = start[in.column[j]]++;
       out.id[to] = in.id[j];
+      out.place[to] = k == 0 ? to : in.place[j];
       out.last[to] = in.last[j];
       out.x0[to] = in.x0[j];
       out.y0[to] = in.y0[j];
@@ -303,10 +303,7 @@ inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, i
       o.y[to] = sweep::rounded_midpoint(in.y0[j], in.vy[j], tm);
       o.vx[to] = static_cast<float>(in.vx[j]);
       o.vy[to] = static_cast<float>(in.vy[j]);
-      if (k == 0) {
-        s.order[to] = in.id[j];
-        s.place[in.id[j]] = to;
-      }
+      if (k == 0) s.order[to] = in.id[j];
       if (next_count) count_entry(out, to, k + 1, g, next_count);
     }
     for (int c = g.columns - 1; c > 0; --c) start[c] = start[c - 1];
@@ -399,7 +396,7 @@ void search(const View& s, std::vector<std::pair<int, int>>& hits, int from, int
 /// which is random in space.
 template <class Real>
 inline void narrow(const Box& box, const Entries& out, const std::vector<std::pair<int, int>>& hits,
-                   std::vector<model::Event>& found) {
+                   std::vector<Candidate>& found) {
   for (auto [a, b] : hits) {
     if (out.id[b] < out.id[a]) std::swap(a, b);  // the lower index first, as pair_candidate()
     const Real t = model::pair_time(
@@ -407,18 +404,18 @@ inline void narrow(const Box& box, const Entries& out, const std::vector<std::pa
         static_cast<Real>(out.vy[a]), static_cast<Real>(out.x0[b]), static_cast<Real>(out.y0[b]),
         static_cast<Real>(out.vx[b]), static_cast<Real>(out.vy[b]), static_cast<Real>(box.r));
     const model::Event e = model::pair_event_key(t, out.id[a], out.id[b]);
-    if (model::in_step(e.t)) found.push_back(e);
+    if (model::in_step(e.t)) found.push_back({e, out.place[a], out.place[b]});
   }
 }
 
 /// Slab k alone, by one thread in its own buffers `o` (whole_slabs()): a counting sort by cell
 /// of slab 0's input `in` (the team's, read only) into `o`, the search, and the pairs' times (into
-/// `my.found`). One level and one move an entry: the slab is small enough to stay in cache. Slab
-/// 0's sort also writes each particle's place in its order to `place` (the team's: plan_team.hpp).
+/// `my.found`). One level and one move an entry: the slab is small enough to stay in cache. A
+/// particle's place for the selection is its entry in `in`, the same in every slab.
 template <class Real>
 inline void slab_alone(const Box& box, Slab& o, Mine& my,
                        const Entries& in, int n, int k, const sweep::Grid& g,
-                       const sweep::Single& single, int* place) {
+                       const sweep::Single& single) {
   const double tm = sweep::slab_mid(k, g);
   Buffer<int>& cell = o.from;  // per input entry: its cell, or -1
   Sorted& to_search = o.sorted[0];
@@ -440,6 +437,7 @@ inline void slab_alone(const Box& box, Slab& o, Mine& my,
     }
     const int to = start[cell[j]]++;
     out.id[to] = in.id[j];
+    out.place[to] = j;
     out.x0[to] = in.x0[j];
     out.y0[to] = in.y0[j];
     out.vx[to] = in.vx[j];
@@ -449,10 +447,7 @@ inline void slab_alone(const Box& box, Slab& o, Mine& my,
     to_search.y[to] = sweep::rounded_midpoint(in.y0[j], in.vy[j], tm);
     to_search.vx[to] = static_cast<float>(in.vx[j]);
     to_search.vy[to] = static_cast<float>(in.vy[j]);
-    if (k == 0) {
-      o.order[to] = in.id[j];
-      place[in.id[j]] = to;
-    }
+    if (k == 0) o.order[to] = in.id[j];
   }
   for (int c = g.cells(); c > 0; --c) start[c] = start[c - 1];
   start[0] = 0;
@@ -641,7 +636,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
       phases.lap(t, Part::kWait);
 #pragma omp for schedule(dynamic, 1) nowait
       for (int k = 0; k < g.slabs; ++k) {
-        slab_alone<Real>(box, my.own, my, in, n, k, g, single, s.place.data());
+        slab_alone<Real>(box, my.own, my, in, n, k, g, single);
         my.first |= (k == 0);
       }
       phases.lap(t, Part::kSearch);  // the slabs' sorts and searches
@@ -726,9 +721,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
     }
 
     // 3. Selection (model.md's greedy rule over the sparse candidates) and apply, by the team.
-    // (the rounds' arrays by slab 0's cell order: a thread's pairs, from runs of cells, then read
-    // and write nearby places)
-    sparse_greedy_plan_in_team(my.found, wall, plan, selection, s.place.data());
+    sparse_greedy_plan_in_team(my.found, wall, plan, selection);
     phases.lap(t, Part::kSelect);
 #pragma omp for schedule(static)
     for (int i = 0; i < n; ++i) {
