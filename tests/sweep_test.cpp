@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <random>
 #include <vector>
 
@@ -306,14 +305,8 @@ TEST(Plan, SparseGreedyInTeamIsSparseGreedy) {
     const int threads = 1;
 #endif
     std::shuffle(pairs.begin(), pairs.end(), rng);
-    // Every other trial numbers the particles' places at random (stage 06's engine gives its cell
-    // order), the others by index: the plan must not depend on it, nor on which thread owns which.
-    std::vector<int> place(n);
-    std::iota(place.begin(), place.end(), 0);
-    if (trial % 2) std::shuffle(place.begin(), place.end(), rng);
-    std::vector<std::vector<plab::Candidate>> parts(threads);
-    for (std::size_t e = 0; e < pairs.size(); ++e)
-      parts[e % threads].push_back({pairs[e], place[pairs[e].lo], place[pairs[e].hi]});
+    std::vector<std::vector<plab::model::Event>> parts(threads);
+    for (std::size_t e = 0; e < pairs.size(); ++e) parts[e % threads].push_back(pairs[e]);
     plab::Plan got;
     got.partner.resize(wall.size());
     got.time.resize(wall.size());

@@ -86,7 +86,6 @@ void resize_padded(Buffer<T>& v, std::size_t size, std::size_t padding) {
 /// A slab's entries, one array per field: the particles that take part, in cell order.
 struct Entries {
   Buffer<int> id;               //!< the particle
-  Buffer<int> place;            //!< its place for the selection (plab::Candidate): slab 0's entry
   Buffer<int> last;             //!< its last slab (sweep::last_slab())
   Buffer<double> x0, y0;        //!< its start-of-step position
   Buffer<double> vx, vy;        //!< its velocity
@@ -94,7 +93,7 @@ struct Entries {
   Buffer<int> row, column;      //!< its row (-1: takes no part) and column in the next slab
   /// Room for `n` entries.
   void reserve(int n) {
-    for (auto* v : {&id, &place, &last, &row, &column}) v->resize(n);
+    for (auto* v : {&id, &last, &row, &column}) v->resize(n);
     for (auto* v : {&x0, &y0, &vx, &vy}) v->resize(n);
     reach.resize(n);
   }
@@ -145,7 +144,7 @@ struct View {
 /// move with every pair found).
 struct alignas(128) Mine {
   std::vector<std::pair<int, int>> hits;  //!< entry pairs that passed close_in_slab()
-  std::vector<Candidate> found;           //!< pair candidates, with their particles' places
+  std::vector<model::Event> found;        //!< pair candidates
   std::vector<int> next;                  //!< per row: where this thread's next entry goes
   int lo = 0, hi = 0;                     //!< the input entries this thread groups by row
   int active = 0;                         //!< particles of its share that take part
@@ -271,8 +270,7 @@ inline void gather(Entries& first, const ParticlesOf<Real>& p, const std::vector
 /// Slab k's counting sort by column, one row at a time (this thread's rows, [r0, r1)): each row's
 /// group into `out` in cell order, with each entry's midpoint position, and `start` of the row's
 /// cells. Each entry is filed for slab k + 1 on the way (count_entry(), into `next_count`); in
-/// slab 0, the particles in their new order also go to `order` (the next step's), and each
-/// entry's place there is its place for the selection (plab::Candidate), carried to later slabs.
+/// slab 0, the particles in their new order also go to `order` (the next step's).
 inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, int r1,
                       const sweep::Grid& g, int* next_count) {
   const double tm = sweep::slab_mid(k, g);
@@ -292,7 +290,6 @@ inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, i
       const int j = s.from[e];
       const int to = start[in.column[j]]++;
       out.id[to] = in.id[j];
-      out.place[to] = k == 0 ? to : in.place[j];
       out.last[to] = in.last[j];
       out.x0[to] = in.x0[j];
       out.y0[to] = in.y0[j];
@@ -396,7 +393,7 @@ void search(const View& s, std::vector<std::pair<int, int>>& hits, int from, int
 /// which is random in space.
 template <class Real>
 inline void narrow(const Box& box, const Entries& out, const std::vector<std::pair<int, int>>& hits,
-                   std::vector<Candidate>& found) {
+                   std::vector<model::Event>& found) {
   for (auto [a, b] : hits) {
     if (out.id[b] < out.id[a]) std::swap(a, b);  // the lower index first, as pair_candidate()
     const Real t = model::pair_time(
@@ -404,14 +401,13 @@ inline void narrow(const Box& box, const Entries& out, const std::vector<std::pa
         static_cast<Real>(out.vy[a]), static_cast<Real>(out.x0[b]), static_cast<Real>(out.y0[b]),
         static_cast<Real>(out.vx[b]), static_cast<Real>(out.vy[b]), static_cast<Real>(box.r));
     const model::Event e = model::pair_event_key(t, out.id[a], out.id[b]);
-    if (model::in_step(e.t)) found.push_back({e, out.place[a], out.place[b]});
+    if (model::in_step(e.t)) found.push_back(e);
   }
 }
 
 /// Slab k alone, by one thread in its own buffers `o` (whole_slabs()): a counting sort by cell
 /// of slab 0's input `in` (the team's, read only) into `o`, the search, and the pairs' times (into
-/// `my.found`). One level and one move an entry: the slab is small enough to stay in cache. A
-/// particle's place for the selection is its entry in `in`, the same in every slab.
+/// `my.found`). One level and one move an entry: the slab is small enough to stay in cache.
 template <class Real>
 inline void slab_alone(const Box& box, Slab& o, Mine& my,
                        const Entries& in, int n, int k, const sweep::Grid& g,
@@ -437,7 +433,6 @@ inline void slab_alone(const Box& box, Slab& o, Mine& my,
     }
     const int to = start[cell[j]]++;
     out.id[to] = in.id[j];
-    out.place[to] = j;
     out.x0[to] = in.x0[j];
     out.y0[to] = in.y0[j];
     out.vx[to] = in.vx[j];
