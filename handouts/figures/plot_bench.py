@@ -14,7 +14,8 @@ DIR, by default beside itself; `plab docs` writes them into build/docs/figures)
                         (data/bench-stage06-cpu16.csv, data/bench-engine-selection-h200.csv)
   ceiling.png           speedup on 1-16 threads (stage 06's engine) and ranks (stage 08's) against
                         the machine's own ceiling that `plab bench --ceiling` measured in the same
-                        call (data/bench-issue30-ceiling-{cpu,cpu-packed,mpi}-h200*.csv)
+                        call (data/bench-issue30-ceiling-{cpu,cpu-packed,mpi}-h200*.csv, and
+                        data/bench-issue30-ceiling-cpu-h100.csv)
   stage08-scaling.png   stage 08 on 1-16 ranks: strong scaling at N = 10^6 and weak scaling at
                         10^5 a rank, with the share of time in exchanges (data/bench-stage08-cpu16.csv)
   accuracy.png          run time against error of the stepped model's variants, against stage
@@ -166,14 +167,16 @@ def ceiling():
     panels = ((left, "threads", (("bench-issue30-ceiling-cpu-h200.csv", "o", "11-29, call 1"),
                                  ("bench-issue30-ceiling-cpu-packed-h200.csv", "s", "11-29, call 3"),
                                  ("bench-issue30-ceiling-cpu-h200-3.csv", "^", "11-30"),
-                                 ("bench-issue30-ceiling-cpu-h200-4.csv", "v", "11-30 (2)")),
+                                 ("bench-issue30-ceiling-cpu-h200-4.csv", "v", "11-30 (2)"),
+                                 ("bench-issue30-ceiling-cpu-h100.csv", "D", "12-06 (H100 host)")),
                "Stage 06's engine, CPU, N = 10^6", 12, "12x (issue 30)"),
               (right, "ranks", (("bench-issue30-ceiling-mpi-h200.csv", "o", "11-29, call 1"),
                                 ("bench-issue30-ceiling-mpi-h200-2.csv", "^", "11-30"),
                                 ("bench-issue30-ceiling-mpi-h200-3.csv", "v", "11-30 (2)")),
                "Stage 08's engine, N = 10^6", 0.7 * 16, "70% at 16 ranks (issue 30)"))
     # one colour a device call, the same in both panels
-    call_color = {"11-29, call 1": "C0", "11-29, call 3": "C1", "11-30": "C2", "11-30 (2)": "C3"}
+    call_color = {"11-29, call 1": "C0", "11-29, call 3": "C1", "11-30": "C2", "11-30 (2)": "C3",
+                  "12-06 (H100 host)": "C4"}
     for ax, count, files, title, goal, goal_label in panels:
         for name, marker, call in files:
             data = sorted(rows(name), key=lambda r: int(r["threads"]))
@@ -193,7 +196,8 @@ def ceiling():
                xticks=[1, 2, 4, 8, 16], xticklabels=["1", "2", "4", "8", "16"], title=title)
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
-    fig.suptitle("H200 machines' 16-core hosts, 2026-11-29 and 11-30: plab bench --ceiling "
+    fig.suptitle("H200 machines' 16-core hosts, 2026-11-29 and 11-30, and an H100 machine's, 12-06: "
+                 "plab bench --ceiling "
                  "(copies of the one-thread or one-rank run at once)", fontsize=9)
     fig.tight_layout()
     fig.savefig(OUT / "ceiling.png", dpi=100)
