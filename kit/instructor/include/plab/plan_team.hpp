@@ -104,7 +104,10 @@ inline void sparse_greedy_plan_in_team(std::vector<model::Event>& mine,
           __builtin_prefetch(&plan.partner[i], 1);
           __builtin_prefetch(&plan.time[i], 1);
         }
-        __builtin_prefetch(&work.best[i], loop == kTake ? 0 : 1);
+        if (loop == kTake)
+          __builtin_prefetch(&work.best[i]);  // (read)
+        else
+          __builtin_prefetch(&work.best[i], 1);  // (written)
       }
     }
     if (loop != kOpen && k + kAhead / 2 < open.size()) {
