@@ -99,15 +99,14 @@ inline void sparse_greedy_plan_in_team(std::vector<model::Event>& mine,
     if (k + kAhead < open.size()) {
       const model::Event& f = work.pairs[open[k + kAhead]];
       for (const int i : {f.lo, f.hi}) {
-        if (loop == kOpen) __builtin_prefetch(&plan.partner[i]);
-        if (loop == kTake) {
+        if (loop == kTake) {  // the choice read, the plan written
+          __builtin_prefetch(&work.best[i]);
           __builtin_prefetch(&plan.partner[i], 1);
           __builtin_prefetch(&plan.time[i], 1);
+          continue;
         }
-        if (loop == kTake)
-          __builtin_prefetch(&work.best[i]);  // (read)
-        else
-          __builtin_prefetch(&work.best[i], 1);  // (written)
+        __builtin_prefetch(&work.best[i], 1);  // the choice written, and the plan read to open
+        if (loop == kOpen) __builtin_prefetch(&plan.partner[i]);
       }
     }
     if (loop != kOpen && k + kAhead / 2 < open.size()) {
