@@ -7,6 +7,9 @@ its full marks.
 
   grader_redteam.py PLAB_PROGRAM KIT_SOURCE_DIR SCRATCH_DIR [CASE ...]
 
+Without CASE every case runs, in the order of CASES (at the end of this file); CTest runs each
+case as a test of its own (grader.redteam.CASE), two at a time on CI.
+
 The attacks (each a stage's step.cpp; the hidden seed of these gradings is SEED):
   read-golden     find an expected output on disk (beside the scene, up the parents' folders,
                   the kit's datasets/golden, /autograder, anywhere on the disk) and copy it as
@@ -30,7 +33,8 @@ and, measured by the grader outside the student's code (each must score nothing)
   ideas           02 with stage 01's O(N^3) selection, 03 serial (no OpenMP pragma), 06 with
                   stage 03's O(N^2) rounds, 08 whose rank 0 steps every particle (a patch of the
                   solution's step.cpp; skipped with a message when its shape changed)
-  rounds          03 that selects its events sequentially after a parallel phase, the same with
+  rounds-03, rounds-07, rounds-08 (one case a stage)
+                  03 that selects its events sequentially after a parallel phase, the same with
                   its parallel phase split into 64 loops a step (a count padded past the rounds,
                   which does not fall on a calmer scene), 03 serial with a
                   thread burning CPU beside it (OpenMP synchronisations counted against the
@@ -1240,16 +1244,9 @@ std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageO
 """
 
 
-def case_rounds():
-    """The idea tests that count (stage 03's OpenMP synchronisations against the rounds its scene
-    needs, stage 08's bytes in any MPI call) and stage 07's event queue, each graded alone: 03
-    that selects its events sequentially after a parallel phase, 03 that does so with its parallel
-    phase split into 64 loops a step (a count that does not follow the rounds), 03 that keeps a thread burning
-    CPU beside a serial step, 07 with a linear scan for the next event, 08 whose rank 0 steps
-    everything through gathers and scatters must score nothing on correctness; 03 written as one
-    parallel region with dynamic and guided `omp for` loops keeps every correctness point."""
-    FOLDERS.update({"07": "07-event-driven"})
-    gradings = []  # (name, stage key, must pass the idea test)
+def rounds_03():
+    """Stage 03's gradings of case rounds-03: (name, stage key, must pass the idea test)."""
+    gradings = []
     sol03 = (kit / "solutions/03-openmp/step.cpp").read_text()
     for variant, honest in (("one-region", True), ("sequential-selection", False)):
         name = f"redteam-rounds-{variant}"
@@ -1266,24 +1263,39 @@ def case_rounds():
     stage_folder(scratch / name, "03", "solutions/03-openmp").write_text(PADDED_03)
     gradings.append((name, "03", False))
     name = "redteam-rounds-burner"
-    shutil.rmtree(scratch / name, ignore_errors=True)
-    step = stage_folder(scratch / name, "03", "solutions/03-openmp")
     entry = "/// Stage 03's entry point"
     if "void step(const Box& box, Particles& p) {" in sol03 and entry in sol03:
+        shutil.rmtree(scratch / name, ignore_errors=True)
+        step = stage_folder(scratch / name, "03", "solutions/03-openmp")
         step.write_text(sol03.replace("#pragma omp", "// (serial) #pragma omp")
                         .replace("void step(const Box& box, Particles& p) {",
                                  "void serial_step(const Box& box, Particles& p) {")
                         .replace(entry, BURNER_03)
                         .replace("#include <omp.h>", "#include <omp.h>\n\n#include <atomic>\n#include <thread>"))
         gradings.append((name, "03", False))
+    else:
+        print(f"SKIP {name}: stage 03's solution changed shape", flush=True)
+    return gradings
+
+
+def rounds_07():
+    """Stage 07's grading of case rounds-07: the linear scan for the next event."""
+    FOLDERS.update({"07": "07-event-driven"})
     name = "redteam-rounds-linear-07"
     shutil.rmtree(scratch / name, ignore_errors=True)
     step = stage_folder(scratch / name, "07", "solutions/07-event-driven")
     text = between(step.read_text(), "    const int k = at_[e.i];", "  }\n", LINEAR_07)
-    if text is not None:
-        step.write_text(text)
-        gradings.append((name, "07", False))
-    # Stage 08 whose rank 0 steps everything: the solution's step renamed, and a step around it
+    if text is None:
+        print(f"SKIP {name}: stage 07's solution changed shape", flush=True)
+        return []
+    step.write_text(text)
+    return [(name, "07", False)]
+
+
+def rounds_08():
+    """Stage 08's gradings of case rounds-08: rank 0 steps everything (the solution's step renamed,
+    and a step around it)."""
+    gradings = []
     for cheat, step in (("gather", GATHER_08), ("barrier", WAIT_08),
                         ("redundant", REDUNDANT_08)):
         name = f"redteam-rounds-{cheat}-08"
@@ -1295,10 +1307,22 @@ def case_rounds():
                 ("#include <vector>\n", "#include <cstring>\n#include <vector>\n")],
                 f"stage 08's solution no longer has the shape the {cheat} patch needs"):
             gradings.append((name, "08-ranks3", False))
+    return gradings
+
+
+def case_rounds(sid):
+    """The idea tests that count (stage 03's OpenMP synchronisations against the rounds its scene
+    needs, stage 08's bytes in any MPI call) and stage 07's event queue, each graded alone; one
+    case a stage (rounds-03, rounds-07, rounds-08, so that CTest runs them side by side): 03
+    that selects its events sequentially after a parallel phase, 03 that does so with its parallel
+    phase split into 64 loops a step (a count that does not follow the rounds), 03 that keeps a thread burning
+    CPU beside a serial step, 07 with a linear scan for the next event, 08 whose rank 0 steps
+    everything through gathers and scatters must score nothing on correctness; 03 written as one
+    parallel region with dynamic and guided `omp for` loops keeps every correctness point."""
+    gradings = {"03": rounds_03, "07": rounds_07, "08": rounds_08}[sid]()
     for name, key, honest in gradings:
         tests, doc, _ = grade(name, scratch / name, key, "--no-races")
-        sid = key[:2]
-        idea = next((t for n, t in tests.items() if n.startswith(f"{sid}: idea")), None)
+        idea = next((t for n, t in tests.items() if n.startswith(f"{key[:2]}: idea")), None)
         mine = correctness(tests, key)
         got = sum(t["score"] for t in mine.values())
         most = sum(t["max_score"] for t in mine.values())
@@ -1314,6 +1338,8 @@ def case_rounds():
     # Stage 08 that steps its slab on the idea test's scene only: its idea test passes there, but
     # the scenes where the kit can judge the ranks' work (random-1000, random-2000) catch the
     # gathers on rank 0, and the whole folder then scores nothing, as when the idea test fails
+    if sid != "08":
+        return
     name = "redteam-rounds-largest-08"
     shutil.rmtree(scratch / name, ignore_errors=True)
     if patched(name, "08", "solutions/08-mpi", [(
@@ -1409,8 +1435,11 @@ def case_bypass():
 CASES = {"copy": case_copy, "escape": case_escape, "processes": case_processes,
          "oracle": case_oracle, "mpi": case_mpi, "control": case_control, "ideas": case_ideas,
          "shortcuts": case_shortcuts, "links": case_links, "gpu-ideas": case_gpu_ideas,
-         "rounds": case_rounds, "ties": case_ties, "leaderboard": case_leaderboard,
+         "rounds-03": lambda: case_rounds("03"), "rounds-07": lambda: case_rounds("07"),
+         "rounds-08": lambda: case_rounds("08"), "ties": case_ties, "leaderboard": case_leaderboard,
          "bypass": case_bypass}
+if only - set(CASES):
+    sys.exit(f"grader_redteam.py: no case {sorted(only - set(CASES))}; the cases: {', '.join(CASES)}")
 scratch.mkdir(parents=True, exist_ok=True)
 try:
     for name, case in CASES.items():

@@ -225,7 +225,7 @@ def student_quick_start(out, clone, kit, scratch):
     solution = kit / "solutions" / "01-naive" / "step.cpp"
     home = scratch / "home"
     home.mkdir(exist_ok=True)
-    env = dict(os.environ, HOME=str(home), EDITOR=f"cp {solution}")
+    env = readme_check.scratch_home_env(home, EDITOR=f"cp {solution}")
     print("the student README's quick start, in the release:", flush=True)
     readme_check.student_block(lines, out, solution, env, "the student README's quick start")
 
