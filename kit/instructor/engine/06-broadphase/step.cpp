@@ -38,6 +38,7 @@
 #include "plab/plan_team.hpp"
 #include "plab/stage.hpp"
 #include "plab/sweep.hpp"
+#include "plab/unwritten.hpp"
 
 namespace plab {
 namespace {
@@ -49,31 +50,6 @@ constexpr double kAlpha = 0.2;     //!< slabs per sqrt(N) v_cut / L, measured be
 constexpr int kChunk = 256;        //!< entries a thread searches at a time (dynamic schedule)
 constexpr int kSmall = 1 << 15;    //!< up to this many particles, a thread may take whole slabs
 constexpr int kAhead = 24;         //!< loops that read particles out of order prefetch this far ahead
-
-/// An allocator that leaves the elements a resize adds unwritten (default-initialised), so that
-/// a buffer's pages are first written, and so mapped by the system, by the threads that use it,
-/// in parallel, and not zeroed by the one thread that grows it (at N = 10^6 the first step's
-/// buffers are some 200 MB).
-template <class T>
-struct Unwritten : std::allocator<T> {
-  template <class U>
-  struct rebind {
-    using other = Unwritten<U>;
-  };
-  Unwritten() = default;
-  template <class U>
-  Unwritten(const Unwritten<U>&) noexcept {}
-  template <class U, class... Args>
-  void construct(U* at, Args&&... args) {
-    if constexpr (sizeof...(Args) == 0)
-      ::new (static_cast<void*>(at)) U;
-    else
-      ::new (static_cast<void*>(at)) U(std::forward<Args>(args)...);
-  }
-};
-/// A step's working array of N or so elements (Unwritten).
-template <class T>
-using Buffer = std::vector<T, Unwritten<T>>;
 
 /// Resizes `v` to `size` elements of which the last `padding` are zero (a vector's lanes past
 /// the entries read them).
@@ -246,7 +222,7 @@ inline void prefetch_motion(const ParticlesOf<Real>& p, int i) {
 /// Slab 0's input, entries [lo, hi): the particles in `order` (the last step's slab-0 order),
 /// each with its last slab and its search; each filed for slab 0 when `count` is given.
 template <class Real>
-inline void gather(Entries& first, const ParticlesOf<Real>& p, const std::vector<double>& end,
+inline void gather(Entries& first, const ParticlesOf<Real>& p, const Buffer<double>& end,
                    const std::vector<int>& order, int lo, int hi, const sweep::Grid& g,
                    int* count) {
   for (int j = lo; j < hi; ++j) {
@@ -530,7 +506,8 @@ PhaseClock phases;
 template <class Real>
 void step_in(const Box& box, ParticlesOf<Real>& p) {
   const int n = static_cast<int>(p.size());
-  static std::vector<double> wall, end, scratch;  // working memory, kept between steps
+  static Buffer<double> wall, end;  // working memory, kept between steps (written by the team)
+  static std::vector<double> scratch;
   static Slab s;  // the slab of the whole team
   static std::vector<Mine> mine;
   static Plan plan;
