@@ -15,7 +15,7 @@ DIR, by default beside itself; `plab docs` writes them into build/docs/figures)
   ceiling.png           speedup on 1-16 threads (stage 06's engine) and ranks (stage 08's) against
                         the machine's own ceiling that `plab bench --ceiling` measured in the same
                         call (data/bench-issue30-ceiling-{cpu,cpu-packed,mpi}-h200*.csv, and
-                        data/bench-issue30-ceiling-cpu-h100.csv)
+                        data/bench-issue30-ceiling-cpu-h100*.csv)
   stage08-scaling.png   stage 08 on 1-16 ranks: strong scaling at N = 10^6 and weak scaling at
                         10^5 a rank, with the share of time in exchanges (data/bench-stage08-cpu16.csv)
   accuracy.png          run time against error of the stepped model's variants, against stage
@@ -168,7 +168,8 @@ def ceiling():
                                  ("bench-issue30-ceiling-cpu-packed-h200.csv", "s", "11-29, call 3"),
                                  ("bench-issue30-ceiling-cpu-h200-3.csv", "^", "11-30"),
                                  ("bench-issue30-ceiling-cpu-h200-4.csv", "v", "11-30 (2)"),
-                                 ("bench-issue30-ceiling-cpu-h100.csv", "D", "12-06 (H100 host)")),
+                                 ("bench-issue30-ceiling-cpu-h100.csv", "D", "12-06 (H100 host)"),
+                                 ("bench-issue30-ceiling-cpu-h100-2.csv", "P", "12-06 (2)")),
                "Stage 06's engine, CPU, N = 10^6", 12, "12x (issue 30)"),
               (right, "ranks", (("bench-issue30-ceiling-mpi-h200.csv", "o", "11-29, call 1"),
                                 ("bench-issue30-ceiling-mpi-h200-2.csv", "^", "11-30"),
@@ -176,27 +177,33 @@ def ceiling():
                "Stage 08's engine, N = 10^6", 0.7 * 16, "70% at 16 ranks (issue 30)"))
     # one colour a device call, the same in both panels
     call_color = {"11-29, call 1": "C0", "11-29, call 3": "C1", "11-30": "C2", "11-30 (2)": "C3",
-                  "12-06 (H100 host)": "C4"}
+                  "12-06 (H100 host)": "C4", "12-06 (2)": "C5"}
+    from matplotlib.lines import Line2D
     for ax, count, files, title, goal, goal_label in panels:
+        keys = []  # one legend entry a call (its colour and marker), then the three line styles
         for name, marker, call in files:
             data = sorted(rows(name), key=lambda r: int(r["threads"]))
             one = float(data[0]["step_median_s"])
             xs = [int(r["threads"]) for r in data]
-            color = ax.plot(xs, [one / float(r["step_median_s"]) for r in data], marker + "-",
-                            color=call_color[call], label=f"speedup in steps ({call})")[0].get_color()
+            color = call_color[call]
+            ax.plot(xs, [one / float(r["step_median_s"]) for r in data], marker + "-", color=color)
             up = [(int(r["threads"]), float(r["ceiling"]), float(r["ceiling_slowest"]))
                   for r in data if r["ceiling"]]
-            ax.plot([1] + [u[0] for u in up], [1] + [u[1] for u in up], "--", color=color,
-                    label=f"ceiling, the mean copy ({call})")
-            ax.plot([1] + [u[0] for u in up], [1] + [u[2] for u in up], ":", color=color,
-                    label=f"ceiling, the slowest copy ({call})")
-        ax.plot([1, 16], [1, 16], "k-", lw=0.5, label="linear")
-        ax.plot([16], [goal], "k*", ms=10, label=goal_label)
+            ax.plot([1] + [u[0] for u in up], [1] + [u[1] for u in up], "--", color=color)
+            ax.plot([1] + [u[0] for u in up], [1] + [u[2] for u in up], ":", color=color)
+            keys.append(Line2D([], [], color=color, marker=marker, label=call))
+        keys += [Line2D([], [], color="gray", ls="-", label="speedup in steps"),
+                 Line2D([], [], color="gray", ls="--", label="ceiling, the mean copy"),
+                 Line2D([], [], color="gray", ls=":", label="ceiling, the slowest copy")]
+        ax.plot([1, 16], [1, 16], "k-", lw=0.5)
+        ax.plot([16], [goal], "k*", ms=10)
+        keys += [Line2D([], [], color="k", lw=0.5, label="linear"),
+                 Line2D([], [], color="k", marker="*", ms=10, ls="", label=goal_label)]
         ax.set(xscale="log", yscale="log", xlabel=count, ylabel=f"speedup over 1 {count[:-1]}",
                xticks=[1, 2, 4, 8, 16], xticklabels=["1", "2", "4", "8", "16"], title=title)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.suptitle("H200 machines' 16-core hosts, 2026-11-29 and 11-30, and an H100 machine's, 12-06: "
+        ax.legend(handles=keys, fontsize=7, loc="lower right")
+    fig.suptitle("H200 machines' 16-core hosts, 2026-11-29 and 11-30, and two H100 machines', 12-06: "
                  "plab bench --ceiling "
                  "(copies of the one-thread or one-rank run at once)", fontsize=9)
     fig.tight_layout()
