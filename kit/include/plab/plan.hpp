@@ -91,14 +91,21 @@ PLAB_HD inline void apply_planned(const Fields& p, const int* partner, const dou
   }
 }
 
-/// Applies particle `i`'s planned event. A pair is applied by its lower index only, so calling
-/// this for every `i` in any order, or in parallel, writes each particle exactly once.
+/// Applies particle `i`'s planned event, from a plan's two arrays (Plan's `partner` and `time`).
+/// A pair is applied by its lower index only, so calling this for every `i` in any order, or in
+/// parallel, writes each particle exactly once.
 template <class Real>
-inline void apply_one(const Box& box, ParticlesOf<Real>& p, const Plan& plan, int i) {
+inline void apply_one(const Box& box, ParticlesOf<Real>& p, const int* partner,
+                      const double* time, int i) {
   const FieldPointers<Real> f{p.x.data(), p.y.data(), p.vx.data(), p.vy.data(), p.pc.data(),
                               p.wc.data()};
-  apply_planned(f, plan.partner.data(), plan.time.data(), i, static_cast<Real>(box.L),
-                static_cast<Real>(box.r));
+  apply_planned(f, partner, time, i, static_cast<Real>(box.L), static_cast<Real>(box.r));
+}
+
+/// Applies particle `i`'s planned event (the same, from `plan`).
+template <class Real>
+inline void apply_one(const Box& box, ParticlesOf<Real>& p, const Plan& plan, int i) {
+  apply_one(box, p, plan.partner.data(), plan.time.data(), i);
 }
 
 /// Applies every planned event (sequentially).

@@ -96,7 +96,7 @@ struct Slab {
   std::vector<int> row_start[2];    //!< row r of slab k holds entries [row_start[k % 2][r], ... [r + 1])
   std::vector<int> counts[2];       //!< slab k's entries per thread and row (count_stride() a thread)
   Buffer<int> from;                 //!< per entry, grouped by row: the input entry it comes from
-  std::vector<int> order;           //!< every particle, in the cell order of the last step's slab 0
+  Buffer<int> order;                //!< every particle, in the cell order of the last step's slab 0
   /// Room for `n` particles in grid `g` sorted by `threads` threads. A thread alone
   /// (slab_alone()) uses sorted[0] only; sorted[1]'s pages stay unwritten, so never mapped.
   void reserve(int n, const sweep::Grid& g, int threads);
@@ -223,7 +223,7 @@ inline void prefetch_motion(const ParticlesOf<Real>& p, int i) {
 /// each with its last slab and its search; each filed for slab 0 when `count` is given.
 template <class Real>
 inline void gather(Entries& first, const ParticlesOf<Real>& p, const Buffer<double>& end,
-                   const std::vector<int>& order, int lo, int hi, const sweep::Grid& g,
+                   const Buffer<int>& order, int lo, int hi, const sweep::Grid& g,
                    int* count) {
   for (int j = lo; j < hi; ++j) {
     if (j + kAhead < hi) {
@@ -510,16 +510,14 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
   static std::vector<double> scratch;
   static Slab s;  // the slab of the whole team
   static std::vector<Mine> mine;
-  static Plan plan;
+  static TeamPlan plan;
   static SparseSelection selection;
   static sweep::Grid g;
   static sweep::Single single;  // the search's test in float, for g
   wall.resize(n);
   end.resize(n);
-  if (static_cast<int>(s.order.size()) != n) {  // a new scene: any order will do to begin with
-    s.order.resize(n);
-    for (int i = 0; i < n; ++i) s.order[i] = i;
-  }
+  const bool fresh = static_cast<int>(s.order.size()) != n;  // a new scene (any order will do)
+  if (fresh) s.order.resize(n);
   mine.resize(omp_get_max_threads());
   plan.partner.resize(n);
   plan.time.resize(n);
@@ -532,6 +530,10 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
     phases.start(t);
     Mine& my = mine[t];
     my.found.clear();
+    if (fresh) {  // the arrays above grew unwritten: the team writes (and so maps) them
+#pragma omp for schedule(static)
+      for (int i = 0; i < n; ++i) s.order[i] = i;
+    }
     // Wall times, and what the grid needs to know (sweep::choose(), by the team): how many take
     // part, the fastest, and a sample of the speeds (every stride-th of those that take part).
     const auto speed2 = [&](int i) {
@@ -704,7 +706,7 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
           __builtin_prefetch(&p.pc[j], 1);
         }
       }
-      apply_one(box, p, plan, i);
+      apply_one(box, p, plan.partner.data(), plan.time.data(), i);
     }
     phases.lap(t, Part::kApply);
   }
