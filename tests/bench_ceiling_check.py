@@ -2,9 +2,12 @@
 """Checks `plab bench --ceiling`: the machine's own ceiling for a speedup, from copies of the
 first count's run started at once. Run by CTest (label kit).
 
-- Threads: twice as many copies as this process may use cores must share the cores, so the
+- Threads: four times as many copies as this process may use cores must share the cores, so the
   ceiling comes out near the cores, not near the copies (copies run one after another would
-  give the copies).
+  give the copies). The bound sits between the two (2.5 x the cores), so that a one-thread run
+  slowed by other work (the ceiling is the copies' count times its time over theirs) does not
+  fail the check: with twice the cores as copies and 1.5 x the cores as the bound, one such run
+  did under ThreadSanitizer on CI's 2-core machine.
 - Ranks: the copies of a one-rank run are started with --bind-to none (mpirun binds a run of one
   rank to the first core; copies left bound would share it and give a ceiling of 1).
 - The CSV has the ceiling on the rows above the first count only, and the text says it.
@@ -34,8 +37,8 @@ def bench(*args):
     return done.stdout, list(csv.DictReader(open(table, newline="")))
 
 
-# Threads: 2 x cores copies of the one-thread run on `cores` cores.
-copies = 2 * cores
+# Threads: 4 x cores copies of the one-thread run on `cores` cores.
+copies = 4 * cores
 text, rows = bench("--stage", "03", "--impl", "solution", "--n", "2000", "--steps", "100",
                    "--threads", f"1,{copies}", "--runs", "1")
 assert len(rows) == 2, rows
@@ -43,7 +46,7 @@ assert rows[0]["ceiling"] == "" and rows[0]["ceiling_slowest"] == "", \
     f"the first count has no ceiling of its own: {rows[0]}"
 ceiling, slowest = float(rows[1]["ceiling"]), float(rows[1]["ceiling_slowest"])
 assert 0 < slowest <= ceiling, (ceiling, slowest)
-assert ceiling < 1.5 * cores, \
+assert ceiling < 2.5 * cores, \
     f"{copies} copies on {cores} core(s) gave a ceiling of {ceiling:.2f}: they did not run at once"
 assert f"this machine's ceiling: {copies} copies of the 1-thread run at once" in text, text
 
