@@ -119,14 +119,14 @@ struct StepArrays {
 /// Particle `i`'s cell in slab k, for find_pairs_banded(): its midpoint's row and column
 /// (bucket_of()'s arithmetic, on the midpoint rounded to float) as row << 16 | column (the bands
 /// take N < 2^15: at most 181 rows and 724 columns), or -1 when it takes no part in slab k (its
-/// last slab is before k). The midpoint is the scatter's expression in find_pairs_banded() (no
-/// contraction: --fmad=false), so an entry is sorted into the cell of the midpoint its search
-/// reads.
+/// last slab is before k). The midpoint is sweep::rounded_midpoint(), as in find_pairs_banded()'s
+/// scatter (no contraction: --fmad=false), so an entry is sorted into the cell of the midpoint its
+/// search reads.
 __device__ inline int band_cell_of(double x, double y, double vx, double vy, int last, int k,
                                    const sweep::Grid& g) {
   if (last < k) return -1;
   const double tm = sweep::slab_mid(k, g);
-  const float mx = static_cast<float>(x + tm * vx), my = static_cast<float>(y + tm * vy);
+  const float mx = sweep::rounded_midpoint(x, vx, tm), my = sweep::rounded_midpoint(y, vy, tm);
   return sweep::row_of(my, g) << 16 | sweep::column_of(mx, g);
 }
 
@@ -208,9 +208,9 @@ __device__ inline void midpoint(const ParticlesView& p, int i, int k, const Devi
 /// the pass: the cell of the rounded midpoint, which the search reads back.
 __device__ inline int bucket_of(const ParticlesView& p, int i, int k, const DeviceGrid& d,
                                 Entry& e) {
-  double mx, my;
-  midpoint(p, i, k, d, mx, my);
-  e = Entry{static_cast<float>(mx), static_cast<float>(my), static_cast<float>(p.vx[i]),
+  const double tm = sweep::slab_mid(k, d.g);
+  e = Entry{sweep::rounded_midpoint(p.x[i], p.vx[i], tm),
+            sweep::rounded_midpoint(p.y[i], p.vy[i], tm), static_cast<float>(p.vx[i]),
             static_cast<float>(p.vy[i])};
   return (k - d.first) * d.cells + sweep::cell_of(e.x, e.y, d.g);
 }
@@ -687,8 +687,8 @@ __global__ void __launch_bounds__(kBandThreads, 1)
   // Scatter: each kept particle to its cell, with what the search reads.
   for (int q = threadIdx.x; q < m; q += blockDim.x) {
     const int i = kept_id[q], e = atomicAdd(&cursor[kept_cell[q]], 1);
-    pos[e] = make_float2(static_cast<float>(p.x[i] + tm * p.vx[i]),
-                         static_cast<float>(p.y[i] + tm * p.vy[i]));
+    pos[e] = make_float2(sweep::rounded_midpoint(p.x[i], p.vx[i], tm),
+                         sweep::rounded_midpoint(p.y[i], p.vy[i], tm));
     vel[e] = make_float2(static_cast<float>(p.vx[i]), static_cast<float>(p.vy[i]));
     id[e] = i;
   }
