@@ -1335,11 +1335,15 @@ def case_rounds(sid):
         else:
             check("rounds", idea is not None and idea["status"] == "failed" and got == 0,
                   f"{name} scored {got} of {most} on correctness; its idea test: {said!r}")
-    # Stage 08 that steps its slab on the idea test's scene only: its idea test passes there, but
-    # the scenes where the kit can judge the ranks' work (random-1000, random-2000) catch the
-    # gathers on rank 0, and the whole folder then scores nothing, as when the idea test fails
-    if sid != "08":
-        return
+    if sid == "08":
+        largest_08()
+
+
+def largest_08():
+    """Stage 08 that steps its slab on the idea test's scene only (the largest it is given): its
+    idea test passes there, but the scenes where the kit can judge the ranks' work (random-1000,
+    random-2000) catch the gathers on rank 0, and the whole folder then scores nothing, as when
+    the idea test fails."""
     name = "redteam-rounds-largest-08"
     shutil.rmtree(scratch / name, ignore_errors=True)
     if patched(name, "08", "solutions/08-mpi", [(
