@@ -51,6 +51,7 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
                                   f"{a.submission} --seed {self.seed}")
         self.notes = self.results.notes
         self.idea_failed, self.idea_done = {}, set()  # stage folder -> why its idea test failed
+        self.idea_slow = {}  # stage folder -> its idea test's result, when it ran out of time
         if a.leaderboard_name:
             self.notes.append(f"your name on the class's leaderboard: {a.leaderboard_name}")
         self.notes.append(f"hidden scenes from seed {self.seed} (replay: ./plab grade "
@@ -164,6 +165,7 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
                     faked = faked or f"{name}: {verdict}"
             if run.reason and "time limit" in run.reason:
                 stopped = f"an earlier test of stage {st.key} ran out of time ({name})"
+                self.idea_not_to_blame(st, name, budget, self.ref_seconds(st, scene))
             self.add_correctness(st, test, points if verdict is None else 0, points,
                                  verdict is None, verdict or "same text as the reference, bit for bit",
                                  hidden, run.seconds)

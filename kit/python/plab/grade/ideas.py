@@ -79,7 +79,25 @@ class Ideas:
             problem, text = self.work_shared(idea, run, text)
         if problem:
             self.idea_failed[st.sid] = f"the idea test of stage {st.sid} failed: {problem}"
+        if run.reason and "time limit" in run.reason:
+            self.idea_slow[st.sid] = (len(self.results.tests), what, limit, own_seconds)
         self.results.add(test, 0, 0, problem is None, problem or text, False, run.seconds)
+
+    def idea_not_to_blame(self, st, name, budget, ref_seconds):
+        """A correctness test of the stage ran out of time after its idea test had: the stage's
+        hint (the idea it lacks) would mislead a stage that never ends even a small scene, so the
+        idea test's result says so instead, with the two scenes' times."""
+        if st.sid not in self.idea_slow:
+            return
+        index, what, limit, own_seconds = self.idea_slow.pop(st.sid)
+        problem = (f"it did not finish the {what} in {limit:.0f} s (the kit's solution takes "
+                   f"{own_seconds:.2f} s), and it did not finish the test {name} either in "
+                   f"{budget:.0f} s (the kit's solution: {ref_seconds:.2f} s): a step that never "
+                   "ends (an endless loop, a wait that nothing ends) comes before the stage's idea; "
+                   "find it first, on the public scenes")
+        self.idea_failed[st.sid] = f"the idea test of stage {st.sid} failed: {problem}"
+        self.results.tests[index]["output"] = self.results.banner + problem
+        self.results.write()
 
     def own_run(self, st, scene, threads, out, ranks=1, report=None):
         """(output, seconds) of the stage's own solution on `scene` (the same bits as the
