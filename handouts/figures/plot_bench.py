@@ -172,16 +172,19 @@ def ceiling():
                                  ("bench-issue30-ceiling-cpu-h100-2.csv", "P", "12-06 (2)"),
                                  ("bench-issue30-ceiling-cpu-h100-3.csv", "X", "12-06 (3)"),
                                  ("bench-issue30-ceiling-cpu-h100-4.csv", "h", "12-06 (4)"),
-                                 ("bench-issue30-ceiling-cpu-h100-5.csv", "*", "12-06 (5)")),
+                                 ("bench-issue30-ceiling-cpu-h100-5.csv", "*", "12-06 (5)"),
+                                 ("bench-issue30-ceiling-cpu-h100-6.csv", "p", "12-06 (6)")),
                "Stage 06's engine, CPU, N = 10^6", 12, "12x (issue 30)"),
               (right, "ranks", (("bench-issue30-ceiling-mpi-h200.csv", "o", "11-29, call 1"),
                                 ("bench-issue30-ceiling-mpi-h200-2.csv", "^", "11-30"),
-                                ("bench-issue30-ceiling-mpi-h200-3.csv", "v", "11-30 (2)")),
+                                ("bench-issue30-ceiling-mpi-h200-3.csv", "v", "11-30 (2)"),
+                                ("bench-issue30-ceiling-mpi-h100.csv", "p", "12-06 (6)")),
                "Stage 08's engine, N = 10^6", 0.7 * 16, "70% at 16 ranks (issue 30)"))
     # one colour a device call, the same in both panels
     call_color = {"11-29, call 1": "C0", "11-29, call 3": "C1", "11-30": "C2", "11-30 (2)": "C3",
                   "12-06 (H100 host)": "C4", "12-06 (2)": "C5",
-                  "12-06 (3)": "C6", "12-06 (4)": "C7", "12-06 (5)": "C8"}
+                  "12-06 (3)": "C6", "12-06 (4)": "C7", "12-06 (5)": "C8",
+                  "12-06 (6)": "C9"}
     from matplotlib.lines import Line2D
     for ax, count, files, title, goal, goal_label in panels:
         keys = []  # one legend entry a call (its colour and marker), then the three line styles
@@ -207,7 +210,7 @@ def ceiling():
                xticks=[1, 2, 4, 8, 16], xticklabels=["1", "2", "4", "8", "16"], title=title)
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(handles=keys, fontsize=7, loc="lower right")
-    fig.suptitle("H200 machines' 16-core hosts, 2026-11-29 and 11-30, and five H100 machines', 12-06: "
+    fig.suptitle("H200 machines' 16-core hosts, 2026-11-29 and 11-30, and six H100 machines', 12-06: "
                  "plab bench --ceiling "
                  "(copies of the one-thread or one-rank run at once)", fontsize=9)
     fig.tight_layout()
