@@ -63,7 +63,7 @@ def case_flat_and_replay():
     flat.mkdir(parents=True)
     (flat / "step.cpp").write_text(mutant_step())
     doc, tests, done, summary = grade("flat", flat)
-    check("flat", "took 1 files uploaded flat (step.cpp) as stage 01" in doc["output"],
+    check("flat", "took 1 file uploaded flat (step.cpp) as stage 01" in doc["output"],
           "a lone step.cpp is taken as the stage its banner names, with no --stages")
     check("flat", tests and all(n.startswith("01") for n in tests), f"{len(tests)} tests of stage 01")
     seed = doc.get("extra_data", {}).get("seed")

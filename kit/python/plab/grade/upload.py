@@ -167,8 +167,8 @@ def find_stages(submission, kit_folders, wanted, scratch):
         for p in flat:
             shutil.copy2(p, dest / p.name)
         where = ", ".join(str(p.relative_to(top)) for p in flat)  # an odd folder shows here
-        return {stage: dest}, note + (f"took {len(flat)} files uploaded flat ({where}) as "
-                                      f"stage {stage}")
+        files = "1 file" if len(flat) == 1 else f"{len(flat)} files"
+        return {stage: dest}, note + f"took {files} uploaded flat ({where}) as stage {stage}"
     shown = uploaded if uploaded.is_dir() and root != uploaded and not any(root.iterdir()) else root
     uploads = [e for e in root.iterdir() if not e.name.startswith(".") and
                (e.is_dir() or e.suffix == ".zip")]
