@@ -393,8 +393,27 @@ constexpr int kRanksSeconds = 240;
 /// ranks waiting for each other for ever, and ended with all its processes.
 constexpr double kRanksStallSeconds = 60;
 
+/// "1 rank", "3 ranks".
+std::string ranks_words(int ranks) {
+  return std::to_string(ranks) + (ranks == 1 ? " rank" : " ranks");
+}
+
+/// The run whose ranks waited for ever, once one has ("" before): after it, the next would too,
+/// and each would cost the stall limit, and the test program's own limit would end the rest unseen.
+std::string& ranks_stalled() {
+  static std::string stalled;
+  return stalled;
+}
+
+/// Skips this case when an earlier case's ranks waited for ever (ranks_stalled()): it is not run,
+/// and `plab test` counts it as such, not as another failure.
+#define PLAB_SKIP_AFTER_STALL()                                                              \
+  if (!ranks_stalled().empty())                                                              \
+  GTEST_SKIP() << "not run, since an earlier run's ranks waited for ever ("                   \
+               << ranks_stalled() << ")"
+
 /// Runs this stage's program on `ranks` ranks on `scene_file`; returns its output ("" and a
-/// failure when it fails).
+/// failure when it fails). A case calls PLAB_SKIP_AFTER_STALL() first.
 std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::test::ScratchDir& dir,
                          const std::string& what, const std::string& options = "",
                          const std::string& stderr_file = "") {
@@ -402,11 +421,9 @@ std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::t
     setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
     setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
   }
-  // After one run whose ranks waited for ever, the next would too: each would cost the stall
-  // limit, and the test program's own limit would end the rest unseen.
-  static std::string stalled;
-  if (!stalled.empty()) {
-    ADD_FAILURE() << this_name() << " on " << ranks << " ranks, " << what
+  std::string& stalled = ranks_stalled();
+  if (!stalled.empty()) {  // a second run in a case whose first stalled (PLAB_SKIP_AFTER_STALL)
+    ADD_FAILURE() << this_name() << " on " << ranks_words(ranks) << ", " << what
                   << ": not run, since an earlier run's ranks waited for ever (" << stalled << ")";
     return std::string();
   }
@@ -421,7 +438,7 @@ std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::t
                               options + " --quiet --status " + status_file + " --out " + out +
                               " " + scene_file + (stderr_file.empty() ? "" : " 2> " + stderr_file);
   std::filesystem::create_directories(dir.file("mpi"));
-  const std::string where = this_name() + " on " + std::to_string(ranks) + " ranks, " + what;
+  const std::string where = this_name() + " on " + ranks_words(ranks) + ", " + what;
   long long done = 0;
   const int status = plab::test::run_watched_steps(command, where, 0, status_file,
                                                    kRanksStallSeconds, done);
@@ -445,6 +462,7 @@ std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::t
 /// golden output.
 void expect_golden_on_ranks(const plab::Dataset& d, int ranks, const std::string& options = "",
                             const std::string& how = "") {
+  PLAB_SKIP_AFTER_STALL();
   const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
   const plab::test::ScratchDir scratch;
   const std::string output =
@@ -452,7 +470,7 @@ void expect_golden_on_ranks(const plab::Dataset& d, int ranks, const std::string
   if (!output.empty())
     expect_same(plab::read_file(m.golden_path(d)), output,
                 m.golden_path(d) + " (" + (options.empty() ? "" : options + ", ") + "on " +
-                    std::to_string(ranks) + " ranks)");
+                    ranks_words(ranks) + ")");
 }
 
 /// The datasets an MPI stage runs on several ranks (none for other stages).
@@ -486,6 +504,7 @@ GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(Ranks);
 TEST(RanksPhases, OneLineEachRank) {
   if (!plab::stage_info().mpi || plab::stage_info().impl != "engine")
     GTEST_SKIP() << "PLAB_ENGINE_PHASES is the MPI engine's";
+  PLAB_SKIP_AFTER_STALL();
   const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
   const std::vector<plab::Dataset> all = rank_datasets();
   ASSERT_FALSE(all.empty());
@@ -511,6 +530,7 @@ TEST(RanksPhases, OneLineEachRank) {
 /// start it): the ranks and the bytes they sent, which the grader's idea check reads.
 TEST(RanksTraffic, ReportedWithAStatusFile) {
   if (!plab::stage_info().mpi) GTEST_SKIP() << this_name() << " runs on one process";
+  PLAB_SKIP_AFTER_STALL();
   const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
   const std::vector<plab::Dataset> all = rank_datasets();
   ASSERT_FALSE(all.empty());
@@ -541,6 +561,7 @@ TEST(RanksTraffic, ReportedWithAStatusFile) {
 TEST(RanksTraffic, EngineStartsInItsBlocks) {
   if (!plab::stage_info().mpi || plab::stage_info().impl != "engine")
     GTEST_SKIP() << "the engine's ranks own blocks; the stage's own slabs";
+  PLAB_SKIP_AFTER_STALL();
   const plab::test::ScratchDir scratch;
   double bytes[2] = {};
   for (int steps = 1; steps <= 2; ++steps) {  // the same first state, 1 and 2 steps
@@ -577,6 +598,7 @@ void expect_same_on_ranks(const plab::Scene& scene, const std::string& how_made,
   if (!plab::stage_info().mpi) GTEST_SKIP() << this_name() << " runs on one process";
   const std::string other = plab::test::kOtherProgram;
   if (other.empty()) GTEST_SKIP() << "no other stage's solution is built to compare with";
+  PLAB_SKIP_AFTER_STALL();
   const plab::test::ScratchDir scratch;
   const std::string scene_file = scratch.file("scene.in");
   {
@@ -594,7 +616,7 @@ void expect_same_on_ranks(const plab::Scene& scene, const std::string& how_made,
     if (output.empty()) return;
     if (plab::first_difference(expected, output)) {
       expect_same(expected, output, reference_name() + " on " + how_made + ", run here on " +
-                                        std::to_string(ranks) + " ranks");
+                                        ranks_words(ranks));
       return;
     }
   }

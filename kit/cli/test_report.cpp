@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -91,11 +92,31 @@ std::optional<Found> find_difference(const std::string& message) {
 
 std::string first_line(const std::string& text) { return text.substr(0, text.find('\n')); }
 
+/// ", on 3 ranks" when a failure message says on how many ranks its run was (a stage on several
+/// processes: tests/stage_test.cpp's "run here on 3 ranks", "(on 3 ranks)"), else "".
+std::string ranks_of(const std::string& message) {
+  static const std::regex re(R"(\bon (\d+ ranks?)\b)");
+  std::smatch m;
+  return std::regex_search(message, m, re) ? ", on " + m[1].str() : "";
+}
+
+/// A failing case's lines, the reason first: GoogleTest prints "Failed" before the reason of
+/// ADD_FAILURE() << "why" and FAIL() << "why", and what the programs the case ran printed (mpirun's
+/// notes on a crashed rank) comes before it. Without that line, the lines as they are.
+std::vector<std::string> message_lines(const std::string& message) {
+  std::vector<std::string> lines = lines_of(message);
+  const auto at = std::find(lines.begin(), lines.end(), "Failed");
+  if (at == lines.end() || at + 1 == lines.end()) return lines;
+  std::vector<std::string> ordered(at + 1, lines.end());
+  ordered.insert(ordered.end(), lines.begin(), at);
+  return ordered;
+}
+
 /// A failure message on one line: its first line, and when that line only announces what follows
 /// (GoogleTest's "Expected equality of these values:", "Value of: ok" then "Actual: false"), the
 /// lines that say which values, joined ("a, which is 3; b, which is 4"): at most 6 lines.
 std::string failure_line(const std::string& message) {
-  const std::vector<std::string> lines = lines_of(message);
+  const std::vector<std::string> lines = message_lines(message);
   if (lines.empty()) return "(no message)";
   std::string out = lines[0];
   const bool announces = out.ends_with(':') || out.starts_with("Value of:") ||
@@ -167,17 +188,20 @@ void print_cases(const std::vector<Case>& cases, const Manifest& m) {
 
 /// One line for a test that is not per scene: how many cases failed, and the first one.
 void print_summary(const std::string& head, const std::vector<Case>& cases) {
-  int failed = 0;
+  int failed = 0, skipped = 0;
   const Case* first = nullptr;
-  for (const Case& c : cases)
+  for (const Case& c : cases) {
     if (c.status == "failed" && failed++ == 0) first = &c;
+    skipped += c.status == "skipped";
+  }
   std::string what;
   if (first) {
     const auto f = find_difference(first->message);
     what = ": " + std::to_string(failed) + " of " + std::to_string(cases.size()) +
-           " cases failed, first " + first->name + ": " +
+           " cases failed" + (skipped ? " (" + std::to_string(skipped) + " skipped)" : "") +
+           ", first " + first->name + ": " +
            (f ? "step " + f->step + (f->particle.empty() ? "" : ", particle " + f->particle) +
-                    ", " + f->field
+                    ", " + f->field + ranks_of(first->message)
               : failure_line(first->message));
   }
   std::printf("%s%s\n", head.c_str(), what.c_str());
@@ -308,13 +332,13 @@ void explain_first(const FirstFailure& f, const Manifest& m) {
   std::printf("first failure: %s, %s\n", f.test.c_str(), d ? ("scene " + d->name).c_str()
                                                            : f.c.name.c_str());
   if (!diff) {
-    for (const std::string& line : lines_of(f.c.message)) std::printf("  %s\n", line.c_str());
+    for (const std::string& line : message_lines(f.c.message)) std::printf("  %s\n", line.c_str());
     return;
   }
-  std::printf("  step %s%s, field %s: expected %s, got %s (%s)\n", diff->step.c_str(),
+  std::printf("  step %s%s, field %s: expected %s, got %s (%s%s)\n", diff->step.c_str(),
               diff->particle.empty() ? "" : (", particle " + diff->particle).c_str(),
               diff->field.c_str(), diff->expected.c_str(), diff->actual.c_str(),
-              diff->lines.c_str());
+              diff->lines.c_str(), ranks_of(f.c.message).c_str());
   if (d)
     explain_golden(f, *d, m, *diff);
   else
