@@ -234,6 +234,20 @@ void check_owners(const Ranks& r, const Local& s) {
   }
 }
 
+/// Ends the run when a step left this rank holding particles it does not count as owned
+/// (mpi_stage()'s check after every step): a step ends with the ghosts dropped and every particle
+/// that arrived in the migration owned, so that the next step's halo starts from its own slab.
+void check_owned_after_step(const Ranks& r, const Local& s) {
+  if (s.owned == s.size()) return;
+  char text[512];
+  std::snprintf(text, sizeof text,
+                "stage 08: after a step rank %d holds %d particles but owns %d of them (s.owned): "
+                "at the end of a step every particle a rank holds is its own, those that arrived "
+                "in the migration too (exercise 3, migrate(): count them all as owned)",
+                r.rank, s.size(), s.owned);
+  throw std::runtime_error(text);
+}
+
 /// Gathers every rank's owned particles into `all` on rank 0, in index order.
 void gather(const Ranks& r, const Local& s, Particles* all_on_0) {
   std::vector<Record> mine;
@@ -291,6 +305,7 @@ void act(int command, const Ranks& r, Run& run, Particles* all) {
       sampled.in_step = 1;
       the_step(run.box, r, run.s);
       sampled.in_step = 0;
+      if (run.slabs) check_owned_after_step(r, run.s);
       break;
     case kRead:
       if (run.slabs) check_owners(r, run.s);

@@ -31,7 +31,8 @@ namespace {
 /// 1a. The fastest speed of any particle, on any rank (every rank gets it).
 double fastest_anywhere(const Ranks& r, const Local& s) {
   // EXERCISE 1 (a): every rank needs the same reach, so the fastest speed of the whole scene:
-  // combine fastest_here(s) of every rank with one MPI_Allreduce (MPI_DOUBLE, MPI_MAX, r.comm).
+  // combine fastest_here(s) of every rank with one MPI_Allreduce. Which datatype and which
+  // reduction operation give every rank that speed?
   (void)r, (void)s;
   PLAB_EXERCISE(1, "the halo: the fastest speed over every rank, with MPI_Allreduce");
 }
@@ -67,7 +68,8 @@ void to_ghosts(const Ranks& r, const Local& s, std::vector<T>& value) {
 /// 2b. Whether `left` is true on any rank (every rank gets the answer).
 bool any_rank_left(const Ranks& r, bool left) {
   // EXERCISE 2 (b): the rounds end when no rank has an open particle: one MPI_Allreduce of an
-  // int (MPI_LOR). What happens if one rank leaves the loop while another goes on?
+  // int; which operation tells every rank whether any rank is left? What happens if one rank
+  // leaves the loop while another goes on?
   (void)r, (void)left;
   PLAB_EXERCISE(2, "the rounds across ranks: any rank still open, with MPI_Allreduce");
 }
