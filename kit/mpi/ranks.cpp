@@ -189,32 +189,40 @@ int status_of(const std::exception& e) {
   std::abort();
 }
 
+/// The kit's own messages between ranks (the scatter), on a communicator of their own: no
+/// message that a stage leaves unreceived on Ranks::comm can match them.
+MPI_Comm kit_comm = MPI_COMM_NULL;
+constexpr int kScatterTag = 1;  //!< rank 0's particles for rank q, on kit_comm
+
 /// Scatters rank 0's particles to their owners (each rank's part of `all`): the kit's slabs, or
-/// the_owner's parts (a rank outside [0, R) read as the nearest).
+/// the_owner's parts (a rank outside [0, R) read as the nearest). Rank 0 sends each rank its
+/// part in one message, whose size the rank learns by probing it.
 void scatter(const Ranks& r, const Particles* all, Local& s) {
-  std::vector<std::vector<Record>> out(r.ranks);
-  const auto owner = [&](int i) {
-    if (!the_owner) return r.owner_of(all->x[i]);
-    return std::clamp(the_owner(all->x[i], all->y[i], r.L, r.ranks), 0, r.ranks - 1);
-  };
-  if (r.rank == 0)
+  if (kit_comm == MPI_COMM_NULL) PMPI_Comm_dup(r.comm, &kit_comm);  // every rank, at once
+  std::vector<Record> mine;
+  if (r.rank == 0) {
+    const auto owner = [&](int i) {
+      if (!the_owner) return r.owner_of(all->x[i]);
+      return std::clamp(the_owner(all->x[i], all->y[i], r.L, r.ranks), 0, r.ranks - 1);
+    };
+    std::vector<std::vector<Record>> out(r.ranks);
     for (int i = 0; i < static_cast<int>(all->size()); ++i)
       out[owner(i)].push_back(
           {all->x[i], all->y[i], all->vx[i], all->vy[i], all->pc[i], all->wc[i], i});
-  std::vector<int> bytes(r.ranks), at(r.ranks);
-  std::vector<Record> send;
-  for (int q = 0; q < r.ranks; ++q) {
-    at[q] = static_cast<int>(send.size() * sizeof(Record));
-    bytes[q] = static_cast<int>(out[q].size() * sizeof(Record));
-    send.insert(send.end(), out[q].begin(), out[q].end());
+    for (int q = 1; q < r.ranks; ++q)
+      PMPI_Send(out[q].data(), static_cast<int>(out[q].size() * sizeof(Record)), MPI_BYTE, q,
+                kScatterTag, kit_comm);
+    mine = std::move(out[0]);
+  } else {
+    MPI_Status status;
+    PMPI_Probe(0, kScatterTag, kit_comm, &status);
+    int bytes = 0;
+    PMPI_Get_count(&status, MPI_BYTE, &bytes);
+    mine.resize(bytes / sizeof(Record));
+    PMPI_Recv(mine.data(), bytes, MPI_BYTE, 0, kScatterTag, kit_comm, MPI_STATUS_IGNORE);
   }
-  int mine = 0;
-  PMPI_Scatter(bytes.data(), 1, MPI_INT, &mine, 1, MPI_INT, 0, r.comm);
-  std::vector<Record> in(mine / sizeof(Record));
-  PMPI_Scatterv(send.data(), bytes.data(), at.data(), MPI_BYTE, in.data(), mine, MPI_BYTE, 0,
-               r.comm);
   s = Local{};
-  for (const Record& rec : in) s.push(rec);
+  for (const Record& rec : mine) s.push(rec);
   s.owned = s.size();
 }
 
