@@ -142,6 +142,10 @@ def ships_only_students_files(clone, out):
         check(path in tracked or path == "README.md" or path.startswith(("docs/html/", "kit/reference/")),
               f"the release ships {path}, which HEAD does not hold")
     check(not (out / "kit" / "release").exists(), "the release ships kit/release/")
+    # The red team's honest and cheating submissions are whole stages (stage 03's rounds, a heap
+    # selection): answers; the instructor-only code's specifications compile only beside it
+    for answer in ("tests/grader_redteam.py", "tests/greedy_test.cpp", "tests/sweep_test.cpp"):
+        check(answer not in shipped, f"the release ships {answer}")
     check("build-asan.log" not in shipped, "the release ships build-asan.log")
     print(f"ships {len(shipped)} files: HEAD's, less solutions/, .ci, logs, build and scratch "
           "files; plus the docs and the reference program")

@@ -62,7 +62,9 @@ for impl in solution engine; do
       --n "${PLAB_SCALE_N:-10000,100000,1000000}" --csv "$results/bench-06-scale-$impl.csv"
 done
 
-if [ -z "${PLAB_SKIP_REDTEAM:-}" ]; then
+if [ -z "${PLAB_SKIP_REDTEAM:-}" ] && [ ! -f tests/grader_redteam.py ]; then
+  log "no grader red team here (a student copy leaves it out): its GPU idea tests not run"
+elif [ -z "${PLAB_SKIP_REDTEAM:-}" ]; then
   log "the grader's GPU idea tests (red team gpu-ideas: each cheat and slip scores nothing, the honest 04, 05, 06-gpu full marks)"
   # Without bubblewrap, as root: the grader's unprivileged-user sandbox, the kit's answers made private.
   grade_args=""

@@ -37,12 +37,15 @@ import tempfile
 # (replaced), the instructor's pages (the measurement logs of the reference solutions and of the
 # kit's engine: the handouts ask the student to measure) and the similarity test's submissions
 # (independent stage 03 solutions), the course guide (its data and its writer), the
-# instructors' TSan runs of the engine and the solutions (tests/tsan_runs_check.py).
+# instructors' TSan runs of the engine and the solutions (tests/tsan_runs_check.py), the grader's
+# red team (its honest submissions are whole stages: answers) and the instructor-only code's own
+# tests (kit/instructor's specifications, which compile only beside it).
 INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "README.md",
                    "handouts/measurements.md", "handouts/engine.md", "handouts/engine-gpu.md",
                    "handouts/engine-08.md", "tests/similar/", "kit/guide/",
                    "kit/python/plab/guide.py", "tools/engine-modes.sh",
-                   "tests/tsan_runs_check.py")
+                   "tests/tsan_runs_check.py", "tests/grader_redteam.py", "tests/greedy_test.cpp",
+                   "tests/sweep_test.cpp")
 # Files that belong to nobody's copy even when tracked by mistake: logs, build folders, scratch.
 SCRATCH = ("*.log", "*.partial", "*.orig", "*.rej", "*.swp", "*~", "*.pyc", "__pycache__/*",
            "build/*", "build-*/*", ".configure.log")

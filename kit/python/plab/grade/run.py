@@ -140,7 +140,11 @@ class Run:
                              f"has:\n  {ref}")
                 lines.append(f"Yours: particle {i} {implied(before, after)}.")
         setup, scene_arg, expected_arg = how
-        if setup:  # a hidden scene: regenerate it and its expected output with the solution
+        if setup and st.released_reference:  # a hidden scene: regenerate it, and its expected
+            # output with the reference program of the student's copy (`plab release` builds it;
+            # the instructor's copy has `./plab run --stage NN --impl solution` too)
+            setup += "kit/reference/bin/plab-reference hidden.in --out expected.out && "
+        elif setup:  # a stage with a model of its own (07): its solution (the instructor's)
             setup += (f"./plab run --stage {st.reference} --impl solution hidden.in --out "
                       f"expected.out && ")
         lines.append(f"Reproduce: {setup}./plab run --stage {st.sid} --impl student {scene_arg} "

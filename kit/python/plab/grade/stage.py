@@ -17,6 +17,8 @@ class Stage:
         self.gpu = conf.get("gpu", False)
         self.threads = str(conf.get("threads", 1))
         self.reference = conf.get("reference", manifest["reference_stage"])
+        # whose text a student copy's compiled reference program (kit/reference/bin) prints
+        self.released_reference = self.reference == manifest["reference_stage"]
         self.exact = conf.get("golden") == "exact"
         self.env = {"PLAB_DEVICE": conf["device"]} if "device" in conf else {}
         self.ranks = int(conf.get("ranks", 1))  # a stage on several processes: mpirun starts them
