@@ -3,6 +3,7 @@
 #include <cstring>
 #include <functional>
 #include <memory>
+#include <set>
 #include <thread>
 #include <utility>
 
@@ -152,6 +153,8 @@ void add_bench(CLI::App& app) {
     // Rows whose runs differ by more than this share of their median: noise (a shared machine).
     constexpr double kNoisy = 0.2;
     std::vector<std::pair<double, std::string>> noisy;  //!< (spread, which row)
+    struct Unfinished {};           //!< a stage that stopped at an exercise not done (exit 3)
+    std::set<std::string> unfinished;  //!< those stages: not run again, the others still timed
     for (const long long n : a->n) {
       const std::string scene = temp_path("bench-" + std::to_string(n) + (a->fixed_density ? "-fd-" : "-") +
                                           std::to_string(a->steps) + "-" + std::to_string(a->seed) +
@@ -171,152 +174,163 @@ void add_bench(CLI::App& app) {
       for (const std::string& raw : a->stages) {
         const std::string id = two_digits(raw);
         const std::string program = require_stage(id, impl);
-        for (const std::string& schedule : a->schedules) {
-          // The command line of one run on `count` threads (or ranks), its report to `report_to`;
-          // ranks bound to cores as mpirun chooses unless `bound` is false.
-          const auto run_args = [&](int count, const std::string& report_to, bool bound = true) {
-            std::vector<std::string> args{program, scene, "--quiet", "--out", "/dev/null",
-                                          "--threads", by_ranks ? "1" : std::to_string(count),
-                                          "--schedule", schedule, "--report", report_to};
-            return by_ranks ? on_ranks(id, impl, count, args, bound) : args;
-          };
-          const auto check_ran = [&](int rc) {
-            if (rc != 0)
-              throw std::runtime_error("stage " + id + " failed (exit " + std::to_string(rc) +
-                                       ") on " + scene);
-          };
-          double one_thread = 0, one_thread_steps = 0;
-          for (const int threads : a->threads) {
-            std::vector<double> t, steps_t;
-            nlohmann::json last;
-            for (int k = 0; k < a->runs; ++k) {
-              if (stderr_is_terminal())
-                std::fprintf(stderr, "\r  stage %s N=%lld threads=%d run %d/%d ", id.c_str(), n,
-                             threads, k + 1, a->runs);
-              const auto t0 = std::chrono::steady_clock::now();
-              check_ran(run_program(run_args(threads, report)));
-              t.push_back(wall_seconds(t0));
-              last = nlohmann::json::parse(read_file(report));
-              steps_t.push_back(last.at("step_seconds").get<double>());
-            }
-            if (stderr_is_terminal()) std::fprintf(stderr, "\r%60s\r", "");
-            std::sort(t.begin(), t.end());
-            std::sort(steps_t.begin(), steps_t.end());
-            const double median = t[t.size() / 2];
-            const double step_median = steps_t[steps_t.size() / 2];
-            const std::string device = last.at("device").get<std::string>();
-            const std::string timer = last.at("timer").get<std::string>();
-            const bool gpu = device != "cpu";
-            if (threads == a->threads.front()) {
-              one_thread = median;
-              one_thread_steps = step_median;
-            }
-            // A stage without OpenMP loops (02, 07, 08) has no schedule to show
-            const bool scheduled = last.value("openmp", true) && !gpu;
-            const double spread = (t.back() - t.front()) / median;
-            if (a->runs > 1 && spread > kNoisy) {
-              char what[128];
-              std::snprintf(what, sizeof what, "stage %s N=%lld %s=%d: %.0f%%", id.c_str(), n,
-                            by_ranks ? "ranks" : "threads", threads, 100 * spread);
-              noisy.emplace_back(spread, what);
-            }
-            char speedup[32] = "-";
-            if (one_thread > 0 && (!gpu || by_ranks))
-              std::snprintf(speedup, sizeof speedup, "%.2f", one_thread / median);
-            std::printf("%-5s %6lld %5lld %7s %-11s %10.3f %8.1f%% %8s %10.4f %9.4f  %s (%s)\n",
-                        id.c_str(), n, a->steps,
-                        gpu && !by_ranks ? "-" : std::to_string(threads).c_str(),
-                        scheduled ? schedule.c_str() : "-", median, 100 * spread, speedup,
-                        step_median,
-                        a->steps ? 1e3 * step_median / a->steps : 0.0, device.c_str(),
-                        timer.c_str());
-            // The memory floor: the state read and written once a step, at the bandwidth the
-            // stage measured (a GPU engine) or, for the engine on the CPU, the host's.
-            double bandwidth = last.value("bandwidth", 0.0);
-            if (bandwidth == 0 && !gpu && !by_ranks && impl == "engine")
-              bandwidth = host_bandwidth(threads);
-            double floor_s = 0;
-            if (bandwidth > 0 && a->steps > 0) {
-              floor_s = 2 * kStateBytes * static_cast<double>(n) / bandwidth;
-              const double per_step = step_median / static_cast<double>(a->steps);
-              std::printf("      memory: %.0f B a particle-step at least (the state read and "
-                          "written once) = %.4f ms/step at the measured %.0f GB/s; this step "
-                          "takes %.0fx that, the time of %.0f B a particle-step\n",
-                          2 * kStateBytes, 1e3 * floor_s, bandwidth / 1e9, per_step / floor_s,
-                          per_step * bandwidth / static_cast<double>(n));
-            }
-            // What a GPU stage held on the device (particles and working arrays, not the CUDA
-            // context): how large a scene one GPU can take.
-            if (const auto held = last.value("device_bytes", std::size_t{0}); held > 0 && n > 0)
-              std::printf("      device memory: %.1f MB held by the stage, %.1f B a particle\n",
-                          static_cast<double>(held) / 1e6,
-                          static_cast<double>(held) / static_cast<double>(n));
-            const double bytes = last.value("bytes_sent", 0.0);
-            const double comm = last.value("comm_seconds", 0.0);
-            const double steps = a->steps ? static_cast<double>(a->steps) : 1.0;
-            if (by_ranks)  // mpirun's start-up is in the whole-process speedup: in steps too
-              std::printf("      %.3g bytes sent per step, %.0f%% of the time in steps in "
-                          "exchanges (the busiest rank); speedup in steps %.2f over %d rank(s)\n",
-                          bytes / steps, step_median > 0 ? 100 * comm / step_median : 0.0,
-                          step_median > 0 ? one_thread_steps / step_median : 0.0,
-                          a->threads.front());
-            // This machine's ceiling for the row: copies of the first count's run at once.
-            double ceiling = 0, ceiling_slowest = 0;
-            const int first = a->threads.front();
-            if (a->ceiling && (!gpu || by_ranks) && threads > first && threads % first != 0)
-              std::printf("      this machine's ceiling: not measured (%d is not a multiple of the "
-                          "first count, %d: copies of that run cannot fill it)\n",
-                          threads, first);
-            if (a->ceiling && (!gpu || by_ranks) && threads > first && threads % first == 0 &&
-                one_thread_steps > 0 && step_median > 0) {
-              const int copies = threads / first;
-              std::vector<std::string> reports;
-              for (int k = 0; k < copies; ++k) {
-                reports.push_back(temp_path("bench-ceiling-" + std::to_string(k) + ".json"));
-                if (std::find(made.begin(), made.end(), reports.back()) == made.end())
-                  made.push_back(reports.back());
+        if (unfinished.count(id)) continue;
+        try {
+          for (const std::string& schedule : a->schedules) {
+            // The command line of one run on `count` threads (or ranks), its report to `report_to`;
+            // ranks bound to cores as mpirun chooses unless `bound` is false.
+            const auto run_args = [&](int count, const std::string& report_to, bool bound = true) {
+              std::vector<std::string> args{program, scene, "--quiet", "--out", "/dev/null",
+                                            "--threads", by_ranks ? "1" : std::to_string(count),
+                                            "--schedule", schedule, "--report", report_to};
+              return by_ranks ? on_ranks(id, impl, count, args, bound) : args;
+            };
+            const auto check_ran = [&](int rc) {
+              if (rc == 3) throw Unfinished{};  // its "EXERCISE N ... is not done yet" said why
+              if (rc != 0)
+                throw std::runtime_error("stage " + id + " failed (exit " + std::to_string(rc) +
+                                         ") on " + scene);
+            };
+            double one_thread = 0, one_thread_steps = 0;
+            for (const int threads : a->threads) {
+              std::vector<double> t, steps_t;
+              nlohmann::json last;
+              for (int k = 0; k < a->runs; ++k) {
+                if (stderr_is_terminal())
+                  std::fprintf(stderr, "\r  stage %s N=%lld threads=%d run %d/%d ", id.c_str(), n,
+                               threads, k + 1, a->runs);
+                const auto t0 = std::chrono::steady_clock::now();
+                check_ran(run_program(run_args(threads, report)));
+                t.push_back(wall_seconds(t0));
+                last = nlohmann::json::parse(read_file(report));
+                steps_t.push_back(last.at("step_seconds").get<double>());
               }
-              // copies at once, unbound: a run of one rank alone is bound to the first core
-              std::vector<std::vector<std::string>> programs;
-              for (const std::string& r : reports) programs.push_back(run_args(first, r, false));
-              char progress[128];
-              std::snprintf(progress, sizeof progress,
-                            "stage %s N=%lld: %d copies of the %d-%s run at once", id.c_str(), n,
-                            copies, first, by_ranks ? "rank" : "thread");
-              const Copies at_once = time_at_once(programs, reports, a->runs, check_ran, progress);
-              const double mean = at_once.mean, slowest = at_once.slowest;
-              ceiling = copies * one_thread_steps / mean;
-              ceiling_slowest = copies * one_thread_steps / slowest;
-              const double in_steps = one_thread_steps / step_median;
-              std::printf("      this machine's ceiling: %d copies of the %d-%s run at once took "
-                          "%.2fx (mean) and %.2fx (slowest) its time in steps alone, so work that "
-                          "shares nothing reaches %.2fx here (%.2fx when the slowest sets the "
-                          "pace); this row's %.2fx in steps is %.0f%% of that\n",
-                          copies, first, by_ranks ? "rank" : "thread", mean / one_thread_steps,
-                          slowest / one_thread_steps, ceiling, ceiling_slowest, in_steps,
-                          100 * in_steps / ceiling);
+              if (stderr_is_terminal()) std::fprintf(stderr, "\r%60s\r", "");
+              std::sort(t.begin(), t.end());
+              std::sort(steps_t.begin(), steps_t.end());
+              const double median = t[t.size() / 2];
+              const double step_median = steps_t[steps_t.size() / 2];
+              const std::string device = last.at("device").get<std::string>();
+              const std::string timer = last.at("timer").get<std::string>();
+              const bool gpu = device != "cpu";
+              if (threads == a->threads.front()) {
+                one_thread = median;
+                one_thread_steps = step_median;
+              }
+              // A stage without OpenMP loops (02, 07, 08) has no schedule to show
+              const bool scheduled = last.value("openmp", true) && !gpu;
+              const double spread = (t.back() - t.front()) / median;
+              if (a->runs > 1 && spread > kNoisy) {
+                char what[128];
+                std::snprintf(what, sizeof what, "stage %s N=%lld %s=%d: %.0f%%", id.c_str(), n,
+                              by_ranks ? "ranks" : "threads", threads, 100 * spread);
+                noisy.emplace_back(spread, what);
+              }
+              char speedup[32] = "-";
+              if (one_thread > 0 && (!gpu || by_ranks))
+                std::snprintf(speedup, sizeof speedup, "%.2f", one_thread / median);
+              std::printf("%-5s %6lld %5lld %7s %-11s %10.3f %8.1f%% %8s %10.4f %9.4f  %s (%s)\n",
+                          id.c_str(), n, a->steps,
+                          gpu && !by_ranks ? "-" : std::to_string(threads).c_str(),
+                          scheduled ? schedule.c_str() : "-", median, 100 * spread, speedup,
+                          step_median,
+                          a->steps ? 1e3 * step_median / a->steps : 0.0, device.c_str(),
+                          timer.c_str());
+              // The memory floor: the state read and written once a step, at the bandwidth the
+              // stage measured (a GPU engine) or, for the engine on the CPU, the host's.
+              double bandwidth = last.value("bandwidth", 0.0);
+              if (bandwidth == 0 && !gpu && !by_ranks && impl == "engine")
+                bandwidth = host_bandwidth(threads);
+              double floor_s = 0;
+              if (bandwidth > 0 && a->steps > 0) {
+                floor_s = 2 * kStateBytes * static_cast<double>(n) / bandwidth;
+                const double per_step = step_median / static_cast<double>(a->steps);
+                std::printf("      memory: %.0f B a particle-step at least (the state read and "
+                            "written once) = %.4f ms/step at the measured %.0f GB/s; this step "
+                            "takes %.0fx that, the time of %.0f B a particle-step\n",
+                            2 * kStateBytes, 1e3 * floor_s, bandwidth / 1e9, per_step / floor_s,
+                            per_step * bandwidth / static_cast<double>(n));
+              }
+              // What a GPU stage held on the device (particles and working arrays, not the CUDA
+              // context): how large a scene one GPU can take.
+              if (const auto held = last.value("device_bytes", std::size_t{0}); held > 0 && n > 0)
+                std::printf("      device memory: %.1f MB held by the stage, %.1f B a particle\n",
+                            static_cast<double>(held) / 1e6,
+                            static_cast<double>(held) / static_cast<double>(n));
+              const double bytes = last.value("bytes_sent", 0.0);
+              const double comm = last.value("comm_seconds", 0.0);
+              const double steps = a->steps ? static_cast<double>(a->steps) : 1.0;
+              if (by_ranks)  // mpirun's start-up is in the whole-process speedup: in steps too
+                std::printf("      %.3g bytes sent per step, %.0f%% of the time in steps in "
+                            "exchanges (the busiest rank); speedup in steps %.2f over %d rank(s)\n",
+                            bytes / steps, step_median > 0 ? 100 * comm / step_median : 0.0,
+                            step_median > 0 ? one_thread_steps / step_median : 0.0,
+                            a->threads.front());
+              // This machine's ceiling for the row: copies of the first count's run at once.
+              double ceiling = 0, ceiling_slowest = 0;
+              const int first = a->threads.front();
+              if (a->ceiling && (!gpu || by_ranks) && threads > first && threads % first != 0)
+                std::printf("      this machine's ceiling: not measured (%d is not a multiple of "
+                            "the first count, %d: copies of that run cannot fill it)\n",
+                            threads, first);
+              if (a->ceiling && (!gpu || by_ranks) && threads > first && threads % first == 0 &&
+                  one_thread_steps > 0 && step_median > 0) {
+                const int copies = threads / first;
+                std::vector<std::string> reports;
+                for (int k = 0; k < copies; ++k) {
+                  reports.push_back(temp_path("bench-ceiling-" + std::to_string(k) + ".json"));
+                  if (std::find(made.begin(), made.end(), reports.back()) == made.end())
+                    made.push_back(reports.back());
+                }
+                // copies at once, unbound: a run of one rank alone is bound to the first core
+                std::vector<std::vector<std::string>> programs;
+                for (const std::string& r : reports) programs.push_back(run_args(first, r, false));
+                char progress[128];
+                std::snprintf(progress, sizeof progress,
+                              "stage %s N=%lld: %d copies of the %d-%s run at once", id.c_str(), n,
+                              copies, first, by_ranks ? "rank" : "thread");
+                const Copies at_once =
+                    time_at_once(programs, reports, a->runs, check_ran, progress);
+                const double mean = at_once.mean, slowest = at_once.slowest;
+                ceiling = copies * one_thread_steps / mean;
+                ceiling_slowest = copies * one_thread_steps / slowest;
+                const double in_steps = one_thread_steps / step_median;
+                std::printf("      this machine's ceiling: %d copies of the %d-%s run at once "
+                            "took %.2fx (mean) and %.2fx (slowest) its time in steps alone, so "
+                            "work that shares nothing reaches %.2fx here (%.2fx when the slowest "
+                            "sets the pace); this row's %.2fx in steps is %.0f%% of that\n",
+                            copies, first, by_ranks ? "rank" : "thread", mean / one_thread_steps,
+                            slowest / one_thread_steps, ceiling, ceiling_slowest, in_steps,
+                            100 * in_steps / ceiling);
+              }
+              std::fflush(stdout);
+              char row[512];
+              std::snprintf(row, sizeof row,
+                            "%s,%s,%lld,%lld,%d,\"%s\",%d,%.6f,%.6f,%.6f,%s,%.6f,%.6f,%.6f,%s,"
+                            "\"%s\",%zu,%.4g,%.4g\n",
+                            id.c_str(), impl.c_str(), n, a->steps, threads, schedule.c_str(),
+                            a->runs,
+                            median, t.front(), t.back(), speedup, step_median, steps_t.front(),
+                            steps_t.back(), timer.c_str(), device.c_str(),
+                            last.value("device_bytes", std::size_t{0}), bandwidth, floor_s);
+              csv += row;
+              csv.pop_back();
+              if (by_ranks)
+                csv += "," + std::to_string(threads) + "," + std::to_string(bytes / steps) + "," +
+                       std::to_string(step_median > 0 ? comm / step_median : 0.0);
+              const auto or_empty = [](double v) { return v > 0 ? std::to_string(v) : ""; };
+              csv += "," + or_empty(ceiling) + "," + or_empty(ceiling_slowest) + "\n";
+              if (gpu && !by_ranks) break;  // threads, schedules: CPU settings (ranks are not)
             }
-            std::fflush(stdout);
-            char row[512];
-            std::snprintf(row, sizeof row,
-                          "%s,%s,%lld,%lld,%d,\"%s\",%d,%.6f,%.6f,%.6f,%s,%.6f,%.6f,%.6f,%s,"
-                          "\"%s\",%zu,%.4g,%.4g\n",
-                          id.c_str(), impl.c_str(), n, a->steps, threads, schedule.c_str(), a->runs,
-                          median, t.front(), t.back(), speedup, step_median, steps_t.front(),
-                          steps_t.back(), timer.c_str(), device.c_str(),
-                          last.value("device_bytes", std::size_t{0}), bandwidth, floor_s);
-            csv += row;
-            csv.pop_back();
-            if (by_ranks)
-              csv += "," + std::to_string(threads) + "," + std::to_string(bytes / steps) + "," +
-                     std::to_string(step_median > 0 ? comm / step_median : 0.0);
-            const auto or_empty = [](double v) { return v > 0 ? std::to_string(v) : ""; };
-            csv += "," + or_empty(ceiling) + "," + or_empty(ceiling_slowest) + "\n";
-            if (gpu && !by_ranks) break;  // threads and schedules are CPU settings (ranks are not)
           }
+        } catch (const Unfinished&) {  // the other stages are still timed
+          unfinished.insert(id);
+          std::printf("%-5s not timed: an exercise is not done yet (its message above)\n",
+                      id.c_str());
         }
       }
     }
+    if (!unfinished.empty()) g_status = 1;
     if (!a->csv.empty()) write_text(a->csv, csv);
     std::printf("median s: whole-process wall seconds (start-up, scene reading and, on a GPU, "
                 "context creation included; output to /dev/null); spread = (max - min) / median "

@@ -10,7 +10,9 @@ void add_diff(CLI::App& app) {
   auto* c = app.add_subcommand("diff", "Compare two outputs (or digest files): exit 0 when equal, "
                                        "otherwise show the first differing step, particle and "
                                        "field, and count the differing lines.");
-  c->add_option("outputs", *files, "EXPECTED ACTUAL: the two outputs (or digest files)")->required()->expected(2)
+  c->add_option("outputs", *files, "EXPECTED ACTUAL: the two outputs (or digest files)")
+      ->required()
+      ->expected(2)
       ->check(CLI::ExistingFile);
   c->add_flag("--json", *json,
               "print JSON instead: equal, text (the report above), first (line, step and "
