@@ -146,6 +146,14 @@ def ships_only_students_files(clone, out):
     # selection): answers; the instructor-only code's specifications compile only beside it
     for answer in ("tests/grader_redteam.py", "tests/greedy_test.cpp", "tests/sweep_test.cpp"):
         check(answer not in shipped, f"the release ships {answer}")
+    # The instructors' page says how each idea test measures and what a forged count could still
+    # pass; the measurement logs answer the handouts' measuring questions
+    for page in ("instructors", "measurements", "engine", "engine-gpu", "engine-08"):
+        check(f"handouts/{page}.md" not in shipped, f"the release ships handouts/{page}.md")
+    pages = " ".join((out / p).read_text(errors="replace") for p in shipped
+                     if p.endswith(".md") and p.startswith(("handouts/", "docs/")))
+    linked = re.search(r"\]\((?:[\w./-]*/)?(instructors|measurements|engine(?:-gpu|-08)?)\.md", pages)
+    check(not linked, f"a shipped page links to the instructor-only {linked and linked.group(1)}.md")
     check("build-asan.log" not in shipped, "the release ships build-asan.log")
     print(f"ships {len(shipped)} files: HEAD's, less solutions/, .ci, logs, build and scratch "
           "files; plus the docs and the reference program")

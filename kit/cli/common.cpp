@@ -2,6 +2,8 @@
 /// \brief The helpers the `plab` commands share (common.hpp).
 #include "common.hpp"
 
+#include <cstdlib>
+
 namespace plab::cli {
 
 int g_status = 0;
@@ -16,6 +18,12 @@ void check_impl(const std::string& impl) {
   if (impl != "solution" && impl != "student" && impl != "engine")
     throw std::runtime_error("--impl must be 'solution', 'student' or 'engine', not '" + impl +
                              "'");
+}
+
+std::string wait_as_the_grader(const std::string& impl) {
+  if (impl != "engine") ::setenv("OMP_WAIT_POLICY", "passive", /*overwrite=*/0);
+  const char* policy = std::getenv("OMP_WAIT_POLICY");
+  return policy ? policy : "OpenMP's default";
 }
 
 std::string require_stage(const std::string& id, const std::string& impl) {

@@ -37,6 +37,11 @@ std::string two_digits(const std::string& stage);
 /// Throws unless `impl` is "solution", "student" or "engine" (the kit's instructor-only fast
 /// versions in kit/instructor/engine, where a stage has one).
 void check_impl(const std::string& impl);
+/// Times a stage's OpenMP threads as the grader does: waiting passively at a barrier (asleep,
+/// not spinning), unless the environment sets OMP_WAIT_POLICY. Spinning threads take the cores
+/// that the others need on a shared machine: two threads could take twice one thread's time.
+/// The engine keeps OpenMP's default (what its measurements used). Returns the policy in use.
+std::string wait_as_the_grader(const std::string& impl);
 /// The stage program, or a clear error saying why there is none (no such stage, not built, or
 /// not built from its current code).
 std::string require_stage(const std::string& id, const std::string& impl);

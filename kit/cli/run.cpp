@@ -23,7 +23,9 @@ void add_run(CLI::App& app) {
                 "solution (solutions/), student (stages/) or engine (kit/instructor/engine/: the "
                 "kit's fast version, instructor only); default: solution when solutions/ exists, "
                 "otherwise student");
-  c->add_option("--threads", a->threads, "threads for stages that use them");
+  c->add_option("--threads", a->threads,
+                "threads for stages that use them (they wait passively at barriers, as when "
+                "graded, unless OMP_WAIT_POLICY is set)");
   c->add_option("--ranks", a->ranks,
                 "processes for a stage that runs on several (08): mpirun starts them, more than "
                 "the cores if asked")->check(CLI::Range(1, 4096));
@@ -58,6 +60,7 @@ void add_run(CLI::App& app) {
   c->callback([a] {
     const std::string impl = a->impl.empty() ? default_impl() : a->impl;
     check_impl(impl);
+    wait_as_the_grader(impl);
     const std::string id = two_digits(a->stage);
     std::vector<std::string> args{require_stage(id, impl), a->scene, "--seed",
                                   std::to_string(a->seed)};

@@ -303,11 +303,25 @@ void explain_golden(const FirstFailure& f, const Dataset& d, const Manifest& m, 
 void explain_generated(const FirstFailure& f, const Found& diff) {
   static const std::regex gen(R"(\(plab gen ([^)]*)\))"), other(R"(differs from stage (\d+))");
   std::smatch g, o;
+  // A difference that shows only with several threads or another schedule (expect_same_on_cpu()
+  // in tests/stage_test.cpp names them): reproduced with the same, and the usual causes named.
+  static const std::regex threaded(R"(run here with (\d+) threads and schedule ([\w,]+))");
+  std::smatch th;
+  std::string with;
+  if (std::regex_search(f.c.message, th, threaded)) {
+    with = " --threads " + th[1].str() + " --schedule " + th[2].str();
+    if (f.impl != "engine")  // (the race check builds stages/ or solutions/)
+      std::printf("  only with %s threads and schedule %s (with 1 thread your stage prints the "
+                  "reference's output):\n  look for a data race (./plab test --impl %s --stage %s "
+                  "--races) or a missing barrier (a nowait, a loop that reads what another loop "
+                  "still writes)\n",
+                  th[1].str().c_str(), th[2].str().c_str(), f.impl.c_str(), f.id.c_str());
+  }
   if (!std::regex_search(f.c.message, g, gen) || !std::regex_search(f.c.message, o, other)) {
     std::printf("  its scene is built in tests/stage_test.cpp (%s)\n", f.c.name.c_str());
     return;
   }
-  const std::string run = "./plab run --stage " + f.id + " --impl " + f.impl + " scene.in";
+  const std::string run = "./plab run --stage " + f.id + " --impl " + f.impl + with + " scene.in";
   const long long step = std::atoll(diff.step.c_str());
   std::printf("  reproduce it:\n    ./plab gen %s --out scene.in\n", g[1].str().c_str());
   const Explainer how = explainer(f, "scene.in");
@@ -468,6 +482,13 @@ void print_crash(const TestResult& t, const std::vector<Case>& cases, const Mani
       std::printf("  it died in case %s\n", c.name.c_str());
     break;
   }
+  // A threaded stage: threads that write one vector, or a buffer another thread reads, crash now
+  // and then, and not with one thread.
+  if (which[2].str() != "engine" &&
+      stage_declares(which[1].str(), which[2].str(), "needs_openmp") == true)
+    std::printf("  a crash that comes and goes from run to run, or goes away with --threads 1, is "
+                "often a data race: ./plab test --impl %s --stage %s --races\n",
+                which[2].str().c_str(), which[1].str().c_str());
 }
 
 /// A line per test that did not pass, its cases for a stage's test, the first failure's page.

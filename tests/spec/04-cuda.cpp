@@ -9,7 +9,7 @@ using namespace plab::spec;
 
 // The rounds on the GPU choose the greedy set for four disks in a row: (2,3) in round 1, then
 // (0,1) in round 2, once 2 and 3 are resolved.
-TEST(Stage04Spec, ChainOfPairsTakesTwoRoundsOnTheGpu) {
+TEST(Stage04Spec, ChainOfFourDisksChoosesTheGreedySetOnTheGpu) {
   PLAB_SPEC_SKIP_WITHOUT_DEVICE();
   expect_case(chain_of_four());
 }

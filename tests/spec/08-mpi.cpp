@@ -10,7 +10,7 @@ namespace {
 using namespace plab::spec;
 
 // The rounds across ranks are stage 03's rounds: four disks in a row take two rounds.
-TEST(Stage08Spec, ChainOfPairsTakesTwoRounds) { expect_case(chain_of_four()); }
+TEST(Stage08Spec, ChainOfFourDisksChoosesTheGreedySet) { expect_case(chain_of_four()); }
 
 // Three in a row: the middle pair chooses each other; the first disk is left free.
 TEST(Stage08Spec, ThreeInARow) { expect_case(three_in_a_row()); }

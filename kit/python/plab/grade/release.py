@@ -35,15 +35,17 @@ import tempfile
 # Tracked paths that are the instructor's, never a student's: the solutions, the CI, the student
 # README's own source (it becomes README.md), the instructor-only code, the instructor's README
 # (replaced), the instructor's pages (the measurement logs of the reference solutions and of the
-# kit's engine: the handouts ask the student to measure) and the similarity test's submissions
+# kit's engine: the handouts ask the student to measure; the grading mechanics: how each idea is
+# measured and what a forged count could still pass; a student's own page on how a stage is
+# graded is working.md's) and the similarity test's submissions
 # (independent stage 03 solutions), the course guide (its data and its writer), the
 # instructors' TSan runs of the engine and the solutions (tests/tsan_runs_check.py), the grader's
 # red team (its honest submissions are whole stages: answers) and the instructor-only code's own
 # tests (kit/instructor's specifications, which compile only beside it).
 INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "README.md",
                    "handouts/measurements.md", "handouts/engine.md", "handouts/engine-gpu.md",
-                   "handouts/engine-08.md", "tests/similar/", "kit/guide/",
-                   "kit/python/plab/guide.py", "tools/engine-modes.sh",
+                   "handouts/engine-08.md", "handouts/instructors.md", "tests/similar/",
+                   "kit/guide/", "kit/python/plab/guide.py", "tools/engine-modes.sh",
                    "tests/tsan_runs_check.py", "tests/grader_redteam.py", "tests/greedy_test.cpp",
                    "tests/sweep_test.cpp")
 # Files that belong to nobody's copy even when tracked by mistake: logs, build folders, scratch.
@@ -194,6 +196,23 @@ def cut_later_stages(release, through):
                 f.write_text(new)
 
 
+# A Markdown link to an instructor-only page: [text](instructors.md), [text](../handouts/engine.md).
+INSTRUCTOR_LINK = re.compile(r"\[([^\]]*)\]\((?:[\w./-]*/)?(" + "|".join(
+    re.escape(p.rsplit("/", 1)[-1]) for p in INSTRUCTOR_ONLY
+    if p.startswith("handouts/") and p.endswith(".md")) + r")(?:#[\w-]*)?\)")
+
+
+def cut_instructor_links(release):
+    """Every link in a shipped page to an instructor-only page (not shipped) becomes its text
+    followed by "(instructor's copy only)", so that the docs build without warnings and a student
+    is not sent to a page that is not there."""
+    for f in list((release / "handouts").glob("*.md")) + list((release / "docs").glob("*.md")):
+        text = f.read_text(errors="replace")
+        new = INSTRUCTOR_LINK.sub(lambda m: f"{m.group(1)} (instructor's copy only)", text)
+        if new != text:
+            f.write_text(new)
+
+
 def copy_files(kit, head, work, say, through=None):
     """Writes the files of the release (from HEAD) into work / "release"; returns (the full HEAD
     tree, the release folder)."""
@@ -228,6 +247,7 @@ def copy_files(kit, head, work, say, through=None):
         dst.parent.mkdir(parents=True, exist_ok=True)
         shutil.copy2(src, dst)
     shutil.copy2(full / STUDENT_README, release / "README.md")
+    cut_instructor_links(release)
     for why, paths in sorted(dropped.items()):
         tops = sorted({p.split("/")[0] + "/" if p.startswith(("solutions/", ".ci/")) else
                        "/".join(p.split("/")[:2]) + "/" if p.startswith("stages/") else p
