@@ -47,6 +47,33 @@ class FirstRace(unittest.TestCase):
         self.assertTrue(races.first_race(text, ["step.cpp"]).endswith("in the main thread"))
 
 
+class Location(unittest.TestCase):
+    def test_heap_block_of_the_report(self):
+        self.assertTrue(races.race_location(REPORT).startswith(
+            "an element of 8 bytes of a block of 72 bytes on the heap"))
+
+    def test_a_flag_on_the_main_threads_stack(self):
+        # A shared bool written by every thread (a missing reduction): the access's line may be
+        # the region's pragma, the location says what the variable is
+        text = ("WARNING: ThreadSanitizer: data race (pid=1)\n"
+                "  Write of size 1 at 0x7ffc by main thread:\n"
+                "    #0 .omp_outlined. step.cpp:60:1 (p+0x1)\n\n"
+                "  Previous write of size 1 at 0x7ffc by thread T2:\n"
+                "    #0 .omp_outlined. step.cpp:60:1 (p+0x1)\n\n"
+                "  Location is stack of main thread.\n\n"
+                "SUMMARY: ThreadSanitizer: data race step.cpp:60:1 in .omp_outlined.\n")
+        self.assertTrue(races.race_location(text).startswith(
+            "a local variable of 1 byte on the main thread's stack"))
+        self.assertIn("reduction", races.race_location(text))
+
+    def test_global_and_none(self):
+        text = ("WARNING: ThreadSanitizer: data race (pid=1)\n"
+                "  Read of size 4 at 0x55 by thread T1:\n"
+                "  Location is global 'counter' of size 4 at 0x55 (p+0x5)\n")
+        self.assertEqual(races.race_location(text), "the global variable 'counter' of 4 bytes")
+        self.assertIsNone(races.race_location("no race here\n"))
+
+
 class Summary(unittest.TestCase):
     def test_an_error_before_any_race(self):
         # What the grader's self-test saw: the race mutant's shared vector corrupted under TSan,

@@ -108,6 +108,9 @@ def main():
             if race:
                 report_file.write_text(run.stderr)
                 say(f"{race}")
+                variable = races.race_location(run.stderr)
+                if variable:
+                    say(f"the variable: {variable}")
                 say(f"(scene {name}, schedule {schedule}; TSan's whole report: {report_file}; "
                     f"{time.monotonic() - started:.0f} s)")
                 return 1

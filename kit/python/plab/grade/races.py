@@ -152,6 +152,38 @@ def first_race(stderr_text: str, source_names: list[str]) -> str | None:
     return message + " in " + thread
 
 
+_LOCATION = re.compile(r"^\s+Location is (?:(stack) of (main thread|thread T\d+)|(heap) block of "
+                       r"size (\d+)|(global) '([^']*)')", re.M)
+_SIZE = re.compile(r"^\s+(?:Previous )?(?:atomic )?(?:read|write) of size (\d+)", re.I | re.M)
+
+
+def race_location(stderr_text: str) -> str | None:
+    """What the first data race's variable is, from TSan's "Location is ..." line, in words a
+    student can match to the code (the access's line may be the parallel region's own when the
+    compiler moved the store), e.g. "a local variable of 1 byte on the main thread's stack: a
+    variable of the function that opens the parallel region, which every thread of the region
+    shares"; None without a race or a location."""
+    m = _RACE.search(stderr_text)
+    if not m:
+        return None
+    block = stderr_text[m.end():]
+    end = block.find("\nSUMMARY: ThreadSanitizer")
+    block = block[:end] if end >= 0 else block
+    where, size = _LOCATION.search(block), _SIZE.search(block)
+    if not where:
+        return None
+    of = f" of {size.group(1)} byte{'s' if size.group(1) != '1' else ''}" if size else ""
+    if where.group(1):
+        owner = "the main thread's" if where.group(2) == "main thread" else f"{where.group(2)}'s"
+        return (f"a local variable{of} on {owner} stack: a variable of the function that opens the "
+                "parallel region, which every thread of the region shares unless a clause says "
+                "otherwise (private, reduction)")
+    if where.group(3):
+        return (f"an element{of} of a block of {where.group(4)} bytes on the heap (an array or a "
+                "vector's storage) that two threads touch")
+    return f"the global variable '{where.group(6)}'{of}"
+
+
 def tsan_summary(stderr_text: str) -> str | None:
     """TSan's last SUMMARY line without its program path and build id, e.g.
     "ThreadSanitizer: allocation-size-too-big in operator new(unsigned long)"; None without one."""
