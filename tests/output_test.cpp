@@ -2,11 +2,13 @@
 /// \brief Output format: `%.8f` bit for bit (without printf), `-0.00000000` written as `0.00000000`.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iostream>
 #include <string>
 
 #include "plab/driver.hpp"
@@ -128,4 +130,47 @@ TEST(OutputFile, DeviceIsWrittenInPlace) {
   ASSERT_EQ(::stat("/dev/null", &st), 0);
   EXPECT_TRUE(S_ISCHR(st.st_mode)) << "/dev/null is no longer a character device";
   EXPECT_NE(::access("/dev/null.partial", F_OK), 0) << "a /dev/null.partial was left behind";
+}
+
+// What a stage prints to stdout (a student's printf or std::cout) goes to stderr once the stage
+// program has kept stdout for the output: `plab run SCENE > mine.out` holds the output alone.
+// Checked in a child process, whose stdout and stderr are pipes read here.
+TEST(OutputFile, PrintsOfTheStageGoToStderr) {
+  int out[2], err[2];
+  ASSERT_EQ(::pipe(out), 0);
+  ASSERT_EQ(::pipe(err), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::dup2(out[1], STDOUT_FILENO);
+    ::dup2(err[1], STDERR_FILENO);
+    ::close(out[0]);
+    ::close(err[0]);
+    ::close(out[1]);
+    ::close(err[1]);
+    plab::keep_stdout_for_output();
+    std::printf("a student's printf\n");
+    std::cout << "a student's cout" << std::endl;
+    plab::OutputFile o("");
+    std::fputs("0 0 1.00000000 1.00000000 0.00000000 0.00000000\n", o.get());
+    o.commit();
+    std::fflush(nullptr);
+    ::_exit(0);
+  }
+  ::close(out[1]);
+  ::close(err[1]);
+  const auto read_all = [](int fd) {
+    std::string text;
+    char buf[256];
+    for (ssize_t n; (n = ::read(fd, buf, sizeof buf)) > 0;) text.append(buf, n);
+    ::close(fd);
+    return text;
+  };
+  const std::string said = read_all(out[0]), errors = read_all(err[0]);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  EXPECT_EQ(said, "0 0 1.00000000 1.00000000 0.00000000 0.00000000\n");
+  EXPECT_NE(errors.find("a student's printf\n"), std::string::npos) << errors;
+  EXPECT_NE(errors.find("a student's cout\n"), std::string::npos) << errors;
 }

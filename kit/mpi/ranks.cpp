@@ -6,6 +6,7 @@
 /// gather, stop), and they serve those commands from plab::dist::serve(), never reading a file or
 /// printing anything.
 #include "plab/mpi/ranks.hpp"
+#include "plab/runtime.hpp"
 
 #include <sys/time.h>
 #include <unistd.h>
@@ -398,6 +399,7 @@ int serve(DistStepFn step) {
   the_step = step;
   const Ranks& r = start_mpi();
   if (r.rank == 0) return -1;  // rank 0 goes on as the runner
+  keep_stdout_for_output();    // the other ranks print no output: their stdout goes to stderr
   Run run;
   for (;;) {
     const int command = next_command(r.comm);

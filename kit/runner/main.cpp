@@ -19,6 +19,9 @@ int main(int argc, char** argv) {
   plab::runner::Options o;
   plab::runner::add_options(app, o);
   CLI11_PARSE(app, argc, argv);
+  // From here what the stage prints to stdout (a student's debugging) goes to stderr: it never
+  // mixes into the output, which alone goes to stdout.
+  plab::keep_stdout_for_output();
 
   try {
     // set-up

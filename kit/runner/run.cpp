@@ -99,7 +99,7 @@ void explain(const Options& o, const Scene& scene) {
   stage->read(p);
   const std::string said = o.json ? describe_events_json(scene.box, p, which)
                                   : describe_events(scene.box, p, which);
-  std::fputs(said.c_str(), stdout);
+  std::fputs(said.c_str(), output_stream());
 #endif
 }
 

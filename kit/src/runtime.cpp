@@ -16,9 +16,34 @@
 
 namespace plab {
 
+namespace {
+std::FILE* g_output = nullptr;  //!< the process's first stdout, kept by keep_stdout_for_output()
+}  // namespace
+
+void keep_stdout_for_output() {
+  if (g_output) return;
+  std::fflush(stdout);
+  const int fd = ::dup(STDOUT_FILENO);
+  if (fd < 0) return;
+  std::FILE* saved = ::fdopen(fd, "w");
+  if (!saved) {
+    ::close(fd);
+    return;
+  }
+  if (::dup2(STDERR_FILENO, STDOUT_FILENO) < 0) {
+    std::fclose(saved);
+    return;
+  }
+  // Line by line, as on a terminal: a print is seen when made, between the kit's own lines.
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  g_output = saved;
+}
+
+std::FILE* output_stream() { return g_output ? g_output : stdout; }
+
 OutputFile::OutputFile(const std::string& path, bool optional) : path_(path) {
-  if (path.empty()) {
-    file_ = optional ? nullptr : stdout;
+  if (path.empty() || (g_output && path == "/dev/stdout")) {
+    file_ = optional ? nullptr : output_stream();
     return;
   }
   struct stat st {};
@@ -38,7 +63,7 @@ OutputFile::~OutputFile() {
   if (!temp_.empty() && file_) {
     std::fclose(file_);
     std::remove(temp_.c_str());
-  } else if (file_ && file_ != stdout) {
+  } else if (file_ && file_ != output_stream()) {
     std::fclose(file_);  // a device written in place
   }
 }
