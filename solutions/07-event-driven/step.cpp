@@ -9,9 +9,8 @@
 //         to its end):
 //         1. each particle keeps ONE predicted event in a priority queue: its earliest wall hit,
 //            pair collision (robust contact time, model::contact_time) or cell crossing;
-//         2. pop the earliest; an event is stale when a particle in it has collided since it was
-//            predicted (per-particle collision counters): drop it, or predict again when only the
-//            partner moved on;
+//         2. pop the earliest; a pair event is stale when the partner has collided since it was
+//            predicted (per-particle collision counters): predict the particle again instead;
 //         3. particles are advanced lazily: each keeps its position at its own last event time;
 //         4. cell lists (cells at least 2r wide, crossing events) keep a prediction O(1), so an
 //            event costs O(log N), not O(N).
@@ -45,9 +44,9 @@ struct Event {
   long long cj;   //!< collisions of `j` when predicted (stale when it has changed)
 };
 
-/// The particles in a binary min-heap by the time of their one predicted event. An indexed heap:
-/// each particle sits in it once, and a new prediction moves it up or down, so the heap never
-/// holds stale entries and stays N long.
+/// The particles in a binary min-heap by the time of their one predicted event (at the same time,
+/// the lower particle first: earlier()). An indexed heap: each particle sits in it once, and a new
+/// prediction moves it up or down, so the heap never holds stale entries and stays N long.
 class EventQueue {
  public:
   explicit EventQueue(int n) : events_(n), heap_(n), at_(n) {
@@ -66,7 +65,7 @@ class EventQueue {
     // EXERCISE 1: the event queue: store the new time at the particle's place, sift up or down.
     const int k = at_[e.i];
     heap_[k].t = e.t;
-    if (k > 0 && e.t < heap_[(k - 1) / 2].t) up(k);
+    if (k > 0 && earlier(heap_[k], heap_[(k - 1) / 2])) up(k);
     else down(k);
   }
 
@@ -75,6 +74,12 @@ class EventQueue {
     double t;  //!< the event's time, kept beside the particle so that sifting reads one array
     int i;     //!< the particle
   };
+  /// The queue's order: the earlier time first and, at the same time, the lower particle. No two
+  /// entries tie (each particle is in the heap once), so every correct priority queue pops the
+  /// events in this one order, the order the golden files hold.
+  static bool earlier(const Entry& a, const Entry& b) {
+    return a.t < b.t || (a.t == b.t && a.i < b.i);
+  }
   /// Puts entry `e` at place `k` of the heap and records where its particle is.
   void put(int k, const Entry& e) {
     heap_[k] = e;
@@ -83,7 +88,7 @@ class EventQueue {
   /// Moves the entry at `k` up while it is earlier than its parent.
   void up(int k) {
     const Entry e = heap_[k];
-    for (; k > 0 && e.t < heap_[(k - 1) / 2].t; k = (k - 1) / 2) put(k, heap_[(k - 1) / 2]);
+    for (; k > 0 && earlier(e, heap_[(k - 1) / 2]); k = (k - 1) / 2) put(k, heap_[(k - 1) / 2]);
     put(k, e);
   }
   /// Moves the entry at `k` down while a child (the earlier one) is earlier.
@@ -91,8 +96,8 @@ class EventQueue {
     const Entry e = heap_[k];
     const int n = static_cast<int>(heap_.size());
     for (int c = 2 * k + 1; c < n; k = c, c = 2 * k + 1) {
-      if (c + 1 < n && heap_[c + 1].t < heap_[c].t) ++c;
-      if (!(heap_[c].t < e.t)) break;
+      if (c + 1 < n && earlier(heap_[c + 1], heap_[c])) ++c;
+      if (!earlier(heap_[c], e)) break;
       put(k, heap_[c]);
     }
     put(k, e);
@@ -230,7 +235,7 @@ class EventDriven final : public Stepper {
     cy_[i] += dy;
     insert(i);
     const Event& c = cached_[i];
-    if (c.kind == kPairHit && c.cj != hits_[c.j]) {
+    if (stale(c)) {
       predict(i);
     } else if (dx != 0) {
       cached_[i] = scan(i, cx_[i] + dx, cx_[i] + dx, cy_[i] - 1, cy_[i] + 1, c);
@@ -241,6 +246,14 @@ class EventDriven final : public Stepper {
     }
   }
 
+  /// Whether event `e` is stale: a pair event whose partner has collided since `e` was predicted
+  /// (a collision of `e.i` itself replaces its prediction at once, so only the partner's can
+  /// leave one behind). A stale event is not a collision: its particle is predicted again.
+  [[nodiscard]] bool stale(const Event& e) const {
+    // EXERCISE 2: the partner's collisions now against those when the event was predicted.
+    return e.kind == kPairHit && e.cj != hits_[e.j];
+  }
+
   /// Processes every event before time `end`, then sets the clock to `end`.
   void run_until(double end) {
     while (!queue_.empty() && queue_.top().t < end) {
@@ -248,8 +261,7 @@ class EventDriven final : public Stepper {
       if (e.t != now_) at_instant_ = 0;
       else if (++at_instant_ > 64 * particles_ + 1024) jammed();
       now_ = e.t;
-      // EXERCISE 2: a pair event whose partner has collided since it was predicted is stale.
-      if (e.kind == kPairHit && e.cj != hits_[e.j]) {  // the partner moved on: look again
+      if (stale(e)) {  // the partner moved on: look again
         predict(e.i);
         continue;
       }
@@ -274,17 +286,11 @@ class EventDriven final : public Stepper {
   /// Elastic collision of equal disks at the current time: the components of the velocities
   /// along the line of centres are exchanged, \f$ v_i \mathrel{-}= (b/d^2)\,d,\ v_j \mathrel{+}= (b/d^2)\,d \f$.
   void collide(int i, int j) {
-    // EXERCISE 3: bring both to now, then exchange the components along the line of centres.
+    // EXERCISE 3: bring both to now, then collide them there.
     advance(i, now_);
     advance(j, now_);
-    const double dx = p_.x[i] - p_.x[j];
-    const double dy = p_.y[i] - p_.y[j];
-    const double b = dx * (p_.vx[i] - p_.vx[j]) + dy * (p_.vy[i] - p_.vy[j]);
-    const double f = b / (dx * dx + dy * dy);
-    p_.vx[i] = p_.vx[i] - f * dx;
-    p_.vy[i] = p_.vy[i] - f * dy;
-    p_.vx[j] = p_.vx[j] + f * dx;
-    p_.vy[j] = p_.vy[j] + f * dy;
+    model::exchange_along_centres(p_.x[i] - p_.x[j], p_.y[i] - p_.y[j], p_.vx[i], p_.vy[i],
+                                  p_.vx[j], p_.vy[j]);
     ++p_.pc[i];
     ++p_.pc[j];
     ++hits_[i];

@@ -9,9 +9,8 @@
 //         to its end):
 //         1. each particle keeps ONE predicted event in a priority queue: its earliest wall hit,
 //            pair collision (robust contact time, model::contact_time) or cell crossing;
-//         2. pop the earliest; an event is stale when a particle in it has collided since it was
-//            predicted (per-particle collision counters): drop it, or predict again when only the
-//            partner moved on;
+//         2. pop the earliest; a pair event is stale when the partner has collided since it was
+//            predicted (per-particle collision counters): predict the particle again instead;
 //         3. particles are advanced lazily: each keeps its position at its own last event time;
 //         4. cell lists (cells at least 2r wide, crossing events) keep a prediction O(1), so an
 //            event costs O(log N), not O(N).
@@ -45,9 +44,9 @@ struct Event {
   long long cj;   //!< collisions of `j` when predicted (stale when it has changed)
 };
 
-/// The particles in a binary min-heap by the time of their one predicted event. An indexed heap:
-/// each particle sits in it once, and a new prediction moves it up or down, so the heap never
-/// holds stale entries and stays N long.
+/// The particles in a binary min-heap by the time of their one predicted event (at the same time,
+/// the lower particle first: earlier()). An indexed heap: each particle sits in it once, and a new
+/// prediction moves it up or down, so the heap never holds stale entries and stays N long.
 class EventQueue {
  public:
   explicit EventQueue(int n) : events_(n), heap_(n), at_(n) {
@@ -64,10 +63,9 @@ class EventQueue {
   void set(const Event& e) {
     events_[e.i] = e;
     // EXERCISE 1: the event queue. Particle e.i sits at heap_[at_[e.i]]: store its new time
-    // there, then restore the heap order (every parent's time <= its children's; the children of
-    // k are 2k + 1 and 2k + 2): sift it up while it is earlier than its parent, else down while a
-    // child is earlier (take the earlier child). Move entries with put(), which keeps at_ in step,
-    // so that each particle is in the heap exactly once. O(log N) per call.
+    // there, then restore the heap order (no child earlier() than its parent) in O(log N). Move
+    // entries with put(), which keeps at_ in step, so that each particle is in the heap exactly
+    // once.
     PLAB_EXERCISE(1, "the event queue: sift the changed entry up or down");
   }
 
@@ -76,6 +74,12 @@ class EventQueue {
     double t;  //!< the event's time, kept beside the particle so that sifting reads one array
     int i;     //!< the particle
   };
+  /// The queue's order: the earlier time first and, at the same time, the lower particle. No two
+  /// entries tie (each particle is in the heap once), so every correct priority queue pops the
+  /// events in this one order, the order the golden files hold.
+  static bool earlier(const Entry& a, const Entry& b) {
+    return a.t < b.t || (a.t == b.t && a.i < b.i);
+  }
   /// Puts entry `e` at place `k` of the heap and records where its particle is.
   void put(int k, const Entry& e) {
     heap_[k] = e;
@@ -156,9 +160,8 @@ class EventDriven final : public Stepper {
   }
 
   /// Predicts particle `i`'s next event and queues it. Wall and pair times are computed from the
-  /// stored states (a pair from the later of its two stored times), never from the current time:
-  /// only collisions change the stored states, so cell crossings and stale events leave no trace
-  /// in the rounding, and the cell size changes the speed, never the result.
+  /// stored states (a pair from the later of its two stored times), never from the current time
+  /// (handout 07's question 1 asks why).
   void predict(int i) {
     // Walls: the centre reaches r or L - r; both axes at the same time is a corner.
     const model::WallTimes w =
@@ -214,7 +217,7 @@ class EventDriven final : public Stepper {
     cy_[i] += dy;
     insert(i);
     const Event& c = cached_[i];
-    if (c.kind == kPairHit && c.cj != hits_[c.j]) {
+    if (stale(c)) {
       predict(i);
     } else if (dx != 0) {
       cached_[i] = scan(i, cx_[i] + dx, cx_[i] + dx, cy_[i] - 1, cy_[i] + 1, c);
@@ -225,6 +228,15 @@ class EventDriven final : public Stepper {
     }
   }
 
+  /// Whether event `e` is stale: a pair event whose partner has collided since `e` was predicted
+  /// (a collision of `e.i` itself replaces its prediction at once, so only the partner's can
+  /// leave one behind). A stale event is not a collision: its particle is predicted again.
+  [[nodiscard]] bool stale([[maybe_unused]] const Event& e) const {
+    // EXERCISE 2: in O(1), without searching the queue: what an event records when predicted
+    // (Event) against what the partner has done since (hits_).
+    PLAB_EXERCISE(2, "tell a stale event");
+  }
+
   /// Processes every event before time `end`, then sets the clock to `end`.
   void run_until(double end) {
     while (!queue_.empty() && queue_.top().t < end) {
@@ -232,9 +244,10 @@ class EventDriven final : public Stepper {
       if (e.t != now_) at_instant_ = 0;
       else if (++at_instant_ > 64 * particles_ + 1024) jammed();
       now_ = e.t;
-      // EXERCISE 2: a pair event whose partner has collided since it was predicted (its hits_
-      // changed) is stale: predict e.i again instead of colliding.
-      PLAB_EXERCISE(2, "redo the stale events");
+      if (stale(e)) {  // the partner moved on: look again
+        predict(e.i);
+        continue;
+      }
       if (e.kind == kCross) {
         cross(e.i, e.axes);
       } else if (e.kind == kWallHit) {
@@ -256,10 +269,9 @@ class EventDriven final : public Stepper {
   /// Elastic collision of equal disks at the current time: the components of the velocities
   /// along the line of centres are exchanged, \f$ v_i \mathrel{-}= (b/d^2)\,d,\ v_j \mathrel{+}= (b/d^2)\,d \f$.
   void collide(int i, int j) {
-    // EXERCISE 3: bring both to now, then exchange the velocity components along the line of
-    // centres: d = p_i - p_j, b = d . (v_i - v_j), f = b / |d|^2, v_i -= f d, v_j += f d, in
-    // that order of operations (the golden files hold its bits; positions do not move).
-    PLAB_EXERCISE(3, "the elastic collision of two disks");
+    // EXERCISE 3: the two disks are stored at their own last event times; collide them where
+    // they are now (model::exchange_along_centres() is the physics).
+    PLAB_EXERCISE(3, "the collision, where the two disks are now");
     ++p_.pc[i];
     ++p_.pc[j];
     ++hits_[i];

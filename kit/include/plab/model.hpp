@@ -323,4 +323,21 @@ PLAB_HD inline Real contact_time_from(Real t0, Real xi, Real yi, Real vxi, Real 
   return contact_time(dx, dy, vxi - vxj, vyi - vyj, r);
 }
 
+/// The elastic collision of two equal disks in contact, continuous-time variant: the velocity
+/// components along the line of centres are exchanged,
+/// \f$ b = d \cdot (v_i - v_j),\ f = b / |d|^2,\ v_i \mathrel{-}= f d,\ v_j \mathrel{+}= f d \f$
+/// with \f$ d = p_i - p_j \f$ at the contact (both centres at the same time), in this order of
+/// operations (stage 07's golden files hold its bits). It is not pair_event()'s unit-normal form:
+/// the two round differently. Positions do not move.
+template <class Real>
+PLAB_HD inline void exchange_along_centres(Real dx, Real dy, Real& vxi, Real& vyi, Real& vxj,
+                                           Real& vyj) {
+  const Real b = dx * (vxi - vxj) + dy * (vyi - vyj);
+  const Real f = b / (dx * dx + dy * dy);
+  vxi = vxi - f * dx;
+  vyi = vyi - f * dy;
+  vxj = vxj + f * dx;
+  vyj = vyj + f * dy;
+}
+
 }  // namespace plab::model

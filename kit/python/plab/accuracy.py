@@ -49,7 +49,10 @@ def run(plab, program, scene, work, tag, extra, env=None):
                          "--audit", os.path.join(work, f"{tag}.audit.json"), "--audit-log", log,
                          *extra, env=env)
     if p.returncode != 0:
-        raise RuntimeError(f"{tag}: exit {p.returncode}: {p.stderr.strip()[:300]}")
+        said = p.stderr.strip().splitlines()
+        sys.exit(f"plab accuracy: {os.path.basename(program)} stopped on {tag} (exit "
+                 f"{p.returncode}): {said[-1] if said else 'no message'}" +
+                 ("; plab accuracy needs stages 06 and 07 done" if p.returncode == 3 else ""))
     with open(rep) as f:
         report = json.load(f)
     blocks, pairs = read_output(plab, out)
@@ -87,18 +90,25 @@ def substeps(text):
     return k
 
 
-def programs(plab, stepped):
-    """(kit, stepped program, exact program): the stepped stage from the kit's engine where it has
-    that stage (its float path), else from the solutions; the manifest's exact stage from the
-    solutions. SystemExit with the reason when one cannot run."""
+def programs(plab, stepped, impl=None):
+    """(kit, stepped program, exact program, whether the stepped one has a float path): in the
+    instructor's copy the stepped stage from the kit's engine where it has that stage (its float
+    path), else from `impl`; the manifest's exact stage from `impl` (default as for plab run: the
+    solutions, or a student's own stages in a student copy). SystemExit with the reason when one
+    cannot run."""
     try:
-        engine = plab.built("engine")
-        use_engine = any(s["id"] == stepped for s in engine["stages"])
-        kit = plab.built("solution")
+        kit = plab.built(impl)
+        impl = kit["impl"]
+        use_engine = False
+        if impl == "solution":
+            try:
+                use_engine = any(s["id"] == stepped for s in plab.built("engine")["stages"])
+            except plabio.ProgramError:
+                use_engine = False
         if not kit["exact_stage"]:
             sys.exit("plab accuracy: the manifest names no exact stage")
-        return (kit, plab.stage_program(stepped, "engine" if use_engine else "solution"),
-                plab.stage_program(kit["exact_stage"], "solution"))
+        return (kit, plab.stage_program(stepped, "engine" if use_engine else impl),
+                plab.stage_program(kit["exact_stage"], impl), use_engine)
     except plabio.ProgramError as e:
         sys.exit(f"plab accuracy: {e}")
 
@@ -118,10 +128,14 @@ def main():
     ap.add_argument("--steps", type=int, help="printed steps of the generated scenes (default 8)")
     ap.add_argument("--csv", help="write the table as CSV here")
     ap.add_argument("--plot", help="draw time against error here (PNG or SVG)")
+    ap.add_argument("--impl", choices=("solution", "student"),
+                    help="whose stages 06 and 07: solution (the kit's; stage 06 from its engine, "
+                         "in double and float) or student (yours, in double); default as for "
+                         "plab run")
     ap.add_argument("--plab", help=argparse.SUPPRESS)  # the kit's plab program (plab passes it)
     args = ap.parse_args()
     plab = plabio.Plab(args.plab)
-    kit, args.stepped, args.exact = programs(plab, "06")
+    kit, args.stepped, args.exact, has_float = programs(plab, "06", args.impl)
     args.datasets = os.path.join(kit["source"], "datasets")
     args.work = os.path.join(kit["build"], "accuracy")
     args.figures = os.path.join(kit["source"], "handouts", "figures")
@@ -152,7 +166,7 @@ def main():
         gpu = None
         k = 1
         while k <= args.max_k:
-            for real in ("double", "float"):
+            for real in ("double", "float") if has_float else ("double",):
                 v = run(plab, args.stepped, scene, args.work, f"{name}.{real}.{k}",
                         ["--substeps", str(k), "--real", real], env=cpu_env)
                 variants.append((f"06 cpu {real} K={k}", v, {"k": k, "real": real, "device": "cpu"}))
