@@ -7,6 +7,7 @@ grader, long):
 - an upload with no stage in it gets a three-line message naming what was found, never a build log;
   flat files whose banners were taken out are told how to re-upload them (a student cannot pass
   --stages; the message says an instructor can);
+- a stage missing from an upload costs that stage's points only;
 - a stage the rubric does not know is a clear error, and results.json says so (never empty);
 - the hidden seed is in the summary and in results.json's extra_data, not in what students see,
   and `--seed S` replays the same hidden scenes;
@@ -155,12 +156,29 @@ def case_no_sandbox():
           "the honest stage keeps full marks")
 
 
+def case_partial():
+    # A stages/ folder without one of the stages asked for: the others are graded as usual (the
+    # kit's CMake once found a folder with no sources for it, and the whole build failed)
+    sub = scratch / "partial-upload" / "stages" / "01-naive"
+    sub.mkdir(parents=True)
+    shutil.copy2(kit / "solutions" / "01-naive" / "step.cpp", sub / "step.cpp")
+    doc, tests, done, _ = grade("partial", sub.parent.parent, "--stages", "01,02", "--no-races")
+    ones = [t for n, t in tests.items() if n.startswith("01")]
+    twos = [t for n, t in tests.items() if n.startswith("02")]
+    check("partial", ones and all(t["score"] == t["max_score"] for t in ones),
+          f"stage 01 keeps full marks ({sum(t['score'] for t in ones):g} of "
+          f"{sum(t['max_score'] for t in ones):g}) beside a stage the upload lacks")
+    check("partial", twos and all("has no stages/02-heap/" in t["output"] or
+                                  t["output"].startswith("not timed") for t in twos),
+          "every stage 02 test says the upload has no stages/02-heap/ (or is not timed)")
+
+
 shutil.rmtree(scratch, ignore_errors=True)
 scratch.mkdir(parents=True)
 try:
     only = set(sys.argv[4:])
     for name, case in (("links", case_links), ("refusals", case_refusals),
-                       ("flat", case_flat_and_replay),
+                       ("flat", case_flat_and_replay), ("partial", case_partial),
                        ("no-sandbox", case_no_sandbox)):
         if not only or name in only:
             case()

@@ -286,9 +286,12 @@ class EventDriven final : public Stepper {
   [[noreturn]] void jammed() const {
     throw InputError("stage 07: at t = " + std::to_string(now_) + " the run processed " +
                      std::to_string(at_instant_) +
-                     " events without time advancing: the scene holds disks that touch each "
-                     "other and the walls (a jammed cluster), which continuous-time hard disks "
-                     "cannot resolve. Give them a gap (the stepped stages 01-06 run this scene).");
+                     " events without time advancing: either the scene holds disks that touch "
+                     "each other and the walls (a jammed cluster), which continuous-time hard "
+                     "disks cannot resolve (give them a gap: the stepped stages 01-06 run it), "
+                     "or the stage meets the same events again and again (a collision of disks "
+                     "not brought to now, a stale event collided or dropped instead of predicted "
+                     "again): every scene of datasets/scenes runs with the kit's solution.");
   }
 
   Box box_;

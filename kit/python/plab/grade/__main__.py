@@ -158,7 +158,14 @@ def grade_one(a):
         if g is None:
             g = type("G", (), {})()
             g.results = Results(a.out, a.junit)
-        g.results.add("grader error", 0, 0, False, traceback.format_exc())
+        # Not a grade: the stages graded before the failure, summed alone, would read as full
+        # marks out of a smaller total (a stage it did not reach left out of the maximum)
+        done = [f"{t['name']}: {t['score']:g}/{t['max_score']:g}" for t in g.results.tests]
+        g.results.tests = []
+        g.results.notes.append("NOT GRADED: the grader itself failed (its error in the test "
+                               "'grader error'): grade this submission again")
+        g.results.add("grader error", 0, 0, False, traceback.format_exc() + (
+            "\nthe tests run before it (not a grade): " + "; ".join(done) if done else ""))
     finally:
         if stopped:
             if hasattr(g, "scratch") and not a.keep:

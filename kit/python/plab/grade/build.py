@@ -66,13 +66,13 @@ class Build:
         built = {}
         limit_kb = self.rubric["limits"]["source_kb"]
         for sid in sorted({s.sid for s in stages}):
+            if sid not in found:  # no folder for it: the kit's CMake would find no sources
+                built[sid] = f"the submission has no stages/{folders[sid]}/"
+                continue
             dest = src / "stages" / folders[sid]
             dest.mkdir(parents=True)
             for declared in ("CMakeLists.txt", "stage.json"):  # never theirs
                 shutil.copy2(self.kit / "stages" / folders[sid] / declared, dest)
-            if sid not in found:
-                built[sid] = f"the submission has no stages/{folders[sid]}/"
-                continue
             sources = upload.sources(found[sid])
             size = sum(f.stat().st_size for f in sources)
             if size > limit_kb * 1024:  # room for any solution, not for an embedded program
@@ -112,8 +112,10 @@ class Build:
                                 600, 2**30, memory=False)
         if conf.rc != 0 or conf.reason:
             log = pathlib.Path(conf.stdout).read_text(errors="replace") + conf.stderr
+            error = log.find("CMake Error")  # CMake's own words, not its progress lines
+            said = log[error:error + 1500] if error >= 0 else log[-1500:]
             return {sid: built.get(sid, "the kit's build could not be configured: " +
-                                   (conf.reason or log[-1500:])) for sid in folders}
+                                   (conf.reason or said)) for sid in folders}
         bin_dir = self.sandbox.shared_dir("bin")
         for sid in sorted({s.sid for s in stages}):
             if sid in built:

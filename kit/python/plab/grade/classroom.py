@@ -133,7 +133,8 @@ def stage_points(data):
 
 def flags(data):
     """Short words a TA scans for: not built, refused (goes around the kit's measurements), idea
-    missed, race, limit hit, not graded, a timing too noisy to trust."""
+    missed, a wrong output on the idea test's scene, race, limit hit, not graded, a timing too
+    noisy to trust. A test held back by another failure flags nothing of its own."""
     words = set()
     for t in data.get("tests", []):
         n, o = t.get("name", ""), t.get("output", "")
@@ -141,18 +142,26 @@ def flags(data):
             words.add("noisy")
         if t.get("status") != "failed":
             continue
+        if n == "not graded" or n == "grader error":
+            words.add("not-graded")
         if "does not compile" in o or "did not compile" in o:
             words.add("build")
+        if "data race at" in o:  # found, even where its points were held back
+            words.add("race")
+        # A test that was not run, or whose points another failure holds back (the stage's build,
+        # its idea test), flags nothing of its own (no "idea" for a stage that did not compile,
+        # no "race" for a race test held back): the failure that stopped it does
+        if o.startswith(("not run:", "counts 0 (it would earn", "not checked:",
+                         "0 points: every correctness test")):
+            continue
         if "goes around what the kit measures" in o:
             words.add("refused")
-        if "idea" in n.lower():
-            words.add("idea")
+        if "idea" in n.lower():  # a wrong output on the idea's scene is not a missed idea
+            words.add("wrong" if "differs from the reference" in o else "idea")
         if "race" in n.lower():
             words.add("race")
         if "time limit" in o or "memory limit" in o or "output limit" in o:
             words.add("limit")
-        if n == "not graded" or n == "grader error":
-            words.add("not-graded")
     return sorted(words)
 
 
@@ -272,8 +281,10 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
                 progress.tick(name, f"NO RESULTS (see students/{name}/grader.log)")
             else:
                 per = stage_points(data)
-                progress.tick(name, f"{sum(s for s, _ in per.values()):g}/"
-                                    f"{sum(m for _, m in per.values()):g} in {seconds:.0f} s")
+                progress.tick(name, (f"NOT GRADED in {seconds:.0f} s (see students/{name}/"
+                                     "results.summary.txt)") if "not-graded" in flags(data) else
+                              f"{sum(s for s, _ in per.values()):g}/"
+                              f"{sum(m for _, m in per.values()):g} in {seconds:.0f} s")
     graded = {}
     for name, _ in everyone:
         try:
