@@ -2,7 +2,8 @@
 """Checks `plab similar`: a class of stage 03 submissions written independently (the kit's
 solution and two others in tests/similar/, each checked against the golden files when written)
 with one planted copy (tests/similar/dee: bo's code with every identifier renamed, its functions
-in another order and its comments rewritten), one submission as a zip and one with no stage 03.
+in another order and its comments rewritten), one submission as a zip (with a Mac's __MACOSX
+resource forks), one with no stage 03 and one with stage 02's file flat (neither compared).
 The copy must rank first and be flagged; no independent pair may be flagged; the HTML page must
 show the pair side by side and load nothing from the network. Run by CTest (label kit).
 
@@ -29,8 +30,12 @@ for who in ("bo", "dee"):
     shutil.copy2(kit / "tests" / "similar" / who / "step.cpp", cls / who / "stages" / "03-openmp")
 (cls / "ann").mkdir()  # flat upload: the kit's own solution
 shutil.copy2(kit / "solutions" / "03-openmp" / "step.cpp", cls / "ann")
-with zipfile.ZipFile(cls / "cy.zip", "w") as z:  # a zip upload
+with zipfile.ZipFile(cls / "cy.zip", "w") as z:  # a zip upload, with a Mac's resource forks
     z.write(kit / "tests" / "similar" / "cy" / "step.cpp", "03-openmp/step.cpp")
+    z.writestr("__MACOSX/03-openmp/._step.cpp", "\x00\x05\x16\x07 resource fork")
+    z.writestr(".DS_Store", "\x00\x00\x00\x01Bud1")
+(cls / "fay").mkdir()  # stage 02's file uploaded flat (its banner says so): not stage 03's
+shutil.copy2(kit / "solutions" / "02-heap" / "step.cpp", cls / "fay")
 (cls / "eve" / "stages" / "02-heap").mkdir(parents=True)  # no stage 03: not compared
 shutil.copy2(kit / "stages" / "02-heap" / "step.cpp", cls / "eve" / "stages" / "02-heap")
 
@@ -43,6 +48,7 @@ r = json.loads(ranking.read_text())
 pairs = r["pairs"]
 assert r["submissions"] == ["ann", "bo", "cy", "dee"], r["submissions"]
 assert any("eve" in s for s in r["not_compared"]), r["not_compared"]
+assert any("fay" in s for s in r["not_compared"]), r["not_compared"]
 assert {pairs[0]["a"], pairs[0]["b"]} == {"bo", "dee"}, f"the copy is not first: {pairs[:2]}"
 assert pairs[0]["flagged"], f"the copy is not flagged: {pairs[0]}"
 honest = [p for p in pairs if {p["a"], p["b"]} != {"bo", "dee"}]

@@ -4,8 +4,9 @@ identifiers, moved functions and changed comments do not hide a copy) and the st
 point as boilerplate (the given code every student shares is ignored). Writes an offline HTML page
 with the pairs side by side, the shared code highlighted.
 
-A submission is a folder or a zip, one per student, holding the stage's files anywhere inside
-(stages/NN-name/, NN-name/, or flat). Symbolic links are never followed.
+A submission is a folder or a zip, one per student, read as `plab grade` reads an upload: the kit
+folder, a stages/ folder, a zip of either, or one stage's files flat with their banner. Symbolic
+links are never followed.
 """
 import argparse
 import html
@@ -15,11 +16,11 @@ import re
 import shutil
 import sys
 import tempfile
-import zipfile
 
 from copydetect import CopyDetector
 
 from plab import KIT
+from plab.grade import upload
 
 EXTENSIONS = (".cpp", ".cu", ".cuh", ".hpp", ".h", ".cc")
 
@@ -34,33 +35,10 @@ def stage_folder(kit, stage):
     return found[0]
 
 
-def sources_in(root, stage_name):
-    """The stage's source files of one submission: in a folder named like the stage if there is
-    one, else every source file at its top level; links are skipped."""
-    def real_files(folder):
-        return sorted(p for p in folder.iterdir()
-                      if p.is_file() and not p.is_symlink() and p.suffix in EXTENSIONS)
-    for folder in sorted(root.rglob(stage_name)):
-        if folder.is_dir() and not folder.is_symlink():
-            return real_files(folder)
-    return real_files(root)
-
-
-def unpack(entry, scratch):
-    """A submission as a folder: a zip is extracted (no links, no paths outside)."""
-    if entry.is_dir() and not entry.is_symlink():
-        return entry
-    dest = scratch / ("zip-" + entry.stem)
-    with zipfile.ZipFile(entry) as z:
-        for info in z.infolist():
-            name = pathlib.PurePosixPath(info.filename)
-            mode = info.external_attr >> 16
-            if info.is_dir() or name.is_absolute() or ".." in name.parts or (mode & 0o170000) == 0o120000:
-                continue
-            target = dest / name
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_bytes(z.read(info))
-    return dest
+def percent(x):
+    """A share as whole percent, rounded down: 74.77% shows as 74%, never as the 75% a flag at
+    75% would then seem to have missed."""
+    return f"{int(x * 100 + 1e-9)}%"
 
 
 def concatenated(files):
@@ -69,22 +47,31 @@ def concatenated(files):
 
 
 def gather(submissions, stage_name, scratch):
-    """{student: one file holding their stage's sources, in name order}."""
+    """{student: one file holding their stage's sources, in name order}, and the submissions left
+    out with why. Each upload is read as `plab grade` reads it (plab.grade.upload: a zip, the kit
+    folder, a stages/ folder, one stage's files flat with their banner; links, `__MACOSX` and
+    dot files left out), so that a flat file of another stage is never taken for this one."""
     flat = scratch / "students"
     flat.mkdir()
+    kit_folders = {d.name[:2]: d.name for d in (KIT / "stages").glob("[0-9][0-9]-*") if d.is_dir()}
+    sid = stage_name[:2]
     out = {}
     skipped = []
-    for entry in sorted(submissions.iterdir()):
+    for k, entry in enumerate(sorted(submissions.iterdir())):
         if entry.is_symlink() or not (entry.is_dir() or entry.suffix == ".zip"):
             continue
         student = re.sub(r"\.zip$", "", entry.name)
+        work = scratch / f"upload-{k}"
+        work.mkdir()
         try:
-            files = sources_in(unpack(entry, scratch), stage_name)
-        except (zipfile.BadZipFile, OSError) as e:
-            skipped.append(f"{entry.name} ({e})")
+            found, _ = upload.find_stages(entry, kit_folders, [], work)
+        except (upload.UploadError, OSError) as e:
+            skipped.append(f"{entry.name} ({str(e).splitlines()[0]})")
             continue
+        files = upload.sources(found[sid]) if sid in found else []
         if not files:
-            skipped.append(f"{entry.name} (no source file of {stage_name})")
+            skipped.append(f"{entry.name} (no source file of {stage_name}: it has "
+                           f"{', '.join(sorted(found)) or 'no stage'})")
             continue
         path = flat / f"{student}.cpp"
         path.write_text(concatenated(files))
@@ -146,14 +133,14 @@ def write_page(path, stage, files, pairs, threshold, skipped, top):
         flag = ' class="flag"' if p["score"] >= threshold else ""
         link = f'<a href="#pair{k}">{html.escape(p["a"])} / {html.escape(p["b"])}</a>' if k <= top \
             else f'{html.escape(p["a"])} / {html.escape(p["b"])}'
-        rows.append(f'<tr{flag}><td>{k}</td><td>{link}</td><td>{p["score"]:.0%}</td>'
+        rows.append(f'<tr{flag}><td>{k}</td><td>{link}</td><td>{percent(p["score"])}</td>'
                     f'<td>{p["overlap"]}</td></tr>')
         if k <= top:
             details.append(
                 f'<h2 id="pair{k}">{k}. {html.escape(p["a"])} and {html.escape(p["b"])}: '
-                f'{p["score"]:.0%}</h2><div class="pair">'
-                f'<pre><b>{html.escape(p["a"])}</b> ({p["left"][1]:.0%} of it shared)\n{p["left"][0]}</pre>'
-                f'<pre><b>{html.escape(p["b"])}</b> ({p["right"][1]:.0%} of it shared)\n{p["right"][0]}</pre>'
+                f'{percent(p["score"])}</h2><div class="pair">'
+                f'<pre><b>{html.escape(p["a"])}</b> ({percent(p["left"][1])} of it shared)\n{p["left"][0]}</pre>'
+                f'<pre><b>{html.escape(p["b"])}</b> ({percent(p["right"][1])} of it shared)\n{p["right"][0]}</pre>'
                 f'</div>')
     note = ("<p>Not compared: " + html.escape("; ".join(skipped)) + "</p>") if skipped else ""
     path.write_text(PAGE.format(stage=stage, count=len(files), npairs=len(files) * (len(files) - 1) // 2,
@@ -215,13 +202,13 @@ def main():
     print(f"{'rank':>4}  {'similarity':>10}  pair")
     for k, p in enumerate(pairs[:10], 1):
         mark = "  FLAGGED" if p["score"] >= a.threshold else ""
-        print(f"{k:>4}  {p['score']:>10.0%}  {p['a']} / {p['b']}{mark}")
+        print(f"{k:>4}  {percent(p['score']):>10}  {p['a']} / {p['b']}{mark}")
     close = [(p["b"] if p["a"] == KIT_SOLUTION else p["a"], p["score"]) for p in leaked
              if p["score"] >= a.threshold]
     if close:
         print(f"plab similar: {len(close)} submission(s) at or above {a.threshold:.0%} of the "
               f"kit's own solution (solutions/{folder.name}): "
-              + ", ".join(f"{name} {score:.0%}" for name, score in close))
+              + ", ".join(f"{name} {percent(score)}" for name, score in close))
     for s in skipped:
         print(f"not compared: {s}")
     print(f"plab similar: {sum(p['score'] >= a.threshold for p in pairs)} pair(s) at or above "
