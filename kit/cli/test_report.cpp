@@ -318,7 +318,7 @@ void explain_generated(const FirstFailure& f, const Found& diff) {
                   th[1].str().c_str(), th[2].str().c_str(), f.impl.c_str(), f.id.c_str());
   }
   if (!std::regex_search(f.c.message, g, gen) || !std::regex_search(f.c.message, o, other)) {
-    std::printf("  its scene is built in tests/stage_test.cpp (%s)\n", f.c.name.c_str());
+    std::printf("  its scene is built in the test itself (%s, in tests/)\n", f.c.name.c_str());
     return;
   }
   const std::string run = "./plab run --stage " + f.id + " --impl " + f.impl + with + " scene.in";
@@ -353,10 +353,26 @@ void explain_first(const FirstFailure& f, const Manifest& m) {
               diff->particle.empty() ? "" : (", particle " + diff->particle).c_str(),
               diff->field.c_str(), diff->expected.c_str(), diff->actual.c_str(),
               diff->lines.c_str(), ranks_of(f.c.message).c_str());
-  if (d)
+  // A test over every scene (stage 07's ExactGolden) names the scene before its difference
+  static const std::regex named(R"((?:^|\n)([\w.-]+): first difference)");
+  std::smatch s;
+  std::optional<Dataset> scene;
+  if (!d && std::regex_search(f.c.message, s, named))
+    for (const Dataset& each : m.datasets)
+      if (each.name == s[1].str()) scene = each;
+  if (d) {
     explain_golden(f, *d, m, *diff);
-  else
+  } else if (scene && m.has_exact_golden(*scene) && f.c.name.rfind("ExactGolden", 0) == 0) {
+    const std::string path = shown_path(m.scene_path(*scene));
+    const std::string golden = shown_path(m.exact_golden_path(*scene));
+    std::printf("  the scene: %s (%s)\n  reproduce it:\n    ./plab run --stage %s --impl %s %s "
+                "--out mine.out\n    ./plab diff %s mine.out\n", scene->name.c_str(),
+                scene->tests.c_str(), f.id.c_str(), f.impl.c_str(), path.c_str(), golden.c_str());
+    std::printf("  draw it:  ./plab render %s --diff %s mine.out --out %s-diff.gif\n",
+                path.c_str(), golden.c_str(), scene->name.c_str());
+  } else {
     explain_generated(f, *diff);
+  }
 }
 
 std::string lower(std::string s) {

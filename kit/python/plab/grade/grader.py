@@ -11,6 +11,7 @@ import json
 import os
 import pathlib
 import secrets
+import shutil
 import subprocess
 import tempfile
 
@@ -43,6 +44,15 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
         self.private = self.scratch / "private"  # expected outputs, hidden scenes: never mounted
         self.private.mkdir(mode=0o700)
         self.plab = self.kit_build / "bin" / "plab"
+        # The kit's own programs that a grading compares with and counts by, copied once: a
+        # rebuild of the kit during a long grading (a TA's ./plab test while a class is graded)
+        # never changes, or removes, the reference under a submission's tests.
+        self.kit_bin = self.private / "kit-bin"
+        self.kit_bin.mkdir()
+        for f in sorted((self.kit_build / "bin").glob("plab-run-*-solution")) + [
+                self.kit_build / "bin" / n for n in ("plab-rounds", "libplab-ompcount.so")]:
+            if f.is_file():
+                shutil.copy2(f, self.kit_bin / f.name)
         self.kit_programs = plabio.Plab(self.plab)  # its leaf commands: gen, diff, read
         self.manifest = json.loads((self.kit / "datasets" / "manifest.json").read_text())
         given = a.seed if a.seed is not None else os.environ.pop("PLAB_GRADE_SEED", None)
@@ -113,7 +123,7 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
 
     # -- the kit's programs ----------------------------------------------------------------------
     def solution(self, sid):
-        return self.kit_build / "bin" / f"plab-run-{sid}-solution"
+        return self.kit_bin / f"plab-run-{sid}-solution"
 
     def gpu_here(self):
         """Whether this machine has a CUDA device (the kit's stage 04 says so)."""

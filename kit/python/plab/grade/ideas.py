@@ -53,7 +53,7 @@ class Ideas:
         threads = str(idea.get("threads", st.threads))
         env = dict(st.env, OMP_WAIT_POLICY="passive") if kind == "threads" else st.env
         # Threads: the kit's counter (not the student's code) counts the OpenMP synchronisations
-        counter = (RoundsCount(self.kit_build, self.sandbox, scene)
+        counter = (RoundsCount(self.kit_bin, self.sandbox, scene)
                    if "min_syncs_per_round" in idea else None)
         if counter:
             env = dict(env, **counter.env(program))
@@ -131,7 +131,7 @@ class Ideas:
         what = f"calmer hidden scene N = {sc['n']}, L = {sc['L']}, S = {sc['steps']}"
         threads = str(idea.get("threads", st.threads))
         expected, own_seconds = self.own_run(st, scene, threads, folder / "idea-calm.out")
-        calm = RoundsCount(self.kit_build, self.sandbox, scene)
+        calm = RoundsCount(self.kit_bin, self.sandbox, scene)
         run = self.run_program(program, scene, ["--quiet", "--threads", threads, "--out",
                                                 "/plab/out/out.txt"], limit,
                                max(self.rubric["limits"]["output_min_mb"] * 2**20,

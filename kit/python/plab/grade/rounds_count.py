@@ -23,8 +23,8 @@ INSIDE = "/plab/ompcount.so"  # where the sandbox (bubblewrap) shows the library
 class RoundsCount:
     """The synchronisations of one watched run of stage 03 against the rounds its scene needs."""
 
-    def __init__(self, kit_build, sandbox, scene):
-        lib, tool = kit_build / "bin" / LIBRARY, kit_build / "bin" / "plab-rounds"
+    def __init__(self, kit_bin, sandbox, scene):
+        lib, tool = kit_bin / LIBRARY, kit_bin / "plab-rounds"  # the grading's copies
         if not lib.is_file() or not tool.is_file():
             raise RuntimeError(f"the kit's {lib.name} or {tool.name} is not built: run ./plab once "
                                "in the kit")
