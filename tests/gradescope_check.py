@@ -131,6 +131,8 @@ def check_results(path):
     assert abs(total - doc["score"]) <= 0.01 * len(tests), f"score {doc['score']} != sum {total}"
     names = {t["name"]: t for t in tests}
     assert "grader error" not in names, names.get("grader error", {}).get("output")
+    later = [n for n in names if n.split(":")[0] not in STAGES]
+    assert not later, f"plab gradescope --stages {','.join(STAGES)} graded other stages: {later[:4]}"
     for stage in STAGES:
         mine = {n: t for n, t in names.items() if n.startswith(f"{stage}:")}
         assert mine, f"no tests of stage {stage} in results.json"
@@ -150,8 +152,8 @@ def main():
     try:
         t0 = time.time()
         zip_path = scratch / "autograder.zip"
-        run([plab, "gradescope", "--out", zip_path], scratch / "gradescope.log", 300,
-            "plab gradescope")
+        run([plab, "gradescope", "--out", zip_path, "--stages", ",".join(STAGES)],
+            scratch / "gradescope.log", 300, "plab gradescope")
         check_zip(zip_path)
         fake = scratch / "autograder"
         (scratch / "tmp").mkdir(mode=0o1777)
@@ -163,6 +165,8 @@ def main():
             for f in (kit / "solutions" / folder).iterdir():
                 if f.is_file():
                     shutil.copy2(f, dest / f.name)
+        # and a later stage's untouched starting point, which the autograder's --stages leaves out
+        shutil.copytree(kit / "stages" / "03-openmp", fake / "submission" / "stages" / "03-openmp")
         (fake / "results").mkdir()
         box, hidden = sandbox(scratch)
         print(f"fake /autograder: {fake} (bwrap; the real {hidden or '(none)'} hidden)", flush=True)

@@ -4,11 +4,16 @@ ls-files`, solutions/ included: the grader needs the reference), without build t
 scratch. Gradescope unpacks the zip into /autograder/source, runs setup.sh once (packages, build,
 the kit made private to root) and run_autograder for each submission.
 
-  python3 -m plab.grade.gradescope --kit-source DIR --out ZIP
+  python3 -m plab.grade.gradescope --kit-source DIR --out ZIP [--stages 01,02,03]
+
+With --stages, run_autograder grades those stages only (one autograder per assignment);
+without, every stage the upload has.
 """
 import argparse
 import fnmatch
+import json
 import pathlib
+import re
 import stat
 import subprocess
 import sys
@@ -38,8 +43,17 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--kit-source", required=True)
     ap.add_argument("--out", required=True)
+    ap.add_argument("--stages", help="the stages run_autograder grades, e.g. 01,02,03")
     a = ap.parse_args()
     kit, out = pathlib.Path(a.kit_source).resolve(), pathlib.Path(a.out).resolve()
+    if a.stages is not None:
+        known = sorted(json.loads((kit / "kit" / "grade" / "rubric.json").read_text())["stages"])
+        asked = [s.strip() for s in a.stages.split(",") if s.strip()]
+        wrong = [s for s in asked if s not in known]
+        if not asked or wrong or not re.fullmatch(r"[\w,-]+", a.stages):
+            sys.exit(f"plab gradescope: --stages {a.stages!r}: expected stages of the rubric, "
+                     f"comma-separated ({', '.join(known)})")
+        a.stages = ",".join(asked)
     if not (kit / "solutions").is_dir():
         sys.exit("plab gradescope: this kit has no solutions/ (a student copy); the grader needs them")
     tracked = [n for n in git(kit, "ls-files", "-z").decode().split("\0") if n]
@@ -63,7 +77,17 @@ def main():
     with zipfile.ZipFile(partial, "w") as z:
         for name in ROOT_FILES:
             src = kit / "kit" / "grade" / "gradescope" / name
-            z.writestr(entry(name, 0o755, src.stat().st_mtime), src.read_bytes())
+            body = src.read_bytes()
+            if name == "run_autograder" and a.stages:
+                text = body.decode()
+                line = "exec ./plab grade --submission /autograder/submission"
+                if line not in text:
+                    sys.exit(f"plab gradescope: {src} has no line '{line} ...' to add --stages to")
+                text = text.replace(line, f"{line} --stages {a.stages}").replace(
+                    "# No --stages: every stage the submission has is graded.",
+                    f"# --stages {a.stages} (plab gradescope --stages): these stages only.")
+                body = text.encode()
+            z.writestr(entry(name, 0o755, src.stat().st_mtime), body)
         for name in files:
             path = kit / name
             st = path.stat()
@@ -71,7 +95,8 @@ def main():
             z.writestr(entry(name, mode, st.st_mtime), path.read_bytes())
     partial.replace(out)
     print(f"wrote {out}: setup.sh, run_autograder and {len(files)} files of the kit "
-          f"(git ls-files, solutions/ included)")
+          f"(git ls-files, solutions/ included); it grades "
+          + (f"stages {a.stages}" if a.stages else "every stage an upload has"))
     if skipped:
         print(f"left out: {', '.join(skipped)}")
     print("Upload it as the autograder of a Gradescope programming assignment (Ubuntu image); "
