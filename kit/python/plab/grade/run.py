@@ -147,7 +147,16 @@ class Run:
         elif setup:  # a stage with a model of its own (07): its solution (the instructor's)
             setup += (f"./plab run --stage {st.reference} --impl solution hidden.in --out "
                       f"expected.out && ")
-        lines.append(f"Reproduce: {setup}./plab run --stage {st.sid} --impl student {scene_arg} "
-                     f"--out mine.out && ./plab diff {expected_arg} mine.out")
+        # As it was run here: on its threads (a difference that only threads make may come and
+        # go from run to run) or its ranks
+        ran = (f"--ranks {st.ranks} " if st.ranks > 1 else
+               f"--threads {st.threads} " if st.threads != "1" else "")
+        lines.append(f"Reproduce: {setup}./plab run --stage {st.sid} --impl student {ran}"
+                     f"{scene_arg} --out mine.out && ./plab diff {expected_arg} mine.out")
+        if st.threads != "1" and st.ranks <= 1:
+            lines.append(f"It ran on {st.threads} threads: if that command prints the right text, "
+                         "run it again, or with --threads 3 --schedule dynamic,1 (a data race or a "
+                         "missing barrier shows in some runs only; ./plab test --impl student "
+                         f"--stage {st.sid} --races).")
         shutil.rmtree(work, ignore_errors=True)
         return "\n".join(lines)
