@@ -2,8 +2,27 @@
 /// \brief `plab test`: run the test suite with CTest.
 #include "common.hpp"
 
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
 namespace plab::cli {
 namespace {
+
+/// After a student's stage passes: the tests checked its output; the grader checks its idea too
+/// (the rubric's idea test, measured outside the student's code), which a green run says nothing
+/// about. One line, from kit/grade/rubric.json.
+void say_what_is_graded_too(const std::string& stage) {
+  std::ifstream in(fs::path(source_dir()) / "kit" / "grade" / "rubric.json");
+  const nlohmann::json rubric = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  const std::string id = two_digits(stage);
+  if (!rubric.is_object() || !rubric.contains("stages") || !rubric["stages"].contains(id)) return;
+  const nlohmann::json& idea = rubric["stages"][id].value("idea", nlohmann::json::object());
+  if (!idea.contains("what")) return;
+  std::printf("stage %s prints the reference's output. Graded too, outside your code: its idea "
+              "(%s); handouts/working.md, \"How a stage is graded\".\n",
+              id.c_str(), idea["what"].get<std::string>().c_str());
+}
 
 /// Runs `body` with TMPDIR pointing at an empty folder of the build, then checks that the tests
 /// left nothing there (a test creates its scratch files in a folder it removes, whatever the
@@ -87,6 +106,7 @@ void add_test(CLI::App& app) {
     if (!*fuzz) left_out += (left_out.empty() ? "" : "|") + std::string("fuzz");
     if (!left_out.empty()) args.insert(args.end(), {"-LE", "^(" + left_out + ")$"});
     g_status = with_scratch_tmpdir([&] { return run_tests_reported({args, log}); });
+    if (g_status == 0 && which == "student" && !stage->empty()) say_what_is_graded_too(*stage);
   });
 }
 
