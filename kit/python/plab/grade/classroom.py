@@ -131,6 +131,19 @@ def stage_points(data):
     return per
 
 
+def missing_stages(data):
+    """The stage keys of a results.json whose every test says the upload had no such stage."""
+    seen, have = set(), set()
+    for t in data.get("tests", []):
+        key = t.get("name", "").split(":")[0].strip()
+        if not key or " " in key:
+            continue
+        seen.add(key)
+        if "the submission has no stages/" not in t.get("output", ""):
+            have.add(key)
+    return seen - have
+
+
 def flags(data):
     """Short words a TA scans for: not built, refused (goes around the kit's measurements), idea
     missed, a wrong output on the idea test's scene, race, limit hit, not graded, a timing too
@@ -198,10 +211,11 @@ def write_outputs(out, rows, keys):
             continue
         img = histogram_png(vals, most, f"stage {k} (max {most:g})")
         mean = sum(vals) / len(vals)
+        handed = sum(1 for r in rows if k in r["per"] and k not in r.get("missing", ()))
         parts.append(f'<figure style="display:inline-block;margin:0.5em">'
                      f'<img src="data:image/png;base64,{img}" alt="stage {html.escape(k)}">'
-                     f"<figcaption>stage {html.escape(k)}: {len(vals)} graded, mean {mean:.1f} / "
-                     f"{most:g}</figcaption></figure>")
+                     f"<figcaption>stage {html.escape(k)}: handed in by {handed} of {len(vals)}, "
+                     f"mean {mean:.1f} / {most:g} over all {len(vals)}</figcaption></figure>")
     parts.append("</div><h2>Flags</h2><table border=1 cellpadding=3><tr><th>student</th>"
                  "<th>total</th><th>flags</th></tr>")
     for r in rows:
@@ -304,7 +318,8 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
         data = graded[name]
         per = stage_points(data)
         rows.append({"name": name, "anonymous": anonymous[name], "per": per,
-                     "total": sum(s for s, _ in per.values()), "flags": flags(data)})
+                     "total": sum(s for s, _ in per.values()), "flags": flags(data),
+                     "missing": missing_stages(data)})
     keys = sorted({k for r in rows for k in r["per"]})
     # Every row out of the same most: a stage a student did not hand in (or an upload that held
     # none) counts 0 of that stage's points, not 0 of 0 (a spreadsheet's percentage divides by it).
