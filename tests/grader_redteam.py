@@ -1019,11 +1019,12 @@ void step(const Box& box, Particles& p) {
 
 /// Stage 03's entry point"""
 
-# Stage 07: the earliest event found by a linear scan (O(N) an event), put on top of the heap.
+# Stage 07: the earliest event found by a linear scan (O(N) an event, in the queue's own order:
+# the right output), put on top of the heap.
 LINEAR_07 = """    const int k = at_[e.i];
     heap_[k].t = e.t;
     int m = 0;
-    for (int q = 1; q < static_cast<int>(heap_.size()); ++q) if (heap_[q].t < heap_[m].t) m = q;
+    for (int q = 1; q < static_cast<int>(heap_.size()); ++q) if (earlier(heap_[q], heap_[m])) m = q;
     const Entry top = heap_[0], low = heap_[m];
     put(0, low);
     put(m, top);
