@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Checks `plab grade --class` on a class of 5 stage 01 submissions (the solution as a folder and as
 a zip, the untouched starting point, one that does not compile, one flat upload): the batch is
-killed once the first student is graded, started again, and must grade only those left; then the
+killed once the first student is graded (no grader of it may go on running), started again, and
+must grade only those left (a second batch into the same folder meanwhile is refused); then the
 gradebook has one row per student with the right totals, each student has results.json, and the
 summary page shows the histogram; the leaderboard page is written and each student has an
 anonymous name there. Run by CTest (label grader).
@@ -44,11 +45,32 @@ first = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, 
 seen = []
 for line in first.stdout:
     seen.append(line.rstrip())
+    if "to grade" in line:  # a second batch into the same OUT meanwhile is refused
+        other = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+        assert other.returncode != 0 and "another grading is writing" in other.stderr, \
+            f"a second batch ran beside the first: exit {other.returncode}\n{other.stderr}"
     if "1/5" in line:
         os.killpg(first.pid, signal.SIGTERM)
         break
 first.wait(timeout=120)
 assert any("1/5" in ln for ln in seen), "the first batch never finished a student:\n" + "\n".join(seen)
+
+
+def graders_left():
+    """Processes still grading into OUT (a stopped batch must leave none: a queued student
+    started after the stop would race the resumed batch)."""
+    left = []
+    for proc in pathlib.Path("/proc").iterdir():
+        try:
+            line = (proc / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+        except OSError:
+            continue
+        if str(out) in line and "plab.grade" in line:
+            left.append(line)
+    return left
+
+
+assert not graders_left(), f"graders still running after the batch stopped: {graders_left()}"
 graded = [p.parent.name for p in out.glob("students/*/upload.sha256")]
 assert 1 <= len(graded) < 5, f"after the kill, {len(graded)} students graded: {graded}"
 

@@ -79,7 +79,9 @@ CLI::App* add_python_command(CLI::App& app, const std::string& name, const std::
     std::vector<std::string> args{"python3", "-m", module};
     for (std::string& s : fixed()) args.push_back(std::move(s));
     for (const std::string& s : c->remaining()) args.push_back(s);
-    g_status = run_program(args);
+    // In its place (exec): a signal to this process (Ctrl-C, `kill`, a timeout) reaches Python,
+    // which stops its own children, and its exit status is this command's
+    exec_program(args);
   });
   return c;
 }

@@ -44,7 +44,9 @@ void add_grade(CLI::App& app) {
       }
       args.push_back(s);
     }
-    g_status = run_program(args);
+    // In its place (exec): a signal to this process (Ctrl-C, `kill`, a timeout) reaches Python,
+    // which stops its own children, and its exit status is this command's
+    exec_program(args);
   });
 }
 

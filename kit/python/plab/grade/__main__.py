@@ -120,9 +120,9 @@ def grader_argv(a):
 
 
 class Stopped(BaseException):
-    """SIGTERM or SIGHUP arrived (a `timeout`, a closed terminal): the grading ends, its scratch
-    folder (student code, builds) is removed, and its results.json says "not graded" instead of
-    the tests run so far."""
+    """SIGTERM, SIGHUP or SIGINT arrived (a `timeout`, a closed terminal, Ctrl-C): the grading
+    ends, its scratch folder (student code, builds) is removed, and its results.json says "not
+    graded" instead of the tests run so far."""
 
 
 def _stop(signum, _frame):
@@ -210,7 +210,9 @@ def grade_one(a):
 
 
 def main(argv=None):
-    for sig in (signal.SIGTERM, signal.SIGHUP):
+    # Ctrl-C too: a grader that read it as its own failure would leave a "not graded" result
+    # that a resumed class batch keeps
+    for sig in (signal.SIGTERM, signal.SIGHUP, signal.SIGINT):
         signal.signal(sig, _stop)
     try:
         return _main(argv)

@@ -17,6 +17,7 @@ import argparse
 import base64
 import concurrent.futures
 import csv
+import fcntl
 import hashlib
 import html
 import io
@@ -94,7 +95,47 @@ class Progress:
                   f"  elapsed {clock(spent)}  ETA {clock(eta)}  {name}: {text}", flush=True)
 
 
-def grade_one(name, entry, out, grader_args, stages, jobs_cpu, key):
+class Graders:
+    """The grader processes running now, so that a stopped batch stops them too: a signal to the
+    batch alone (`kill PID`, a scheduler's timeout) reaches no child, and a queued student must
+    not start once the batch is stopping (else a resumed batch and the old one's leftovers grade
+    the same student at once)."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.running = set()
+        self.stopping = False
+
+    def start(self, cmd, **kw):
+        with self.lock:
+            if self.stopping:
+                return None
+            proc = subprocess.Popen(cmd, **kw)
+            self.running.add(proc)
+            return proc
+
+    def done(self, proc):
+        with self.lock:
+            self.running.discard(proc)
+
+    def stop(self):
+        """No new grader starts; each running one gets SIGTERM (it removes its scratch folder and
+        leaves a results.json that says "not graded") and is waited for."""
+        with self.lock:
+            self.stopping = True
+            running = list(self.running)
+        for proc in running:
+            if proc.poll() is None:
+                proc.terminate()
+        for proc in running:
+            try:
+                proc.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+
+
+def grade_one(name, entry, out, grader_args, stages, jobs_cpu, key, graders):
     """Runs one grader on one upload (`key`: its grading_key(), stored with the results);
     returns (name, results dict or None, seconds)."""
     mine = out / "students" / name
@@ -107,9 +148,15 @@ def grade_one(name, entry, out, grader_args, stages, jobs_cpu, key):
     env = dict(python_env(), PLAB_BUILD_JOBS=str(jobs_cpu))
     t0 = time.monotonic()
     with open(mine / "grader.log", "w") as log:
-        done = subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
+        proc = graders.start(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
+        if proc is None:  # the batch is stopping
+            return name, None, 0.0
+        try:
+            returncode = proc.wait()
+        finally:
+            graders.done(proc)
     seconds = time.monotonic() - t0
-    if done.returncode < 0 or done.returncode >= 128:  # stopped by a signal: graded again later
+    if returncode < 0 or returncode >= 128:  # stopped by a signal: graded again later
         return name, None, seconds
     try:
         data = json.loads(results.read_text())
@@ -263,6 +310,14 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
     except ValueError as e:
         sys.exit(f"plab grade --class: {e}")
     out.mkdir(parents=True, exist_ok=True)
+    # One batch writes OUT at a time (two would grade the same student at once): the lock is
+    # the kernel's, so a batch that was killed leaves none behind
+    lock = open(out / ".grading.lock", "w")
+    try:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        sys.exit(f"plab grade --class: another grading is writing to {out} now; wait for it to "
+                 "end (or stop it): the same command then resumes where it stopped")
     anonymous = anonymous_names(out, everyone)
     todo, done, changed = [], [], 0
     keys = {}
@@ -283,10 +338,12 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
               "other options or another rubric: graded again", flush=True)
     progress = Progress(len(everyone), len(done))
     failures = []
-    with concurrent.futures.ThreadPoolExecutor(max_workers=jobs) as pool:
+    graders = Graders()
+    pool = concurrent.futures.ThreadPoolExecutor(max_workers=jobs)
+    try:
         futures = [pool.submit(grade_one, n, e, out,
                                [*grader_args, "--leaderboard-name", anonymous[n]], stages, per_job,
-                               keys[n])
+                               keys[n], graders)
                    for n, e in todo]
         for fut in concurrent.futures.as_completed(futures):
             name, data, seconds = fut.result()
@@ -299,6 +356,11 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
                                      "results.summary.txt)") if "not-graded" in flags(data) else
                               f"{sum(s for s, _ in per.values()):g}/"
                               f"{sum(m for _, m in per.values()):g} in {seconds:.0f} s")
+    except BaseException:  # stopped (SIGTERM, Ctrl-C): no student starts, the running ones end
+        graders.stop()
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
     graded = {}
     for name, _ in everyone:
         try:

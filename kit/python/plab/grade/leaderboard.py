@@ -19,7 +19,8 @@ scores the class's performance tests again from the times in their results.json.
 import html
 import json
 import math
-import os
+
+from plab.grade.results import atomic_write
 
 #: The words of a performance test's output that the class's rescoring writes (and replaces).
 CLASS_NOTE = "\nscored against the class"
@@ -145,9 +146,7 @@ def rescore(graded, perf):
 
 def write_results(path, data):
     """Writes a results.json again (atomically)."""
-    temp = path.with_name(path.name + ".partial")
-    temp.write_text(json.dumps(data, indent=2) + "\n")
-    os.replace(temp, path)
+    atomic_write(path, json.dumps(data, indent=2) + "\n")
 
 
 def write_page(path, by_name, perf):
