@@ -2,7 +2,12 @@
 /// \brief The helpers the `plab` commands share (common.hpp).
 #include "common.hpp"
 
+#include <csignal>
 #include <cstdlib>
+#include <cstring>
+
+#include <signal.h>
+#include <unistd.h>
 
 namespace plab::cli {
 
@@ -57,10 +62,41 @@ std::string fmt_double(double v) {
   return buf;
 }
 
+namespace {
+/// The scratch files temp_path() named, as C strings a signal handler may read (no allocation).
+constexpr int kMaxTemps = 256;
+constexpr std::size_t kMaxTempPath = 1024;
+char g_temps[kMaxTemps][kMaxTempPath];
+volatile sig_atomic_t g_temp_count = 0;
+
+/// Ctrl-C, `kill` or a closed terminal while a command runs: its scratch files go (unlink is
+/// async-signal-safe; one not made yet, or removed already, is no harm), then the signal ends the
+/// process as it would have.
+extern "C" void remove_temps_and_stop(int sig) {
+  for (int i = 0; i < g_temp_count; ++i) unlink(g_temps[i]);
+  std::signal(sig, SIG_DFL);
+  raise(sig);
+}
+
+void remember_temp(const std::string& path) {
+  if (g_temp_count == 0)  // the first: a signal that would end the process removes them first
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+      struct sigaction now {};
+      if (sigaction(sig, nullptr, &now) == 0 && now.sa_handler == SIG_DFL)
+        std::signal(sig, remove_temps_and_stop);
+    }
+  if (g_temp_count >= kMaxTemps || path.size() >= kMaxTempPath) return;
+  std::memcpy(g_temps[g_temp_count], path.c_str(), path.size() + 1);
+  g_temp_count = g_temp_count + 1;
+}
+}  // namespace
+
 std::string temp_path(const std::string& stem) {
   const fs::path dir = fs::path(build_dir()) / "tmp";
   fs::create_directories(dir);
-  return (dir / (stem + "." + std::to_string(getpid()))).string();
+  const std::string path = (dir / (stem + "." + std::to_string(getpid()))).string();
+  remember_temp(path);
+  return path;
 }
 
 void write_text(const std::string& path, const std::string& text) {

@@ -49,7 +49,8 @@ std::string require_stage(const std::string& id, const std::string& impl);
 double wall_seconds(std::chrono::steady_clock::time_point t0);
 /// A double as text that reads back to the same value.
 std::string fmt_double(double v);
-/// A scratch file name in build/tmp/, unique to this process.
+/// A scratch file name in build/tmp/, unique to this process; removed if a signal (Ctrl-C, kill)
+/// ends the process.
 std::string temp_path(const std::string& stem);
 /// Writes `text` to `path` whole or not at all (plab::OutputFile).
 void write_text(const std::string& path, const std::string& text);
