@@ -16,8 +16,8 @@ plab, build = sys.argv[1], pathlib.Path(sys.argv[2])
 tmp = build / "tmp"
 # A scene big enough that the bench is still running its first repetition when the signal comes.
 bench = subprocess.Popen([plab, "bench", "--stage", "01", "--impl", "solution", "--n", "4000",
-                          "--steps", "200"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                         start_new_session=True)
+                          "--steps", "200"], stdout=subprocess.DEVNULL,
+                         stderr=subprocess.PIPE, text=True, start_new_session=True)
 mine = []
 deadline = time.time() + 60
 while not mine and time.time() < deadline and bench.poll() is None:
