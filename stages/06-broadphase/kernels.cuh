@@ -16,21 +16,6 @@ namespace plab::kernels {
 using cuda::ParticlesView;
 constexpr int kSelectThreads = 1024;  //!< the one block of select_pairs
 
-/// How far along each axis a particle of velocity (vx, vy) searches around its midpoint
-/// position: two particles that meet in a slab are at most 2r + h(|v_a| + |v_b|) apart at its
-/// midpoint (h = 1/(2K)), so within the faster one's 2r + 2h|v|.
-__device__ inline double reach_of(double vx, double vy, const Grid& g) {
-  return (g.reach + sqrt(vx * vx + vy * vy) * g.per_speed) * (1 + 1e-9);
-}
-
-/// Whether particle i files its pair with j: the faster of the two (its reach covers the other),
-/// the lower index when both are as fast; so each pair is filed once.
-__device__ inline bool files_pair(const ParticlesView& p, int i, int j) {
-  const double vi = p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i];
-  const double vj = p.vx[j] * p.vx[j] + p.vy[j] * p.vy[j];
-  return vj < vi || (vj == vi && i < j);
-}
-
 /// Particle i's wall time (model.md).
 __device__ inline double wall_of(const ParticlesView& p, const Box& box, int i) {
   return model::wall_time(p.x[i], p.y[i], p.vx[i], p.vy[i], box.L, box.r);
@@ -62,10 +47,11 @@ __global__ void start_step(int n, StepArrays a) {
 // also sets the later ones, up to start[slabs * cells], to `entries`.
 
 // EXERCISE 5: the neighbour search. Kernel `find_pairs(p, box, a, g, entries)`, a thread per
-// sorted entry (particle i, slab k): the entries of slab k in the cells within reach_of() of
-// i's midpoint (a row's cells are one run of entries). Each j that i files (files_pair()):
-// model::pair_time(), lower index first; file() it when in the step, in slab k (slab_of()) and
-// before both walls (model::before_walls(), wall_of()).
+// sorted entry (particle i, slab k): the entries of slab k in the cells within your exercise 2's
+// distance d of i's midpoint (a row's cells are one run of entries; `g.reach` and `g.per_speed`,
+// a slab's width plus rounding, are the device grid's), each pair tested by one of its two
+// particles as in exercise 2: model::pair_time(), lower index first; file() it when in the step,
+// in slab k (slab_of()) and before both walls (model::before_walls(), wall_of()).
 
 // EXERCISE 6: the sparse selection. Kernel `select_pairs(a)`, one block (nothing when
 // flags->overflow): rounds over the flags->pairs pairs of `list` until none has both particles

@@ -90,12 +90,11 @@ void BroadPhase::bin([[maybe_unused]] const Particles& p, [[maybe_unused]] int k
 void BroadPhase::search([[maybe_unused]] const Box& box, [[maybe_unused]] const Particles& p,
                         [[maybe_unused]] int k) {
   // EXERCISE 2: the neighbour search. In parallel over the entries: particle i searches every cell
-  // within d of its midpoint position along both axes (g_.indices_within()), where d covers any
-  // partner no faster than i: they are at most 2r + h(|v_i| + |v_j|) <= 2r + 2h|v_i| apart, plus
-  // the margins for rounding (g_.reach is 2r and one margin; the midpoint positions take one more
-  // g_.margin). Test each partner within d and no faster than i (equal speeds: the higher index)
-  // with model.md's pair time, and keep the event if it is in the step, before both walls and in
-  // this slab (the same pair may be near in other slabs too).
+  // within a distance d of its midpoint position along both axes (g_.indices_within()). Choose d,
+  // and which of a pair's two particles tests it, so that no pair is missed (handout 06, "What you
+  // write": fast particles and rounding included). Test each partner with model.md's pair time,
+  // and keep the event if it is in the step, before both walls and in this slab (the same pair
+  // may be near in other slabs too).
   PLAB_EXERCISE(2, "search the neighbouring cells for the pairs that meet in the slab");
 }
 
