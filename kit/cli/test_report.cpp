@@ -256,6 +256,12 @@ void explain_golden(const FirstFailure& f, const Dataset& d, const Manifest& m, 
   const std::string golden = shown_path(m.golden_path(d));
   const std::string run = "./plab run --stage " + f.id + " --impl " + f.impl + " " + scene;
   std::printf("  the scene: %s\n", d.tests.c_str());
+  // A threaded stage's race changes the output from run to run: the commands below may then
+  // print `equal`, which reads as a contradiction without this line.
+  if (f.impl != "engine" && stage_declares(f.id, f.impl, "needs_openmp") == true)
+    std::printf("  (if the commands below print `equal`, the difference comes and goes between "
+                "runs: often a data race, ./plab test --impl %s --stage %s --races)\n",
+                f.impl.c_str(), f.id.c_str());
   const long long step = std::atoll(diff.step.c_str());
   const std::string explain = std::to_string(step > 0 ? step - 1 : 0) + ":" + diff.particle;
   const Explainer how = explainer(f, scene);
@@ -491,7 +497,9 @@ void print_crash(const TestResult& t, const std::vector<Case>& cases, const Mani
     const auto d = scene_of(m, c.name);
     if (d)
       std::printf("  it died on scene %s; see it: ./plab run --stage %s --impl %s %s --out "
-                  "mine.out   (names the signal and the step)\n",
+                  "mine.out   (names the signal and the step; if that run does not crash, an "
+                  "earlier scene of the same test damaged the memory: a write past the end of an "
+                  "array, which the AddressSanitizer build of handouts/working.md names)\n",
                   d->name.c_str(), which[1].str().c_str(), which[2].str().c_str(),
                   shown_path(m.scene_path(*d)).c_str());
     else

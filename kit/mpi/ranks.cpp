@@ -18,6 +18,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <stdexcept>
 #include <utility>
 
@@ -183,8 +184,11 @@ int status_of(const std::exception& e) {
     std::fprintf(stderr, "%s%s\n", status_of(e) == 2 ? "error: " : "", e.what());
   else if (status_of(e) == 3)
     usleep(500000);  // rank 0 meets the same unfinished exercise: let it say so first
-  else
-    std::fprintf(stderr, "stage 08, rank %d: %s\n", r.rank, e.what());
+  else {  // "stage 08, rank 2: after a step ...", not "stage 08, rank 2: stage 08: after ..."
+    const char* what = e.what();
+    if (std::strncmp(what, "stage 08: ", 10) == 0) what += 10;
+    std::fprintf(stderr, "stage 08, rank %d: %s\n", r.rank, what);
+  }
   std::fflush(stderr);
   MPI_Abort(r.comm, status_of(e));
   std::abort();
