@@ -113,7 +113,18 @@ class Progress {
 
 /// The exit status, with a message when a signal ended the program.
 int report_end(int status, const RunWatch& w, const Steps& s) {
-  if (!WIFSIGNALED(status)) return WEXITSTATUS(status);
+  if (!WIFSIGNALED(status)) {
+    const int code = WEXITSTATUS(status);
+    // mpirun passes a rank's death by a signal on as 128 + its number, after its own report
+    // (a backtrace a rank): the kit's one line says what it was and when.
+    if (w.ranks > 1 && code > 128 && code < 128 + NSIG && code - 128 != SIGPIPE) {
+      const char* abbrev = sigabbrev_np(code - 128);
+      std::fprintf(stderr, "plab run: %s: a rank crashed: SIG%s (%s) %s (mpirun's report of it "
+                   "above)\n", w.label.c_str(), abbrev ? abbrev : "?", strsignal(code - 128),
+                   where(s).c_str());
+    }
+    return code;
+  }
   const int sig = WTERMSIG(status);
   if (sig == SIGPIPE) return 128 + sig;  // its reader stopped reading (`| head`): not a crash
   const char* abbrev = sigabbrev_np(sig);
