@@ -188,17 +188,25 @@ void print_cases(const std::vector<Case>& cases, const Manifest& m) {
 
 /// One line for a test that is not per scene: how many cases failed, and the first one.
 void print_summary(const std::string& head, const std::vector<Case>& cases) {
-  int failed = 0, skipped = 0;
+  int failed = 0, skipped = 0, after_stall = 0;
   const Case* first = nullptr;
   for (const Case& c : cases) {
     if (c.status == "failed" && failed++ == 0) first = &c;
     skipped += c.status == "skipped";
+    // (tests/stage_test.cpp's PLAB_SKIP_AFTER_STALL: the cases after ranks that waited for ever)
+    after_stall +=
+        c.status == "skipped" && c.message.find("ranks waited for ever") != std::string::npos;
   }
   std::string what;
   if (first) {
     const auto f = find_difference(first->message);
+    const std::string why =
+        after_stall > 0 ? ", " + std::to_string(after_stall) +
+                              " of them not run once ranks had waited for ever"
+                        : "";
     what = ": " + std::to_string(failed) + " of " + std::to_string(cases.size()) +
-           " cases failed" + (skipped ? " (" + std::to_string(skipped) + " skipped)" : "") +
+           " cases failed" +
+           (skipped ? " (" + std::to_string(skipped) + " skipped" + why + ")" : "") +
            ", first " + first->name + ": " +
            (f ? "step " + f->step + (f->particle.empty() ? "" : ", particle " + f->particle) +
                     ", " + f->field + ranks_of(first->message)
