@@ -68,28 +68,56 @@ constexpr int kMaxTemps = 256;
 constexpr std::size_t kMaxTempPath = 1024;
 char g_temps[kMaxTemps][kMaxTempPath];
 volatile sig_atomic_t g_temp_count = 0;
+/// The programs started and not yet waited for (remember_child()); 0: a free place.
+constexpr int kMaxChildren = 64;
+volatile pid_t g_children[kMaxChildren] = {};
 
-/// Ctrl-C, `kill` or a closed terminal while a command runs: its scratch files go (unlink is
-/// async-signal-safe; one not made yet, or removed already, is no harm), then the signal ends the
-/// process as it would have.
-extern "C" void remove_temps_and_stop(int sig) {
+/// Ctrl-C, `kill` or a closed terminal while a command runs: the programs it started get the same
+/// signal (a `kill` of this process alone would leave them running), its scratch files go (kill
+/// and unlink are async-signal-safe; a file not made yet, or removed already, is no harm), then
+/// the signal ends the process as it would have.
+extern "C" void stop_children_remove_temps(int sig) {
+  for (int i = 0; i < kMaxChildren; ++i)
+    if (g_children[i] > 0) kill(g_children[i], sig);
   for (int i = 0; i < g_temp_count; ++i) unlink(g_temps[i]);
   std::signal(sig, SIG_DFL);
   raise(sig);
 }
 
+/// Installs the handler once, for the signals that would end the process (not where they are
+/// ignored, as for a command started in the background by a script).
+void handle_stop_signals() {
+  static bool installed = false;
+  if (installed) return;
+  installed = true;
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction now {};
+    if (sigaction(sig, nullptr, &now) == 0 && now.sa_handler == SIG_DFL)
+      std::signal(sig, stop_children_remove_temps);
+  }
+}
+
 void remember_temp(const std::string& path) {
-  if (g_temp_count == 0)  // the first: a signal that would end the process removes them first
-    for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
-      struct sigaction now {};
-      if (sigaction(sig, nullptr, &now) == 0 && now.sa_handler == SIG_DFL)
-        std::signal(sig, remove_temps_and_stop);
-    }
+  handle_stop_signals();
   if (g_temp_count >= kMaxTemps || path.size() >= kMaxTempPath) return;
   std::memcpy(g_temps[g_temp_count], path.c_str(), path.size() + 1);
   g_temp_count = g_temp_count + 1;
 }
 }  // namespace
+
+void remember_child(pid_t pid) {
+  handle_stop_signals();
+  for (int i = 0; i < kMaxChildren; ++i)
+    if (g_children[i] == 0) {
+      g_children[i] = pid;
+      return;
+    }
+}
+
+void forget_child(pid_t pid) {
+  for (int i = 0; i < kMaxChildren; ++i)
+    if (g_children[i] == pid) g_children[i] = 0;
+}
 
 std::string temp_path(const std::string& stem) {
   const fs::path dir = fs::path(build_dir()) / "tmp";

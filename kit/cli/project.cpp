@@ -129,7 +129,9 @@ pid_t start_program(const std::vector<std::string>& args, const std::string& std
   auto argv = argv_of(args);
   const int rc = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
-  return rc == 0 ? pid : -1;
+  if (rc != 0) return -1;
+  remember_child(pid);
+  return pid;
 }
 
 /// Waits for a program start_program() started: its exit status as run_program() gives it.
@@ -138,6 +140,7 @@ int wait_program(pid_t pid) {
   int status = 0;
   while (waitpid(pid, &status, 0) < 0) {
   }
+  forget_child(pid);
   if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
   return WEXITSTATUS(status);
 }

@@ -2,8 +2,9 @@
 /// \brief Where things are (source tree, build tree, stage programs) and running other programs.
 #pragma once
 
-#include <nlohmann/json.hpp>
+#include <sys/types.h>
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -71,5 +72,9 @@ int run_program(const std::vector<std::string>& args, const std::string& stdout_
 std::vector<int> run_programs(const std::vector<std::vector<std::string>>& programs);
 /// Replaces this process with the program (does not return unless it fails).
 [[noreturn]] void exec_program(const std::vector<std::string>& args);
+/// A program this command started (its process id): a signal that ends the command (Ctrl-C,
+/// `kill`) is passed on to it until forget_child() (once it has been waited for). In common.cpp.
+void remember_child(pid_t pid);
+void forget_child(pid_t pid);
 
 }  // namespace plab::cli
