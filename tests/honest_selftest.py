@@ -8,6 +8,7 @@ breaks the student's stage in the ways students do and checks what `plab test` a
     compiler's first error (file:line), and its last good binary is not tested; fixed, it passes;
   * an endless loop (`break` turned into `continue`) ends within its limit, naming the scene and
     the step; `plab run --timeout` ends it too, nothing left running;
+  * the untouched starting point says once that its exercise is not done, in its own words;
   * a test that checked no case (no reference stage to compare with) is counted as skipped;
   * a wrong comparison (model::key_less's arguments swapped) gives a report of at most 40 lines
     with the commands that reproduce and draw the first difference.
@@ -127,6 +128,16 @@ def endless_loop():
     check("... and nothing is left running", not leftovers(), "\n".join(leftovers()))
 
 
+def not_done():
+    rc, out = plab("test", "--impl", "student", "--stage", "01")  # the untouched starting point
+    said = re.findall(r"stage 01: EXERCISE 1 \([^)]+\) is not done yet", out)
+    check("an untouched starting point fails, saying what is not done", rc != 0 and said, out)
+    check("... once for all its golden scenes, not once a scene",
+          re.search(r"all \d+ scenes failed: stage 01: EXERCISE 1", out) and len(said) <= 6, out)
+    check("... in its own words (not GoogleTest's 'C++ exception with description')",
+          "C++ exception" not in out, out)
+
+
 def skip_is_skip():
     STEP.write_text(SOLUTION)
     rc, out = plab("test", "--impl", "student", "--stage", "01")
@@ -154,7 +165,7 @@ def short_report():
 def main():
     try:
         make_copy()
-        for part in (broken_compile, endless_loop, skip_is_skip, short_report):
+        for part in (not_done, broken_compile, endless_loop, skip_is_skip, short_report):
             part()
     finally:
         for line in leftovers():

@@ -140,6 +140,8 @@ void add_bench(CLI::App& app) {
     }
     csv.pop_back();
     csv += ",ceiling,ceiling_slowest\n";
+    // A stage that is not there or not built is said before the table starts (not under its head).
+    for (const std::string& raw : a->stages) require_stage(two_digits(raw), impl);
     std::printf("%-5s %6s %5s %7s %-11s %10s %9s %8s %10s %9s  %s\n", "stage", "N", "S",
                 by_ranks ? "ranks" : "threads",
                 "schedule", "median s", "spread", "speedup", "in steps", "ms/step", "device");
