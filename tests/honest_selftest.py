@@ -9,6 +9,7 @@ breaks the student's stage in the ways students do and checks what `plab test` a
   * an endless loop (`break` turned into `continue`) ends within its limit, naming the scene and
     the step; `plab run --timeout` ends it too, nothing left running;
   * the untouched starting point says once that its exercise is not done, in its own words;
+  * a stage that starts another program (the compiled reference) is refused by its first test;
   * a test that checked no case (no reference stage to compare with) is counted as skipped;
   * a wrong comparison (model::key_less's arguments swapped) gives a report of at most 40 lines
     with the commands that reproduce and draw the first difference.
@@ -138,6 +139,16 @@ def not_done():
           "C++ exception" not in out, out)
 
 
+def reference_refused():
+    # the shortcut a student found: the step asks the compiled reference for each step's events
+    STEP.write_text('#include <cstdlib>\nstatic const int asked = std::system('
+                    '"kit/reference/bin/plab-reference s.in --explain 0:0 --json");\n' + SOLUTION)
+    rc, out = plab("test", "--impl", "student", "--stage", "01")
+    check("a stage that starts another program is refused before any test runs it",
+          rc != 0 and "stage 01 is refused, as the grader refuses it" in out and
+          "step.cpp calls system" in out and re.search(r"\b4 not run\b", out), out)
+
+
 def skip_is_skip():
     STEP.write_text(SOLUTION)
     rc, out = plab("test", "--impl", "student", "--stage", "01")
@@ -165,7 +176,7 @@ def short_report():
 def main():
     try:
         make_copy()
-        for part in (not_done, broken_compile, endless_loop, skip_is_skip, short_report):
+        for part in (not_done, reference_refused, broken_compile, endless_loop, skip_is_skip, short_report):
             part()
     finally:
         for line in leftovers():

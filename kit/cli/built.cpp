@@ -1,5 +1,6 @@
 /// \file cli/built.cpp
-/// \brief `plab built`: is a stage built from its current code? With `--json`, the kit's stages,
+/// \brief `plab built`: is a stage built from its current code, and does its compiled code pass the
+/// grader's reading of it (plab.grade.symbols)? With `--json`, the kit's stages,
 /// their programs and folders as JSON: how the kit's Python commands (`plab stress`, `plab
 /// accuracy`) find the programs they run, with the same checks as every other command.
 #include "common.hpp"
@@ -67,6 +68,19 @@ void add_built(CLI::App& app) {
     if (ids->size() != 1) throw std::runtime_error("built: name one stage (--stage NN)");
     const std::string id = two_digits(ids->front());
     const std::string problem = stage_build_problem(id, which, *targets);
+    if (problem.empty() && which != "engine") {
+      // The grader's reading of the stage's objects (plab.grade.symbols): a stage that runs the
+      // reference program or another stage, or goes around what the kit measures, is refused
+      // here as it is there, before any test runs it.
+      const Captured calls =
+          capture_program({"python3", "-m", "plab.grade.symbols", "--kit", source_dir(), "--build",
+                           build_dir(), "--stage", id, "--impl", which});
+      if (calls.status != 0) {
+        std::printf("%s", calls.text.c_str());
+        g_status = 1;
+        return;
+      }
+    }
     if (problem.empty()) {
       std::printf("stage %s (%s) is built from its current code\n", id.c_str(), which.c_str());
       return;

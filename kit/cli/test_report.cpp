@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -243,7 +244,8 @@ std::string stop_message(const std::string& output) {
   for (const std::string& line : lines_of(output)) {
     if (line.find("an endless loop?") != std::string::npos ||
         line.find("did not compile") != std::string::npos ||
-        line.find("is not built from its current code") != std::string::npos)
+        line.find("is not built from its current code") != std::string::npos ||
+        line.find("is refused, as the grader refuses it") != std::string::npos)
       return line;
     const std::size_t at = line.find(what);
     if (at != std::string::npos) {
@@ -387,6 +389,17 @@ void explain_first(const FirstFailure& f, const Manifest& m) {
               diff->particle.empty() ? "" : (", particle " + diff->particle).c_str(),
               diff->field.c_str(), diff->expected.c_str(), diff->actual.c_str(),
               diff->lines.c_str(), ranks_of(f.c.message).c_str());
+  // At the first wrong step, a value off by its last printed digit is rounding, not logic: the
+  // handouts' "What to steer away from" (a formula typed again, operations in another order).
+  char* end_e = nullptr;
+  char* end_a = nullptr;
+  const double e = std::strtod(diff->expected.c_str(), &end_e);
+  const double a = std::strtod(diff->actual.c_str(), &end_a);
+  if (end_e && *end_e == '\0' && end_a && *end_a == '\0' && e != a && std::isfinite(e) &&
+      std::isfinite(a) && std::fabs(e - a) <= 1e-6 * std::max(std::fabs(e), std::fabs(a)))
+    std::printf("  the two differ only in their last digits: rounding, not the logic. A formula "
+                "typed again instead of called from kit/include/plab/model.hpp, or its operations "
+                "in another order, or contracted into an FMA (handouts/model.md, Why every stage prints the same bits)\n");
   // A test over every scene (stage 07's ExactGolden) names the scene before its difference
   static const std::regex named(R"((?:^|\n)([\w.-]+): first difference)");
   std::smatch s;

@@ -38,15 +38,7 @@ class Build:
     def refused_calls(self, sid):
         """The groups of calls (symbols.CALL_GROUPS) that the rubric's entries of stage folder
         `sid` refuse in its code (`refuse_calls`)."""
-        groups = []
-        for key, conf in self.rubric["stages"].items():
-            if conf.get("folder", key) == sid:
-                groups += [g for g in conf.get("refuse_calls", []) if g not in groups]
-        unknown = [g for g in groups if g not in symbols.CALL_GROUPS]
-        if unknown:
-            raise ValueError(f"rubric: stage {sid}'s refuse_calls names {unknown}, not one of "
-                             f"{sorted(symbols.CALL_GROUPS)}")
-        return groups
+        return symbols.refused_groups(self.rubric, sid)
 
     def build(self, stages, found):
         """Builds each stage's program from the submission's sources and the kit's own CMake, kit

@@ -333,8 +333,10 @@ def main():
         fail(f"{out} exists and is not empty; name a new folder")
     if out.is_relative_to(kit):
         fail("write the release outside the kit's own folder")
-    if not out.parent.is_dir():
-        fail(f"{out.parent} does not exist")
+    try:  # its parents made, as `mkdir -p` would: a student copy's place is often new
+        out.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        fail(f"cannot make {out.parent}: {e.strerror}")
     inside = subprocess.run(["git", "-C", str(kit), "rev-parse", "--show-toplevel"],
                             capture_output=True, text=True)
     if inside.returncode != 0 or pathlib.Path(inside.stdout.strip()).resolve() != kit:

@@ -13,6 +13,9 @@ counts as not compiling, with the reason):
     GOMP_*, omp_*, kmp_*, __kmpc_*, cuda*, cu* of the driver, cupti*): it would replace the
     library's own, and the kit's layer with it;
   - calls CUPTI (cupti*), the interface the kit's GPU trace is written with;
+  - starts another program (fork, exec*, posix_spawn, system, popen, a raw syscall): a stage
+    that runs the compiled reference (`--explain --json` answers every step) or another stage
+    does none of its own work;
   - looks a symbol up by name (dlopen, dlsym, dlvsym) from C++ code: the only way left to reach a
     library's function without naming it. CUDA objects (*.cu.o) are left out of this rule: the
     CUDA runtime's own start-up code, compiled into every one, calls them;
@@ -36,8 +39,12 @@ start no thread or process (work beside a rank's MPI wait).
 The names are read from the symbol tables the compiler wrote, so a macro or a wrapper in the
 source does not hide them. What stays open is said in handouts/instructors.md.
 """
+import argparse
+import json
+import pathlib
 import re
 import subprocess
+import sys
 
 # (pattern, kind of symbol: "U" undefined (called) or "D" defined and global, reason, whether
 # CUDA objects are left out)
@@ -56,6 +63,10 @@ RULES = [
     (re.compile(r"(dlopen|dlsym|dlvsym|dlmopen)$"), "U",
      "calls {name}: looking functions up by name passes by the kit's measurements; call them "
      "by name in the code", True),
+    (re.compile(r"(fork|vfork|clone|clone3|execve|execveat|fexecve|execv|execvp|execvpe|execl|"
+                r"execlp|execle|posix_spawn|posix_spawnp|system|popen|syscall)$"), "U",
+     "calls {name}: a stage starts no other program (a step is the stage's own work: the kit's "
+     "reference program, its --explain and the other stages are not part of an answer)", False),
 ]
 GLOBAL = set("TWDBRVGSiu")  # nm -P types of a global symbol the object defines
 
@@ -199,3 +210,54 @@ def check(archive, mpi_library=None, refuse_calls=()):
         mpi_kit = {f[0] for f in (ln.partition(": ")[2].split() for ln in kit_lines)
                    if len(f) >= 2 and f[0].startswith("MPI_") and f[1] in GLOBAL}
     return problems(lines, mpi_kit, refuse_calls)
+
+
+def refused_groups(rubric, sid):
+    """The groups of calls (CALL_GROUPS) that the rubric's entries of stage folder `sid` refuse in
+    its code (`refuse_calls`)."""
+    groups = []
+    for key, conf in rubric["stages"].items():
+        if conf.get("folder", key) == sid:
+            groups += [g for g in conf.get("refuse_calls", []) if g not in groups]
+    unknown = [g for g in groups if g not in CALL_GROUPS]
+    if unknown:
+        raise ValueError(f"rubric: stage {sid}'s refuse_calls names {unknown}, not one of "
+                         f"{sorted(CALL_GROUPS)}")
+    return groups
+
+
+def main(argv=None):
+    """`python3 -m plab.grade.symbols --kit SRC --build BUILD --stage NN --impl IMPL`: the checks
+    the grader makes of a stage's compiled objects, on this copy's build (what `plab built`, every
+    stage test's first check, runs): the reasons on stdout and exit 1, or exit 0."""
+    ap = argparse.ArgumentParser(prog="plab.grade.symbols", description=main.__doc__)
+    ap.add_argument("--kit", required=True, type=pathlib.Path, help="the kit's source folder")
+    ap.add_argument("--build", required=True, type=pathlib.Path, help="its build folder")
+    ap.add_argument("--stage", required=True, help="the stage's number, e.g. 01")
+    ap.add_argument("--impl", default="student", choices=("student", "solution"))
+    a = ap.parse_args(argv)
+    tree = "stages" if a.impl == "student" else "solutions"
+    folders = sorted((a.kit / tree).glob(a.stage + "-*"))
+    if not folders:
+        print(f"there is no stage {a.stage} in {tree}/")
+        return 1
+    folder = folders[0]
+    rubric = json.loads((a.kit / "kit" / "grade" / "rubric.json").read_text())
+    try:
+        needs_mpi = bool(json.loads((folder / "stage.json").read_text()).get("needs_mpi"))
+    except (OSError, ValueError):
+        needs_mpi = False
+    refused = check(a.build / tree / folder.name / f"libplab_stage_{a.stage}_{a.impl}.a",
+                    a.build / "kit" / "libplab_mpi.a" if needs_mpi else None,
+                    refused_groups(rubric, a.stage))
+    if not refused:
+        return 0
+    print(f"stage {a.stage} is refused, as the grader refuses it (handouts/working.md, How a stage "
+          f"is graded): {refused[0]}")
+    for line in refused[1:10]:
+        print("  and " + line)
+    return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
