@@ -527,8 +527,11 @@ def scored_nothing(name, tests, stage, attack):
 
 
 def case_copy():
+    # (the rubric's refused calls left out: run-solution starts programs, and the sandbox is what
+    # is tested here; with them it is refused before it runs, case oracle)
     tests, doc, _ = grade("redteam-copy", submission("redteam-copy", {
-        "01": "read-golden", "02": "run-solution", "03": "include-path"}))
+        "01": "read-golden", "02": "run-solution", "03": "include-path"}), "01,02,03",
+        "--rubric", str(without_refused_calls()))
     for stage, attack in (("01", "read-golden"), ("02", "run-solution"), ("03", "include-path")):
         scored_nothing("copy", tests, stage, attack)
     print("     read-golden said: " + first_output(tests, "01")[-150:])
@@ -578,7 +581,7 @@ def case_escape():
 
 def case_processes():
     tests, doc, _ = grade("redteam-processes", submission("redteam-processes", {
-        "01": "fork-bomb", "03": "daemon"}))
+        "01": "fork-bomb", "03": "daemon"}), "01,02,03", "--rubric", str(without_refused_calls()))
     scored_nothing("processes", tests, "01", "fork-bomb")
     scored_nothing("processes", tests, "03", "daemon")
     honest = correctness(tests, "02")
@@ -592,19 +595,28 @@ def case_processes():
 
 
 def case_oracle():
-    """The kit's own oracle: a graded build has none to call or include."""
-    tests, doc, _ = grade("redteam-oracle", submission("redteam-oracle", {"02": "call-oracle"}),
-                          "02")
+    """The kit's own oracle: a graded build has none to call or include; and a stage that starts
+    another program (the compiled reference's --explain, another stage) is refused before it runs
+    (the rubric's refuse_calls: processes)."""
+    tests, doc, _ = grade("redteam-oracle", submission("redteam-oracle", {
+        "02": "call-oracle", "03": "run-solution"}), "02,03")
     got = sum(t["score"] for t in correctness(tests, "02").values())
     said = next((t["output"] for t in correctness(tests, "02").values()), "")
     check("call-oracle", got == 0 and "does not compile" in said,
           f"stage 02 scored {got} on correctness and did not build: {said.splitlines()[:2]}")
     print("     call-oracle: " + " ".join(said.splitlines()[:2])[:150])
+    got = sum(t["score"] for t in correctness(tests, "03").values())
+    said = next((t["output"] for t in correctness(tests, "03").values()), "")
+    check("run-solution", got == 0 and "is refused" in said and "starts no other program" in said,
+          f"stage 03 that runs another program scored {got} and was refused before it ran: "
+          f"{said.splitlines()[:2]}")
+    print("     run-solution, the rubric's refused calls kept: " + " ".join(said.splitlines()[:2])[:150])
 
 
 def without_refused_calls():
-    """rubric.json without its entries' `refuse_calls`: stage 08's before-main (which opens files
-    and starts processes) then runs, so that the sandbox alone is what stops it."""
+    """rubric.json without its entries' `refuse_calls`: the attacks that start programs (and
+    stage 08's before-main, which opens files) then run, so that the sandbox alone is what stops
+    them."""
     rubric = json.loads((kit / "kit/grade/rubric.json").read_text())
     for conf in rubric["stages"].values():
         conf.pop("refuse_calls", None)

@@ -39,6 +39,13 @@ CASES = [
     ("the engine's driver that does not check the slabs", "step.cpp.o",
      "namespace plab::dist { int mpi_stage_any_cut(int); }\nint f() { return plab::dist::mpi_stage_any_cut(1); }",
      "calls the instructor's engine's driver (mpi_stage_any_cut)"),
+    ("dlsym in a CUDA object (the runtime's start-up code)", "step.cu.o",
+     '#include <dlfcn.h>\nvoid* f() { return dlsym(RTLD_NEXT, "x"); }', None),
+]
+
+
+# Stages 01 to 07's refused group (rubric.json's refuse_calls: processes): no other program.
+PROCESS_CASES = [
     ("the compiled reference run from the step (--explain --json: every step's answer)", "step.cpp.o",
      '#include <cstdlib>\nint f() { return std::system("kit/reference/bin/plab-reference s.in --explain 0:0 --json"); }',
      "step.cpp calls system: a stage starts no other program"),
@@ -50,8 +57,6 @@ CASES = [
      "calls posix_spawn"),
     ("fork in a CUDA stage's host code", "step.cu.o", '#include <unistd.h>\nint f() { return fork(); }',
      "calls fork: a stage starts no other program"),
-    ("dlsym in a CUDA object (the runtime's start-up code)", "step.cu.o",
-     '#include <dlfcn.h>\nvoid* f() { return dlsym(RTLD_NEXT, "x"); }', None),
 ]
 
 
@@ -123,6 +128,12 @@ try:
         print(f"{'ok  ' if ok else 'FAIL'} {name}: {said or 'let through'}")
         if not ok:
             failures.append(name)
+    for name, member, source, expected in PROCESS_CASES:
+        said = symbols.check(library(work, member, source), None, ("processes",))
+        ok = any(expected in s for s in said)
+        print(f"{'ok  ' if ok else 'FAIL'} stages 01-07's refused calls: {name}: {said or 'let through'}")
+        if not ok:
+            failures.append(f"processes: {name}")
     kit_mpi = library(work, "ranks.cpp.o", MPI_KIT).rename(work / "libplab_mpi.a")
     for name, source, expected in MPI_CASES:
         said = symbols.check(library(work, "step.cpp.o", source), kit_mpi)
@@ -164,4 +175,4 @@ finally:
     shutil.rmtree(work, ignore_errors=True)
 if failures:
     sys.exit("symbols check FAILED: " + "; ".join(failures))
-print(f"{len(CASES) + len(MPI_CASES) + len(GROUP_CASES) + 1} objects judged as expected")
+print(f"{len(CASES) + len(PROCESS_CASES) + len(MPI_CASES) + len(GROUP_CASES) + 1} objects judged as expected")

@@ -2,6 +2,8 @@
 /// \brief The helpers the `plab` commands share (common.hpp).
 #include "common.hpp"
 
+#include <charconv>
+
 #include <csignal>
 #include <cstdlib>
 #include <cstring>
@@ -60,6 +62,34 @@ std::string fmt_double(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.17g", v);
   return buf;
+}
+
+/// The kind of a file from its first line: `STEP INDEX wall|pair` is an events file, `STEP HASH`
+/// (16 hex digits) a digest file, 6 or 8 numbers an output, anything else a scene (whose parser
+/// then says what is wrong). An empty text has no kind (an events file may be empty: give --kind).
+std::string detect_kind(std::string_view text, const std::string& file) {
+  const std::string_view first = text.substr(0, text.find('\n'));
+  std::vector<std::string_view> words;
+  for (std::size_t i = 0; i < first.size();) {
+    while (i < first.size() && (first[i] == ' ' || first[i] == '\t' || first[i] == '\r')) ++i;
+    const std::size_t start = i;
+    while (i < first.size() && first[i] != ' ' && first[i] != '\t' && first[i] != '\r') ++i;
+    if (i > start) words.push_back(first.substr(start, i - start));
+  }
+  if (text.find_first_not_of(" \t\r\n") == std::string_view::npos)
+    throw InputError(file + ": the file is empty, so its kind is unknown (an events file may be "
+                     "empty: give --kind events)");
+  if (words.size() == 3 && (words[2] == "wall" || words[2] == "pair")) return "events";
+  if (words.size() == 2 && words[1].size() == 16 &&
+      words[1].find_first_not_of("0123456789abcdef") == std::string_view::npos)
+    return "digest";
+  const bool numbers = std::all_of(words.begin(), words.end(), [](std::string_view w) {
+    double v = 0;
+    const char* b = w.data() + (!w.empty() && w.front() == '+');
+    return std::from_chars(b, w.data() + w.size(), v).ec == std::errc();
+  });
+  if ((words.size() == 6 || words.size() == 8) && numbers) return "output";
+  return "scene";
 }
 
 namespace {

@@ -32,6 +32,10 @@ namespace fs = std::filesystem;
 /// The exit status the chosen command asks for (main returns it; see exit_status()).
 extern int g_status;
 
+/// The kind of a scene, output, digest or events file from its first line ("scene", "output",
+/// "digest" or "events"); throws InputError for an empty text.
+std::string detect_kind(std::string_view text, const std::string& file);
+
 /// "1" -> "01": a stage number as the kit names its folders and targets.
 std::string two_digits(const std::string& stage);
 /// Throws unless `impl` is "solution", "student" or "engine" (the kit's instructor-only fast

@@ -4,12 +4,62 @@
 
 namespace plab::cli {
 
+namespace {
+/// The particles of an output's first block (its lines that share the first line's step).
+std::size_t first_block_size(const std::string& text) {
+  std::istringstream in(text);
+  std::string line, step, first;
+  std::size_t n = 0;
+  while (std::getline(in, line)) {
+    std::istringstream words(line);
+    if (!(words >> step)) continue;
+    if (n == 0) first = step;
+    if (step != first) break;
+    ++n;
+  }
+  return n;
+}
+
+/// Why two files cannot be compared line by line, or "": a scene, an events file or a digest
+/// against an output, or two outputs of scenes with another N (a student's file mixed up).
+std::string not_comparable(const std::string& expected, const std::string& actual,
+                           const std::vector<std::string>& names) {
+  const auto kind = [](const std::string& text, const std::string& name) -> std::string {
+    try {
+      return detect_kind(text, name);
+    } catch (const InputError&) {
+      return "empty";
+    }
+  };
+  const std::string a = kind(expected, names[0]), b = kind(actual, names[1]);
+  const auto article = [](const std::string& k) {
+    return k == "empty" ? "an empty file" : (k == "output" || k == "events" ? "an " : "a ") + k +
+                                                (k == "events" ? " file" : "");
+  };
+  if (a != b && a != "empty" && b != "empty")
+    return names[0] + " is " + article(a) + " and " + names[1] + " " + article(b) +
+           ": plab diff compares two outputs (or two digest files) of the same scene";
+  if (a == "scene" && b == "scene")
+    return "both are scenes: plab diff compares two outputs (or two digest files) of the same "
+           "scene; run each (plab run SCENE --out FILE), then compare the outputs";
+  if (a == "output" && b == "output") {
+    const std::size_t n = first_block_size(expected), m = first_block_size(actual);
+    if (n != m)
+      return "these are outputs of different scenes: " + names[0] + " has " + std::to_string(n) +
+             " particles a step, " + names[1] + " " + std::to_string(m);
+  }
+  return "";
+}
+}  // namespace
+
 void add_diff(CLI::App& app) {
   auto files = std::make_shared<std::vector<std::string>>();
   auto json = std::make_shared<bool>(false);
   auto* c = app.add_subcommand("diff", "Compare two outputs (or digest files): exit 0 when equal, "
                                        "otherwise show the first differing step, particle and "
-                                       "field, and count the differing lines.");
+                                       "field, and count the differing lines; exit 2 when the "
+                                       "two are not outputs of the same scene (a scene, an "
+                                       "events file, another N).");
   c->add_option("outputs", *files, "EXPECTED ACTUAL: the two outputs (or digest files)")
       ->required()
       ->expected(2)
@@ -22,6 +72,16 @@ void add_diff(CLI::App& app) {
   c->callback([files, json] {
     const std::string expected = read_file((*files)[0]);
     const std::string actual = read_file((*files)[1]);
+    if (const std::string why = not_comparable(expected, actual, *files); !why.empty()) {
+      // Not a difference: the two files are not what plab diff compares (exit 2, as diff(1)
+      // does for trouble).
+      if (*json)
+        std::printf("%s\n", nlohmann::ordered_json{{"equal", nullptr}, {"error", why}}.dump().c_str());
+      else
+        std::fprintf(stderr, "error: %s\n", why.c_str());
+      g_status = 2;
+      return;
+    }
     const auto d = first_difference(expected, actual);
     g_status = d ? 1 : 0;
     if (!*json) {

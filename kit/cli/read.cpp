@@ -12,31 +12,6 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 
-/// The kind of a file from its first line: `STEP INDEX wall|pair` is an events file, 6 or 8
-/// numbers an output, anything else a scene (whose parser then says what is wrong). An empty
-/// text has no kind (an events file may be empty: give --kind).
-std::string detect_kind(std::string_view text, const std::string& file) {
-  const std::string_view first = text.substr(0, text.find('\n'));
-  std::vector<std::string_view> words;
-  for (std::size_t i = 0; i < first.size();) {
-    while (i < first.size() && (first[i] == ' ' || first[i] == '\t' || first[i] == '\r')) ++i;
-    const std::size_t start = i;
-    while (i < first.size() && first[i] != ' ' && first[i] != '\t' && first[i] != '\r') ++i;
-    if (i > start) words.push_back(first.substr(start, i - start));
-  }
-  if (text.find_first_not_of(" \t\r\n") == std::string_view::npos)
-    throw InputError(file + ": the file is empty, so its kind is unknown (an events file may be "
-                     "empty: give --kind events)");
-  if (words.size() == 3 && (words[2] == "wall" || words[2] == "pair")) return "events";
-  const bool numbers = std::all_of(words.begin(), words.end(), [](std::string_view w) {
-    double v = 0;
-    const char* b = w.data() + (!w.empty() && w.front() == '+');
-    return std::from_chars(b, w.data() + w.size(), v).ec == std::errc();
-  });
-  if ((words.size() == 6 || words.size() == 8) && numbers) return "output";
-  return "scene";
-}
-
 /// The fields of particles `p` as arrays, one per field (x, y, vx, vy; pc, wc with `counters`).
 void put_particles(Json& j, const Particles& p, bool counters) {
   j["x"] = p.x;
@@ -165,6 +140,9 @@ void add_read(CLI::App& app) {
         const Scene s = parse_scene(text, a->file);
         j.update(scene_json(s));
         summary = scene_summary(s);
+      } else if (kind == "digest") {
+        throw InputError(a->file + ": a digest file (one hash a step, from --digest): plab diff "
+                         "compares two of them; plab read reads scenes, outputs and events files");
       } else if (kind == "output") {
         const auto blocks = parse_output(text, a->file);
         j.update(output_json(blocks, range));

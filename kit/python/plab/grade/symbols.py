@@ -13,9 +13,6 @@ counts as not compiling, with the reason):
     GOMP_*, omp_*, kmp_*, __kmpc_*, cuda*, cu* of the driver, cupti*): it would replace the
     library's own, and the kit's layer with it;
   - calls CUPTI (cupti*), the interface the kit's GPU trace is written with;
-  - starts another program (fork, exec*, posix_spawn, system, popen, a raw syscall): a stage
-    that runs the compiled reference (`--explain --json` answers every step) or another stage
-    does none of its own work;
   - looks a symbol up by name (dlopen, dlsym, dlvsym) from C++ code: the only way left to reach a
     library's function without naming it. CUDA objects (*.cu.o) are left out of this rule: the
     CUDA runtime's own start-up code, compiled into every one, calls them;
@@ -31,7 +28,10 @@ counts as not compiling, with the reason):
     it makes.
 
 A stage entry of rubric.json may also name groups of calls its code may not make at all
-(`refuse_calls`, CALL_GROUPS): stage 08's ranks, whose work the kit samples and whose messages
+(`refuse_calls`, CALL_GROUPS): stages 01 to 07 start no other program (`processes`: a stage that
+runs the compiled reference, whose `--explain --json` answers every step, or another stage, does
+none of its own work; the grader's sandbox holds neither, but a student learned that only from
+the grade); stage 08's ranks, whose work the kit samples and whose messages
 it counts, open no files and map no memory (which would move particles between ranks past the
 count, or change the kit's report), change no signal or timer (the sampling's SIGPROF), and
 start no thread or process (work beside a rank's MPI wait).
@@ -63,16 +63,17 @@ RULES = [
     (re.compile(r"(dlopen|dlsym|dlvsym|dlmopen)$"), "U",
      "calls {name}: looking functions up by name passes by the kit's measurements; call them "
      "by name in the code", True),
-    (re.compile(r"(fork|vfork|clone|clone3|execve|execveat|fexecve|execv|execvp|execvpe|execl|"
-                r"execlp|execle|posix_spawn|posix_spawnp|system|popen|syscall)$"), "U",
-     "calls {name}: a stage starts no other program (a step is the stage's own work: the kit's "
-     "reference program, its --explain and the other stages are not part of an answer)", False),
 ]
 GLOBAL = set("TWDBRVGSiu")  # nm -P types of a global symbol the object defines
 
 # Calls a stage's code may be refused by group (a rubric entry's `refuse_calls`): (pattern of the
 # called symbol's name, as nm prints it, mangled; the reason)
 CALL_GROUPS = {
+    "processes": (re.compile(
+        r"(fork|vfork|clone|clone3|execve|execveat|fexecve|execv|execvp|execvpe|execl|execlp|"
+        r"execle|posix_spawn|posix_spawnp|system|popen|syscall)$"),
+        "calls {name}: a stage starts no other program (a step is the stage's own work: the kit's "
+        "reference program, its --explain and the other stages are not part of an answer)"),
     "files": (re.compile(
         r"(open|open64|openat|openat64|creat|creat64|fopen|fopen64|freopen|freopen64|fdopen|"
         r"mmap|mmap64|shm_open|memfd_create|shmget|shmat|mkstemp|mkstemp64|mkostemp|tmpfile|"
