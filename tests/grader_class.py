@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Checks `plab grade --class` on a class of 5 stage 01 submissions (the solution as a folder and as
-a zip, the untouched starting point, one that does not compile, one flat upload): the batch is
-killed once the first student is graded (no grader of it may go on running), started again, and
+a zip, the untouched starting point, one that does not compile, one flat upload) and a tarball
+(left out, and named): the batch is killed once the first student is graded (no grader of it may
+go on running; the gradebook so far is written, the others not-graded), started again, and
 must grade only those left (a second batch into the same folder meanwhile is refused); then the
 gradebook has one row per student with the right totals, each student has results.json, and the
 summary page shows the histogram; the leaderboard page is written and each student has an
@@ -37,6 +38,7 @@ upload("dan", solution, flat=True)
 with zipfile.ZipFile(cls / "eve.zip", "w") as z:
     z.writestr("stages/01-naive/step.cpp", solution)
 expected = {"ann": "full", "ben": "zero", "cat": "zero", "dan": "full", "eve": "full"}
+(cls / "fay.tar.gz").write_bytes(b"not a zip")  # left out, and named
 cmd = [plab, "grade", "--class", str(cls), "--stages", "01", "--out", str(out), "--jobs", "2"]
 
 # First batch: killed (its whole process group) as soon as one student is graded.
@@ -73,6 +75,11 @@ def graders_left():
 assert not graders_left(), f"graders still running after the batch stopped: {graders_left()}"
 graded = [p.parent.name for p in out.glob("students/*/upload.sha256")]
 assert 1 <= len(graded) < 5, f"after the kill, {len(graded)} students graded: {graded}"
+assert any("left out" in ln and "fay.tar.gz" in ln for ln in seen), "\n".join(seen)
+# The stopped batch wrote the gradebook so far: the graded students' rows, the others not-graded
+rows = {r["student"]: r for r in csv.DictReader(open(out / "gradebook.csv", newline=""))}
+assert sorted(rows) == sorted(expected), f"gradebook rows after the stop: {sorted(rows)}"
+assert all(("not-graded" in r["flags"]) == (name not in graded) for name, r in rows.items()), rows
 
 # Second batch: resumes, grades only the others.
 done = subprocess.run(cmd, capture_output=True, text=True, timeout=1200)

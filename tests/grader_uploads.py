@@ -7,9 +7,11 @@ grader, long):
 - an upload with no stage in it gets a three-line message naming what was found, never a build log;
   flat files whose banners were taken out are told how to re-upload them (a student cannot pass
   --stages; the message says an instructor can);
-- a stage missing from an upload costs that stage's points only;
+- a stage missing from an upload costs that stage's points only; without --stages, a stage that
+  is the untouched starting point is not graded, and the summary says so;
 - a stage the rubric does not know is a clear error, and results.json says so (never empty);
-- the hidden seed is in the summary and in results.json's extra_data, not in what students see,
+- the hidden seed is in the summary file and in results.json's extra_data, not in what students
+  see at once,
   and `--seed S` replays the same hidden scenes;
 - an output left as a link (symbolic or hard) to another file, a golden one say, is never read;
 - without namespaces the grader refuses to run student code as an unprivileged user that could read
@@ -71,7 +73,9 @@ def case_flat_and_replay():
     check("seed", seed is not None and f"seed {seed}" in summary,
           f"the seed ({seed}) is in results.json's extra_data and the summary file")
     shown = json.dumps([t["output"] for t in doc["tests"] if t["visibility"] == "visible"])
-    check("seed", str(seed) not in shown, "no visible test output holds the seed")
+    check("seed", str(seed) not in shown and str(seed) not in doc["output"],
+          "no visible test output, nor results.json's output (shown to students at once), holds "
+          "the seed")
     lost = [n for n, t in hidden(tests).items() if "same text" not in t]
     check("mutant", len(lost) > 0, f"the wrong comparison loses {len(lost)} hidden tests")
     repro = next((t for t in hidden(tests).values() if "Reproduce:" in t), "")
@@ -173,12 +177,28 @@ def case_partial():
           "every stage 02 test says the upload has no stages/02-heap/ (or is not timed)")
 
 
+def case_untouched():
+    # A whole copy of the kit handed in early: stage 01 done, stage 02 as given. Without --stages
+    # the untouched starting point is not graded (its zeros are not the student's week)
+    sub = scratch / "untouched-upload" / "stages"
+    shutil.copytree(kit / "stages" / "02-heap", sub / "02-heap")
+    (sub / "01-naive").mkdir()
+    shutil.copy2(kit / "solutions" / "01-naive" / "step.cpp", sub / "01-naive" / "step.cpp")
+    doc, tests, done, _ = grade("untouched", sub.parent)
+    check("untouched", tests and all(n.startswith("01") for n in tests) and
+          doc["score"] == sum(t["max_score"] for t in tests.values()),
+          f"only stage 01 graded, full marks ({doc['score']} over {len(tests)} tests)")
+    check("untouched", "stage 02: the untouched starting point, not graded" in doc["output"],
+          "the summary says stage 02 was the untouched starting point")
+
+
 shutil.rmtree(scratch, ignore_errors=True)
 scratch.mkdir(parents=True)
 try:
     only = set(sys.argv[4:])
     for name, case in (("links", case_links), ("refusals", case_refusals),
                        ("flat", case_flat_and_replay), ("partial", case_partial),
+                       ("untouched", case_untouched),
                        ("no-sandbox", case_no_sandbox)):
         if not only or name in only:
             case()

@@ -140,8 +140,21 @@ void add_bench(CLI::App& app) {
     }
     csv.pop_back();
     csv += ",ceiling,ceiling_slowest\n";
-    // A stage that is not there or not built is said before the table starts (not under its head).
-    for (const std::string& raw : a->stages) require_stage(two_digits(raw), impl);
+    // A stage that is not there or not built is said before the table starts (not under its head),
+    // and so is a size far past what the stage is tested at (stage 01's step is O(N^3) by design:
+    // the default sizes would take minutes a run, with nothing printed).
+    for (const std::string& raw : a->stages) {
+      const std::string id = two_digits(raw);
+      require_stage(id, impl);
+      const nlohmann::json most = stage_declares(id, impl, "test_max_n");
+      const long long largest = *std::max_element(a->n.begin(), a->n.end());
+      if (most.is_number_integer() && largest > 2 * most.get<long long>())
+        std::fprintf(stderr,
+                     "plab bench: stage %s is tested up to N = %lld (test_max_n in its stage.json); "
+                     "N = %lld may take minutes a run (--n %lld,%lld,%lld: a quicker table)\n",
+                     id.c_str(), most.get<long long>(), largest, most.get<long long>() / 4,
+                     most.get<long long>() / 2, most.get<long long>());
+    }
     std::printf("%-5s %6s %5s %7s %-11s %10s %9s %8s %10s %9s  %s\n", "stage", "N", "S",
                 by_ranks ? "ranks" : "threads",
                 "schedule", "median s", "spread", "speedup", "in steps", "ms/step", "device");

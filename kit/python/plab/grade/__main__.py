@@ -173,7 +173,7 @@ def grade_one(a):
         elif g is not None:
             total, most = g.results.total()
             report = [f"total: {total:.2f} / {most:g}   (results: {a.out}, JUnit: {a.junit})"]
-            report += [f"  {note}" for note in g.results.notes]
+            report += [f"  {note}" for note in g.results.instructor_notes + g.results.notes]
             noisy = [t["name"] for t in g.results.tests if "TOO NOISY" in t.get("output", "")]
             if noisy:
                 report.append(f"  timing TOO NOISY (spread above the rubric's limit) in "

@@ -30,7 +30,7 @@ import sys
 import threading
 import time
 
-from plab import python_env
+from plab import KIT, python_env
 from plab.grade import leaderboard
 
 
@@ -48,24 +48,46 @@ def upload_hash(entry):
     return h.hexdigest()
 
 
-def grading_key(entry, stages, grader_args, rubric_path):
+def kit_hash(kit):
+    """The grading kit's own content hash: every file the grader reads or builds a stage with
+    (kit/, cmake/, the CMake files, stages/ and datasets/), so that a batch resumed after a `git
+    pull` of the grader grades again what the old one graded."""
+    h = hashlib.sha256()
+    roots = [kit / d for d in ("kit", "cmake", "stages", "datasets")]
+    files = [kit / "CMakeLists.txt", kit / "CMakePresets.json"]
+    for root in roots:
+        if root.is_dir():
+            files += sorted(p for p in root.rglob("*") if p.is_file() and not p.is_symlink()
+                            and "__pycache__" not in p.parts)
+    for p in files:
+        if p.is_file():
+            h.update(str(p.relative_to(kit)).encode() + b"\0")
+            h.update(p.read_bytes())
+    return h.hexdigest()
+
+
+def grading_key(entry, stages, grader_args, rubric_path, kit_version):
     """What a stored result must match to be kept on resume (OUT/students/NAME/upload.sha256):
-    the upload's hash, the stages asked for, the grader's options and the rubric's bytes. A batch
-    resumed with other --stages or another rubric grades everyone again."""
-    h = hashlib.sha256(json.dumps([stages, grader_args]).encode())
+    the upload's hash, the stages asked for, the grader's options, the rubric's bytes and the
+    kit's (kit_hash()). A batch resumed with other --stages, another rubric or another version
+    of the grader grades everyone again."""
+    h = hashlib.sha256(json.dumps([stages, grader_args, kit_version]).encode())
     h.update(pathlib.Path(rubric_path).read_bytes())
     return upload_hash(entry) + " " + h.hexdigest()
 
 
 def students(folder):
-    """(name, path) of every upload in the class folder: folders and zips, links skipped."""
-    out = []
+    """(name, path) of every upload in the class folder (folders and zips), and the names of the
+    entries left out (links, other files: a tarball, a lone step.cpp), which the batch names."""
+    out, left_out = [], []
     for p in sorted(folder.iterdir()):
-        if p.name.startswith(".") or p.is_symlink():
+        if p.name.startswith("."):
             continue
-        if p.is_dir() or p.suffix == ".zip":
+        if not p.is_symlink() and (p.is_dir() or p.suffix == ".zip"):
             out.append((p.stem if p.suffix == ".zip" else p.name, p))
-    return out
+        else:
+            left_out.append(p.name + (" (a link)" if p.is_symlink() else ""))
+    return out, left_out
 
 
 def clock(seconds):
@@ -151,6 +173,7 @@ def grade_one(name, entry, out, grader_args, stages, jobs_cpu, key, graders):
         proc = graders.start(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
         if proc is None:  # the batch is stopping
             return name, None, 0.0
+        print(f"  grading {name} (its log: {mine / 'grader.log'})", flush=True)
         try:
             returncode = proc.wait()
         finally:
@@ -179,16 +202,14 @@ def stage_points(data):
 
 
 def missing_stages(data):
-    """The stage keys of a results.json whose every test says the upload had no such stage."""
-    seen, have = set(), set()
+    """The stage keys of a results.json that the upload had no folder for: their tests say so
+    (those held back by them, a performance test's "not timed", say only that)."""
+    missing = set()
     for t in data.get("tests", []):
         key = t.get("name", "").split(":")[0].strip()
-        if not key or " " in key:
-            continue
-        seen.add(key)
-        if "the submission has no stages/" not in t.get("output", ""):
-            have.add(key)
-    return seen - have
+        if key and " " not in key and "the submission has no stages/" in t.get("output", ""):
+            missing.add(key)
+    return missing
 
 
 def flags(data):
@@ -301,7 +322,10 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
     results.json)."""
     if not klass.is_dir():
         sys.exit(f"plab grade --class: {klass} is not a folder")
-    everyone = students(klass)
+    everyone, left_out = students(klass)
+    if left_out:
+        print(f"plab grade --class: left out, not a folder nor a .zip (a student's upload is one "
+              f"of those): {', '.join(left_out)}", flush=True)
     if not everyone:
         sys.exit(f"plab grade --class: {klass} holds no submission (a folder or a zip per student)")
     rubric = json.loads(pathlib.Path(rubric_path).read_text())
@@ -319,11 +343,12 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
         sys.exit(f"plab grade --class: another grading is writing to {out} now; wait for it to "
                  "end (or stop it): the same command then resumes where it stopped")
     anonymous = anonymous_names(out, everyone)
+    version = kit_hash(KIT)
     todo, done, changed = [], [], 0
     keys = {}
     for name, entry in everyone:
         mine = out / "students" / name
-        keys[name] = grading_key(entry, stages, grader_args, rubric_path)
+        keys[name] = grading_key(entry, stages, grader_args, rubric_path, version)
         stored = (mine / "upload.sha256").read_text().split() \
             if (mine / "results.json").is_file() and (mine / "upload.sha256").is_file() else []
         same = stored == keys[name].split()
@@ -335,9 +360,11 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
           f"{len(todo)} to grade, {jobs} at a time ({per_job} cores each)", flush=True)
     if changed and not regrade:
         print(f"plab grade --class: {changed} graded before with another upload, other --stages, "
-              "other options or another rubric: graded again", flush=True)
+              "other options, another rubric or another version of the kit: graded again",
+              flush=True)
     progress = Progress(len(everyone), len(done))
     failures = []
+    completed = {name for name, _ in done}  # graded whole: resumed, or in this batch
     graders = Graders()
     pool = concurrent.futures.ThreadPoolExecutor(max_workers=jobs)
     try:
@@ -351,6 +378,7 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
                 failures.append(name)
                 progress.tick(name, f"NO RESULTS (see students/{name}/grader.log)")
             else:
+                completed.add(name)
                 per = stage_points(data)
                 progress.tick(name, (f"NOT GRADED in {seconds:.0f} s (see students/{name}/"
                                      "results.summary.txt)") if "not-graded" in flags(data) else
@@ -359,10 +387,24 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
     except BaseException:  # stopped (SIGTERM, Ctrl-C): no student starts, the running ones end
         graders.stop()
         pool.shutdown(wait=True, cancel_futures=True)
+        # The gradebook of those graded so far (the others not-graded): a resume completes it
+        try:
+            write_class(out, everyone, anonymous, rubric, failures, completed, stopped=True)
+        except Exception as e:  # the stop is what is reported
+            print(f"plab grade --class: no gradebook written on stopping ({e})", flush=True)
         raise
     pool.shutdown(wait=True)
+    return write_class(out, everyone, anonymous, rubric, failures, completed)
+
+
+def write_class(out, everyone, anonymous, rubric, failures, completed, stopped=False):
+    """The class's gradebook, summary page and leaderboard from the results in OUT/students of
+    the students in `completed` (a grading stopped part-way leaves a results.json of the tests
+    run so far: not a grade); returns the exit status (1 if a grading left no results.json)."""
     graded = {}
     for name, _ in everyone:
+        if name not in completed:
+            continue
         try:
             graded[name] = json.loads((out / "students" / name / "results.json").read_text())
         except (OSError, ValueError):
@@ -391,7 +433,9 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
     write_outputs(out, rows, keys)
     leaderboard.write_page(out / "leaderboard.html", {anonymous[n]: d for n, d in graded.items()},
                            rubric["performance"])
-    print(f"plab grade --class: gradebook {out / 'gradebook.csv'}, summary {out / 'summary.html'}, "
-          f"leaderboard {out / 'leaderboard.html'}"
-          + (f"; {len(failures)} without results: {', '.join(failures)}" if failures else ""))
+    print(f"plab grade --class: {'stopped; so far: ' if stopped else ''}gradebook "
+          f"{out / 'gradebook.csv'}, summary {out / 'summary.html'}, leaderboard "
+          f"{out / 'leaderboard.html'}"
+          + (f"; {len(failures)} without results: {', '.join(failures)}" if failures else "")
+          + ("; the same command resumes" if stopped else ""), flush=True)
     return 1 if failures else 0

@@ -4,6 +4,7 @@ import subprocess
 
 from plab.grade import hidden as hidden_module
 from plab.grade.build import unbuilt
+from plab.grade.run import stderr_tail
 
 
 class Correctness:
@@ -93,7 +94,7 @@ class Correctness:
         text = (f"{len(right)} of {len(want)} steps right when each starts from the correct state "
                 "(every other step's start given)")
         if run.reason or run.rc:
-            text += f"; the run {run.reason or 'exited ' + str(run.rc)}: {run.stderr.strip()[-300:]}"
+            text += f"; the run {run.reason or 'exited ' + str(run.rc)}: {stderr_tail(run.stderr)}"
         elif wrong:
             text += f"; wrong: steps {', '.join(map(str, wrong[:12]))}{' ...' if len(wrong) > 12 else ''}"
         ok = not wrong and not run.rc and not run.reason

@@ -64,8 +64,9 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
         self.idea_slow = {}  # stage folder -> its idea test's result, when it ran out of time
         if a.leaderboard_name:
             self.notes.append(f"your name on the class's leaderboard: {a.leaderboard_name}")
-        self.notes.append(f"hidden scenes from seed {self.seed} (replay: ./plab grade "
-                          f"--submission SUBMISSION --seed {self.seed})")
+        self.results.instructor_notes.append(f"hidden scenes from seed {self.seed} (replay: "
+                                             f"./plab grade --submission SUBMISSION --seed "
+                                             f"{self.seed})")
         self.isolate()
         for sid in {self.manifest["reference_stage"], "01"}:
             if not self.solution(sid).exists():
@@ -95,7 +96,8 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
             seen = isolation.private_readable(private)
             if seen:
                 raise Refused(
-                    f"no namespaces here, so student code would run as uid {isolation.SANDBOX_UID}, "
+                    f"a sandbox without namespaces (--sandbox user, or none on this machine): "
+                    f"student code would run as uid {isolation.SANDBOX_UID}, "
                     f"which can read {', '.join(seen)}. Make the kit private first "
                     f"(chmod -R go-rwx {self.kit} {self.kit_build}, or grade with --make-private; "
                     "the Gradescope setup.sh does).")
@@ -104,7 +106,8 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
                                                          self.a.submission).resolve()])
             if copies:
                 raise Refused(
-                    f"no namespaces here, so student code would run as uid {isolation.SANDBOX_UID}, "
+                    f"a sandbox without namespaces (--sandbox user, or none on this machine): "
+                    f"student code would run as uid {isolation.SANDBOX_UID}, "
                     f"which can read other copies of the kit's answers: {', '.join(copies[:6])}"
                     f"{' ...' if len(copies) > 6 else ''}; remove them or make them private "
                     "(chmod -R go-rwx FOLDER) first.")
@@ -189,7 +192,10 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
         if st.conf.get("races") and not self.a.no_races:
             self.race_check(st, program, folder, correct, any_right)
         if st.conf.get("performance"):
-            self.performance(st, program, correct)
+            idea = self.idea_failed.get(st.sid) or self.idea_failed.get(st.key)
+            self.performance(st, program, correct,
+                             "its idea test must pass first" if all_right and not stopped and idea
+                             else "every correctness test must pass first")
 
     def void_folder(self, st, why):
         """Stage folder st.sid fails its idea after all (`why`: a correctness scene on several
@@ -221,6 +227,14 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
             out += [Stage(k, self.rubric["stages"][k], self.manifest) for k in keys]
         return out
 
+    def untouched(self, sid, folder):
+        """Whether the upload's stage folder holds the kit's starting point of stage `sid`, byte
+        for byte (the same source files, the same bytes)."""
+        given = upload.sources(self.kit / "stages" / self.kit_folders[sid])
+        theirs = upload.sources(folder)
+        return [p.name for p in given] == [p.name for p in theirs] and all(
+            a.read_bytes() == b.read_bytes() for a, b in zip(given, theirs))
+
     def grade(self):
         self.kit_folders = {p.name[:2]: p.name for p in sorted((self.kit / "stages").iterdir())
                             if p.is_dir() and p.name[:2].isdigit()}
@@ -234,6 +248,19 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
             raise Refused(f"the upload is not a submission: {e}")
         self.notes.append(f"submission: {layout}")
         print(f"submission: {layout}", flush=True)
+        if not wanted:
+            # Every stage the upload has, less the untouched starting points: a whole copy of the
+            # kit handed in in week 3 holds stages 04 to 08 as given, not handed in (their idea
+            # tests alone would take minutes and put zeros in the total). --stages grades them.
+            given = [sid for sid in sorted(found) if self.untouched(sid, found[sid])]
+            if given and len(given) < len(found):
+                many = len(given) > 1
+                note = (f"stage{'s' * many} {', '.join(given)}: the untouched starting "
+                        f"point{'s' * many}, not graded (not handed in; --stages grades "
+                        f"{'them' if many else 'it'})")
+                self.notes.append(note)
+                print(note, flush=True)
+                found = {sid: f for sid, f in found.items() if sid not in given}
         stages = self.entries(wanted or sorted(found))
         if self.a.stages and any("-" in s for s in self.a.stages.split(",")):
             stages = [s for s in stages if s.key in self.a.stages.split(",")]

@@ -587,6 +587,9 @@ def main():
     ap.add_argument("--plab", default=str(KIT / "build" / "bin" / "plab"),
                     help="the kit's plab program (its folder holds the reference)")
     a = ap.parse_args()
+    if not pathlib.Path(a.plab).is_file():
+        sys.exit(f"plab.grade.hidden: {a.plab} is not built yet: run ./plab once in the kit (it "
+                 "builds the kit), then this command again")
     rubric = json.loads(pathlib.Path(a.rubric).read_text())
     import tempfile
     import shutil

@@ -11,6 +11,7 @@ import time
 
 from plab.grade.rounds_count import RoundsCount
 from plab.grade.build import unbuilt
+from plab.grade.run import stderr_tail
 
 
 class Ideas:
@@ -169,7 +170,7 @@ class Ideas:
                     f"{own_seconds:.2f} s): {hint}")
         if run.reason or run.rc != 0:
             return (f"the run on the {what} {run.reason or 'exited ' + str(run.rc)}: "
-                    f"{run.stderr.strip()[-300:]}")
+                    f"{stderr_tail(run.stderr)}")
         if run.read_output() != expected:
             return f"its output on the {what} differs from the reference's"
         return None

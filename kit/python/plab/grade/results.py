@@ -17,6 +17,10 @@ class Results:
         self.json_path, self.junit_path = pathlib.Path(json_path), pathlib.Path(junit_path)
         self.tests, self.notes, self.start = [], [], time.time()
         self.extra = {}  # results.json's extra_data: for the instructor, not shown to students
+        # Lines of the summary file (results.summary.txt) only, never in results.json's output,
+        # which Gradescope shows to the student at once: the hidden scenes' seed (the hidden
+        # tests' own outputs, shown once grades are published, say how to replay theirs)
+        self.instructor_notes = []
         self.leaderboard = []  # results.json's leaderboard: the grader's measured times
         self.banner = ""  # printed before every test's output (--no-sandbox)
         self.write()

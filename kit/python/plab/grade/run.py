@@ -38,7 +38,24 @@ def velocities(plab, path, step, i):
 #: of every run doing so: a stage 08 run of a small scene took 1.6 s, and 0.2 s with these (Open
 #: MPI 4.1, the kit's 2-core machine, 2026-12-06). The bytes the ranks send are counted in the MPI
 #: calls, whatever carries them.
-MPI_IN_SANDBOX = {"OMPI_MCA_pml": "ob1", "OMPI_MCA_btl": "self,vader"}
+MPI_IN_SANDBOX = {"OMPI_MCA_pml": "ob1", "OMPI_MCA_btl": "self,vader",
+                  # hwloc's "failed to find sysfs cpu topology directory, aborting linux
+                  # discovery": the sandbox hides /sys; not the student's error
+                  "HWLOC_HIDE_ERRORS": "2"}
+
+
+def stderr_tail(text, limit=300):
+    """The last whole lines of a run's stderr within `limit` characters, without the MPI
+    libraries' notes about the sandbox (hwloc's topology discovery): what a student reads as
+    the reason their run failed."""
+    lines = [ln for ln in (text or "").strip().splitlines()
+             if ln.strip() and "hwloc" not in ln and "aborting linux discovery" not in ln]
+    out = []
+    for ln in reversed(lines):
+        if out and sum(len(x) + 1 for x in out) + len(ln) > limit:
+            break
+        out.insert(0, ln if len(ln) <= limit else "..." + ln[-limit:])
+    return "\n".join(out)
 
 
 def launcher_crashed(run):

@@ -68,7 +68,7 @@ CLEAN_ENV = {"PATH": "/usr/local/cuda/bin:/usr/local/bin:/usr/bin:/bin", "HOME":
 #: What every mode is called in summaries and results.json.
 NAMES = {"bwrap": "bubblewrap (mount, PID, network, IPC, UTS and user namespaces; "
                   "an unprivileged uid; read-only system; clean environment)",
-         "user": f"unprivileged user (uid {SANDBOX_UID}, clean environment; no namespaces here: "
+         "user": f"unprivileged user (uid {SANDBOX_UID}, clean environment; no namespaces: "
                  "the network is not isolated)",
          "none": "NONE: --no-sandbox, student code ran with the grader's own rights"}
 
