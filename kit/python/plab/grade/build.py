@@ -84,7 +84,8 @@ class Build:
         build = self.sandbox.writable_dir(self.sandbox.box, "build-")
         mounts = ({"/plab/src": src}, {"/plab/build": build})
         self.built_in = (src, build)  # for probes compiled later (branches.py)
-        print(f"building stages {', '.join(sorted({s.sid for s in stages}))} in the sandbox",
+        print(f"building stages {', '.join(sorted({s.sid for s in stages}))} "
+              + ("(no sandbox: --no-sandbox)" if self.sandbox.mode == "none" else "in the sandbox"),
               flush=True)
         # The kit and the runner's command line, compiled once already outside the sandbox from
         # the kit's own sources: a submission's build compiles its stage and run.cpp alone.

@@ -268,7 +268,9 @@ def write_outputs(out, rows, keys):
         w.writerow(["student", *keys, "total", "max", "flags", "leaderboard name"])
         for r in rows:
             w.writerow([r["name"], *[f"{r['per'].get(k, (0, 0))[0]:g}" for k in keys],
-                        f"{r['total']:g}", f"{r['max']:g}", " ".join(r["flags"]), r["anonymous"]])
+                        f"{r['total']:g}", f"{r['max']:g}",
+                        " ".join([*r["flags"], *(f"missing:{k}" for k in sorted(r.get("missing", ())))]),
+                        r["anonymous"]])
     parts = [f"<h1>Class summary: {len(rows)} students</h1>",
              "<p>Score histograms per stage (points), from each student's results.json. "
              "The gradebook is gradebook.csv beside this page.</p><div>"]
@@ -357,7 +359,7 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
     cores = os.cpu_count() or 2
     per_job = max(1, cores // max(1, jobs))
     print(f"plab grade --class: {len(everyone)} submissions, {len(done)} graded already, "
-          f"{len(todo)} to grade, {jobs} at a time ({per_job} cores each)", flush=True)
+          f"{len(todo)} to grade, {jobs} at a time ({per_job} core{'s' * (per_job > 1)} each)", flush=True)
     if changed and not regrade:
         print(f"plab grade --class: {changed} graded before with another upload, other --stages, "
               "other options, another rubric or another version of the kit: graded again",

@@ -77,7 +77,7 @@ class RoundsCount:
                     f"work-sharing loops) in {steps} steps whose event selection takes {rounds} "
                     f"mutual-earliest rounds ({self.rounds['rounds']}); a round of parallel loops "
                     f"passes at least one, so at least {need:g} were expected. "
-                    f"{idea['hint']}"), text
+                    f"{idea['hint'][:1].upper()}{idea['hint'][1:]}"), text
         return None, text
 
     def follows(self, idea, calm, calm_run, text):
@@ -100,5 +100,5 @@ class RoundsCount:
                     f"same N, box and steps, slow speeds) of {calm.rounds['total']} rounds; a "
                     f"stage whose rounds are parallel loops passes at least {idea['min_syncs_per_round']:g} "
                     f"more for each extra round, so at least {need:g} more were expected. "
-                    f"{idea['hint']}"), text
+                    f"{idea['hint'][:1].upper()}{idea['hint'][1:]}"), text
         return None, text
