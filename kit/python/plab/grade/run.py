@@ -21,6 +21,30 @@ def implied(before, after):
     return f"changed velocity as in a pair collision ({v0[0]:.8f}, {v0[1]:.8f}) -> ({v1[0]:.8f}, {v1[1]:.8f})"
 
 
+def pair_partner(plab, before_path, after_path, step, i):
+    """The particle that particle i collided with in `step`, as the student's output shows it:
+    the one whose velocity also changed, not as a wall flips it, with the pair's momentum the same
+    before and after (equal masses; the outputs print 8 decimals), or None."""
+    try:
+        b = plab.read_output(before_path, steps=(step - 1, step - 1))["blocks"]
+        a = plab.read_output(after_path, steps=(step, step))["blocks"]
+    except plabio.FormatError:
+        return None
+    if not b or not a or len(b[0]["vx"]) != len(a[0]["vx"]) or i >= len(b[0]["vx"]):
+        return None
+    b, a = b[0], a[0]
+    best, off = None, None
+    for j in range(len(b["vx"])):
+        v0, v1 = (b["vx"][j], b["vy"][j]), (a["vx"][j], a["vy"][j])
+        if j == i or v0 == v1 or [abs(v) for v in v0] == [abs(v) for v in v1]:
+            continue
+        d = max(abs(b["vx"][i] + v0[0] - a["vx"][i] - v1[0]), abs(b["vy"][i] + v0[1] - a["vy"][i] - v1[1]))
+        if off is None or d < off:
+            best, off = j, d
+    scale = max(1.0, *(abs(v) for v in (b["vx"][i], b["vy"][i])))
+    return best if off is not None and off <= 1e-6 * scale else None
+
+
 def velocities(plab, path, step, i):
     """Particle i's printed (vx, vy) in the block of `step` of an output, or None when the output
     has no such block or particle, or is not an output at all (a student's may be anything)."""
@@ -164,7 +188,12 @@ class Run:
                     capture_output=True, text=True).stdout.strip().splitlines())
                 lines.append(f"In step {k - 1} (from the correct state at its start) the reference "
                              f"has:\n  {ref}")
-                lines.append(f"Yours: particle {i} {implied(before, after)}.")
+                yours = implied(before, after)
+                if yours.startswith("changed velocity as in a pair collision"):
+                    j = pair_partner(self.kit_programs, work / "expected.out", work / "actual.out", k, i)
+                    if j is not None:
+                        yours = yours.replace("a pair collision", f"a pair collision with {j}", 1)
+                lines.append(f"Yours: particle {i} {yours}.")
         setup, scene_arg, expected_arg = how
         if setup and st.released_reference:  # a hidden scene: regenerate it, and its expected
             # output with the reference program of the student's copy (`plab release` builds it;
