@@ -477,7 +477,12 @@ def submission(name, attacks, port=0):
     return root
 
 
-def grade(name, root, stages="01,02,03", *extra):
+def grade(name, root, stages="01,02,03", *extra, refusals=False):
+    """Grades `root`. Without `refusals`, with the rubric's refused calls left out (unless `extra`
+    names a rubric): the attacks open files and start programs, which the grader refuses before
+    they run (case oracle checks that), and the sandbox is what these cases test."""
+    if not refusals and "--rubric" not in extra:
+        extra = (*extra, "--rubric", str(without_refused_calls()))
     out = scratch / f"{name}.json"
     start = time.time()
     done = subprocess.run([plab, "grade", "--submission", root, "--stages", stages, "--out", out,
@@ -599,7 +604,7 @@ def case_oracle():
     another program (the compiled reference's --explain, another stage) is refused before it runs
     (the rubric's refuse_calls: processes)."""
     tests, doc, _ = grade("redteam-oracle", submission("redteam-oracle", {
-        "02": "call-oracle", "03": "run-solution"}), "02,03")
+        "02": "call-oracle", "03": "run-solution"}), "02,03", refusals=True)
     got = sum(t["score"] for t in correctness(tests, "02").values())
     said = next((t["output"] for t in correctness(tests, "02").values()), "")
     check("call-oracle", got == 0 and "does not compile" in said,
@@ -634,7 +639,8 @@ def case_mpi():
     scored_nothing("mpi", tests, "08", "before-main")
     print("     before-main said: " + first_output(tests, "08")[-150:])
     tests, doc, _ = grade("redteam-mpi-refused", submission("redteam-mpi-refused",
-                                                             {"08": "before-main"}), "08")
+                                                             {"08": "before-main"}), "08",
+                          refusals=True)
     said = next((t["output"] for t in correctness(tests, "08").values()), "")
     check("mpi", "is refused" in said and "opens no file" in said,
           f"stage 08's before-main refused for its calls before it runs: {said[:300]!r}")

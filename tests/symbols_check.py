@@ -39,12 +39,19 @@ CASES = [
     ("the engine's driver that does not check the slabs", "step.cpp.o",
      "namespace plab::dist { int mpi_stage_any_cut(int); }\nint f() { return plab::dist::mpi_stage_any_cut(1); }",
      "calls the instructor's engine's driver (mpi_stage_any_cut)"),
+    ("a raw system call by inline assembly (fork with no symbol)", "step.cpp.o",
+     'long f() { long r; asm volatile("syscall" : "=a"(r) : "a"(57L) : "rcx", "r11", "memory"); return r; }',
+     "step.cpp makes a system call by its own instructions"),
+    ("the loaded libraries walked (to find the kit's counter in memory)", "step.cpp.o",
+     '#include <link.h>\nint f() { return dl_iterate_phdr([](dl_phdr_info*, size_t, void*) { return 0; }, nullptr); }',
+     "calls dl_iterate_phdr"),
     ("dlsym in a CUDA object (the runtime's start-up code)", "step.cu.o",
      '#include <dlfcn.h>\nvoid* f() { return dlsym(RTLD_NEXT, "x"); }', None),
 ]
 
 
-# Stages 01 to 07's refused group (rubric.json's refuse_calls: processes): no other program.
+# Stages 01 to 07's refused groups (rubric.json's refuse_calls: processes, files): no other
+# program, no file.
 PROCESS_CASES = [
     ("the compiled reference run from the step (--explain --json: every step's answer)", "step.cpp.o",
      '#include <cstdlib>\nint f() { return std::system("kit/reference/bin/plab-reference s.in --explain 0:0 --json"); }',
@@ -79,6 +86,16 @@ MPI_CASES = [
      'int f() { return MPI_Comm_set_errhandler(0, 0); }', None),
     ("new processes", 'extern "C" int MPI_Comm_spawn(const char*, char**, int, int, int, int, int*, int*);\n'
      'int f() { return MPI_Comm_spawn(0, 0, 1, 0, 0, 0, 0, 0); }', "calls MPI_Comm_spawn"),
+]
+
+# Stages 01-07 refuse files too: the kit's counter's file taken over (attempted on 2026-12-07 by
+# a red-team session, with the count forged at exit)
+PROCESS_CASES += [
+    ("a descriptor taken over", "step.cpp.o", '#include <unistd.h>\nint f(int a, int b) { return dup2(a, b); }',
+     "calls dup2"),
+    ("/proc/self/maps read", "step.cpp.o",
+     '#include <fstream>\n#include <string>\nstd::string f() { std::ifstream m("/proc/self/maps"); std::string s; m >> s; return s; }',
+     "opens no file"),
 ]
 
 # Stage 08's groups of refused calls (rubric.json's refuse_calls: files, signals, threads).
@@ -129,7 +146,7 @@ try:
         if not ok:
             failures.append(name)
     for name, member, source, expected in PROCESS_CASES:
-        said = symbols.check(library(work, member, source), None, ("processes",))
+        said = symbols.check(library(work, member, source), None, ("processes", "files"))
         ok = any(expected in s for s in said)
         print(f"{'ok  ' if ok else 'FAIL'} stages 01-07's refused calls: {name}: {said or 'let through'}")
         if not ok:

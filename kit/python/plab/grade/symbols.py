@@ -60,9 +60,9 @@ RULES = [
     (re.compile(r".*mpi_stage_any_cut"), "U",
      "calls the instructor's engine's driver (mpi_stage_any_cut), which does not check that each "
      "rank owns its slab's particles: call plab::dist::mpi_stage()", False),
-    (re.compile(r"(dlopen|dlsym|dlvsym|dlmopen)$"), "U",
-     "calls {name}: looking functions up by name passes by the kit's measurements; call them "
-     "by name in the code", True),
+    (re.compile(r"(dlopen|dlsym|dlvsym|dlmopen|dladdr|dladdr1|dlinfo|dl_iterate_phdr|_r_debug)$"),
+     "U", "calls {name}: looking functions or loaded libraries up by name or address passes by "
+     "the kit's measurements; call them by name in the code", True),
 ]
 GLOBAL = set("TWDBRVGSiu")  # nm -P types of a global symbol the object defines
 
@@ -77,12 +77,14 @@ CALL_GROUPS = {
     "files": (re.compile(
         r"(open|open64|openat|openat64|creat|creat64|fopen|fopen64|freopen|freopen64|fdopen|"
         r"mmap|mmap64|shm_open|memfd_create|shmget|shmat|mkstemp|mkstemp64|mkostemp|tmpfile|"
-        r"tmpfile64|truncate|ftruncate|rename|unlink|syscall)$"
+        r"tmpfile64|truncate|ftruncate|rename|unlink|syscall|dup|dup2|dup3|mprotect|"
+        r"pkey_mprotect|process_vm_readv|process_vm_writev|opendir|fdopendir)$"
         r"|.*(basic_ofstream|basic_ifstream|basic_fstream|basic_filebuf|St10filesystem).*"),
-        "calls {name}: a rank's step gets its particles from the kit and gives them back to it, "
-        "and opens no file and maps no memory of its own (files and shared memory would move "
-        "particles between ranks past the kit's count of the bytes they send); print to stderr "
-        "to debug"),
+        "calls {name}: a stage's step gets its particles from the kit and gives them back to it, "
+        "and opens no file, maps no memory and changes no descriptor of its own (a file could "
+        "hold an answer or change what the kit measures; on MPI, files and shared memory would "
+        "move particles between ranks past the kit's count of the bytes they send); print to "
+        "stderr to debug"),
     "signals": (re.compile(
         r"(signal|sigaction|sigprocmask|pthread_sigmask|sigset|sysv_signal|__sysv_signal|"
         r"bsd_signal|setitimer|timer_create|timer_settime|timer_delete|alarm|ualarm)$"),
@@ -195,6 +197,37 @@ def symbol_lines(archive, seconds=60):
     return done.stdout.splitlines()
 
 
+# A system call made by the stage's own instructions (inline assembly), not through the C
+# library: every rule above reads the calls' names, and this one has none. Honest code never
+# holds one (the C library's wrappers are not inlined into a stage's objects).
+RAW_SYSCALL = re.compile(r"\s(syscall|sysenter|int\s+\$0x80)\s*$")
+
+
+def raw_syscalls(archive, seconds=60):
+    """The objects of `archive` whose code holds a system call instruction (objdump), as reasons
+    to refuse; [] when there is none or the archive cannot be disassembled (nm's check says that)."""
+    try:
+        done = subprocess.run(["objdump", "-d", "--no-show-raw-insn", str(archive)],
+                              capture_output=True, text=True, errors="replace", timeout=seconds)
+    except (OSError, subprocess.TimeoutExpired):
+        return []
+    found, member = [], None
+    for line in done.stdout.splitlines():
+        if line.startswith("In archive") or not line.strip():
+            continue
+        if ":     file format" in line:
+            member = line.split(":")[0].strip()
+            continue
+        if member and RAW_SYSCALL.search(line):
+            source = member[:-2] if member.endswith(".o") else member
+            if not source.startswith(("stage_info.cpp", "no_gpu_path.cpp", "stage_entry.cpp")):
+                found.append(f"{source} makes a system call by its own instructions (inline "
+                             "assembly): a stage calls no kernel directly, it calls the C library "
+                             "and the kit")
+            member = None  # one reason an object
+    return found
+
+
 def check(archive, mpi_library=None, refuse_calls=()):
     """The reasons to refuse the stage whose library is `archive` (its objects only: the kit's
     libraries are linked later), or [] when there is none; a list of one line when the archive
@@ -210,7 +243,7 @@ def check(archive, mpi_library=None, refuse_calls=()):
             return [f"the kit's MPI layer could not be read: {kit_lines}"]
         mpi_kit = {f[0] for f in (ln.partition(": ")[2].split() for ln in kit_lines)
                    if len(f) >= 2 and f[0].startswith("MPI_") and f[1] in GLOBAL}
-    return problems(lines, mpi_kit, refuse_calls)
+    return problems(lines, mpi_kit, refuse_calls) + raw_syscalls(archive)
 
 
 def refused_groups(rubric, sid):
