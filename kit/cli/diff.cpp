@@ -23,7 +23,10 @@ std::size_t first_block_size(const std::string& text) {
 /// Why two files cannot be compared line by line, or "": a scene, an events file or a digest
 /// against an output, or two outputs of scenes with another N (a student's file mixed up).
 std::string not_comparable(const std::string& expected, const std::string& actual,
-                           const std::vector<std::string>& names) {
+                           const std::vector<std::string>& paths) {
+  // The files by their names alone (the grader's are in its private scratch)
+  const std::vector<std::string> names{fs::path(paths[0]).filename().string(),
+                                       fs::path(paths[1]).filename().string()};
   const auto kind = [](const std::string& text, const std::string& name) -> std::string {
     try {
       return detect_kind(text, name);
@@ -65,7 +68,9 @@ void add_diff(CLI::App& app) {
       ->expected(2)
       ->check(CLI::ExistingFile);
   c->add_flag("--json", *json,
-              "print JSON instead: equal, text (the report above), first (line, step and "
+              "print JSON instead: equal, comparable (false when the two are not outputs of the "
+              "same scene, exit 2: text says why, first is null, steps empty), text (the report "
+              "above), first (line, step and "
               "particle as numbers or null, field, expected and actual as the printed text, "
               "differing_lines; null when equal) and steps (for every step EXPECTED prints, "
               "whether ACTUAL prints the same lines for it)");
@@ -75,8 +80,14 @@ void add_diff(CLI::App& app) {
     if (const std::string why = not_comparable(expected, actual, *files); !why.empty()) {
       // Not a difference: the two files are not what plab diff compares (exit 2, as diff(1)
       // does for trouble).
-      if (*json)
-        std::printf("%s\n", nlohmann::ordered_json{{"equal", nullptr}, {"error", why}}.dump().c_str());
+      if (*json)  // the same keys as a comparison's (callers read text, first and steps)
+        std::printf("%s\n", nlohmann::ordered_json{{"equal", false},
+                                                   {"comparable", false},
+                                                   {"text", why},
+                                                   {"first", nullptr},
+                                                   {"steps", nlohmann::ordered_json::array()}}
+                                 .dump()
+                                 .c_str());
       else
         std::fprintf(stderr, "error: %s\n", why.c_str());
       g_status = 2;
@@ -90,6 +101,7 @@ void add_diff(CLI::App& app) {
     }
     nlohmann::ordered_json out;
     out["equal"] = !d;
+    out["comparable"] = true;
     out["text"] = d ? d->describe() : "equal";
     out["first"] = nullptr;
     // A step or particle is a number where the line's word is one (a garbled line's is not:

@@ -125,9 +125,11 @@ class Plab:
         """`plab diff --json`: {equal, text (plab diff's report), first (line; step and particle,
         ints or None where the line's word is not a number; field; expected and actual, the
         printed text; differing_lines; None when equal), steps: [{step, equal}] (for
-        every step the expected output prints, whether the actual prints it the same)}."""
+        every step the expected output prints, whether the actual prints it the same),
+        comparable}. Two files that are not outputs of the same scene (a scene, another N: exit
+        2) are not equal: `comparable` is False, `text` says why, `first` is None."""
         done, argv = self._run("diff", "--json", expected, actual)
-        if done.returncode not in (0, 1):
+        if done.returncode not in (0, 1, 2) or not done.stdout.strip():
             _check(done, argv)
         return json.loads(done.stdout)
 

@@ -157,6 +157,8 @@ def what_to_draw(plab, a, scratch):
                 fail(f"--diff: {path} is not a file")
         d = plab.diff(*a.diff)
         mark = None
+        if not d.get("comparable", True):
+            fail(f"--diff: {d['text']}")
         if d["equal"]:
             print("the two outputs are equal")
         else:
