@@ -9,6 +9,8 @@
 
 #include "common.hpp"
 
+#include <map>
+
 namespace plab::cli {
 namespace {
 
@@ -143,9 +145,10 @@ void add_bench(CLI::App& app) {
     // A stage that is not there or not built is said before the table starts (not under its head),
     // and so is a size far past what the stage is tested at (stage 01's step is O(N^3) by design:
     // the default sizes would take minutes a run, with nothing printed).
+    std::map<std::string, std::string> programs;  // each stage's program, checked once
     for (const std::string& raw : a->stages) {
       const std::string id = two_digits(raw);
-      require_stage(id, impl);
+      programs[id] = require_stage(id, impl);
       const nlohmann::json most = stage_declares(id, impl, "test_max_n");
       const long long largest = *std::max_element(a->n.begin(), a->n.end());
       if (most.is_number_integer() && largest > 2 * most.get<long long>())
@@ -191,7 +194,7 @@ void add_bench(CLI::App& app) {
       write_text(scene, format_scene(generate_scene(g)));
       for (const std::string& raw : a->stages) {
         const std::string id = two_digits(raw);
-        const std::string program = require_stage(id, impl);
+        const std::string program = programs.at(id);
         if (unfinished.count(id)) continue;
         try {
           for (const std::string& schedule : a->schedules) {

@@ -33,17 +33,21 @@ std::string wait_as_the_grader(const std::string& impl) {
   return policy ? policy : "OpenMP's default";
 }
 
-std::string require_stage(const std::string& id, const std::string& impl) {
+void require_stage_folder(const std::string& id, const std::string& impl) {
   bool exists = false;
   std::string known;
   for (const auto& s : stages(impl)) {
     exists = exists || s.id == id;
     known += (known.empty() ? "" : ", ") + s.id;
   }
-  const std::string tree = impl_tree(impl) + "/";
   if (!exists)
-    throw std::runtime_error("there is no stage " + id + " in " + tree + " (stages: " +
-                             (known.empty() ? "none" : known) + ")");
+    throw std::runtime_error("there is no stage " + id + " in " + impl_tree(impl) +
+                             "/ (stages: " + (known.empty() ? "none" : known) + ")");
+}
+
+std::string require_stage(const std::string& id, const std::string& impl) {
+  require_stage_folder(id, impl);
+  const std::string tree = impl_tree(impl) + "/";
   const std::string program = stage_program(id, impl);
   if (!fs::exists(program))
     throw std::runtime_error("stage " + id + " (" + impl + ") is not built: its code in " + tree +

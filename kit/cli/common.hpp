@@ -46,6 +46,8 @@ void check_impl(const std::string& impl);
 /// that the others need on a shared machine: two threads could take twice one thread's time.
 /// The engine keeps OpenMP's default (what its measurements used). Returns the policy in use.
 std::string wait_as_the_grader(const std::string& impl);
+/// Throws "there is no stage NN in TREE/ (stages: ...)" unless the stage's folder exists.
+void require_stage_folder(const std::string& id, const std::string& impl);
 /// The stage program, or a clear error saying why there is none (no such stage, not built, or
 /// not built from its current code).
 std::string require_stage(const std::string& id, const std::string& impl);

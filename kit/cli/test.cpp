@@ -95,15 +95,7 @@ void add_test(CLI::App& app) {
                                   "-j", "2"};
     const std::string log = build_dir() + "/test-logs/plab-test.log";
     if (!stage->empty()) {
-      std::string known;  // a stage that is not there is said as `plab run` says it
-      bool exists = false;
-      for (const auto& s : stages(which)) {
-        exists = exists || s.id == two_digits(*stage);
-        known += (known.empty() ? "" : ", ") + s.id;
-      }
-      if (!exists)
-        throw std::runtime_error("there is no stage " + *stage + " in " + impl_tree(which) +
-                                 "/ (stages: " + (known.empty() ? "none" : known) + ")");
+      require_stage_folder(two_digits(*stage), which);  // said as `plab run` says it
       args.insert(args.end(), {"-L", "^stage" + two_digits(*stage) + "$", "-L", "^" + which + "$"});
     } else if (which == "solution") {
       args.insert(args.end(), {"-L", "^(kit|solution|starting-point|engine)$"});
