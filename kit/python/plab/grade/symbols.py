@@ -13,7 +13,10 @@ counts as not compiling, with the reason):
     GOMP_*, omp_*, kmp_*, __kmpc_*, cuda*, cu* of the driver, cupti*): it would replace the
     library's own, and the kit's layer with it;
   - calls CUPTI (cupti*), the interface the kit's GPU trace is written with;
-  - looks a symbol up by name (dlopen, dlsym, dlvsym) from C++ code: the only way left to reach a
+  - makes a system call by its own instructions (inline assembly: `syscall`, `sysenter`,
+    `int $0x80`, found by objdump), which names no function for the rules here to read;
+  - looks a symbol or a loaded library up by name or address (dlopen, dlsym, dlvsym, dladdr,
+    dl_iterate_phdr) from C++ code: the only way left to reach a
     library's function without naming it. CUDA objects (*.cu.o) are left out of this rule: the
     CUDA runtime's own start-up code, compiled into every one, calls them;
   - on MPI (stage 08), calls an MPI function that kit/mpi neither counts nor refuses (it defines
@@ -31,7 +34,9 @@ A stage entry of rubric.json may also name groups of calls its code may not make
 (`refuse_calls`, CALL_GROUPS): stages 01 to 07 start no other program (`processes`: a stage that
 runs the compiled reference, whose `--explain --json` answers every step, or another stage, does
 none of its own work; the grader's sandbox holds neither, but a student learned that only from
-the grade); stage 08's ranks, whose work the kit samples and whose messages
+the grade) and open no file, map no memory and change no descriptor (`files`: a red-team stage
+03 read the OpenMP counter's secret from /proc/self/maps and took its file over with dup2);
+stage 08's ranks, whose work the kit samples and whose messages
 it counts, open no files and map no memory (which would move particles between ranks past the
 count, or change the kit's report), change no signal or timer (the sampling's SIGPROF), and
 start no thread or process (work beside a rank's MPI wait).
