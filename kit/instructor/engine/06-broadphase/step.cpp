@@ -219,6 +219,32 @@ inline void prefetch_motion(const ParticlesOf<Real>& p, int i) {
   __builtin_prefetch(&p.vy[i], kWrite);
 }
 
+/// Particle `i`'s squared speed, in double.
+template <class Real>
+inline double speed2_of(const ParticlesOf<Real>& p, int i) {
+  return double(p.vx[i]) * double(p.vx[i]) + double(p.vy[i]) * double(p.vy[i]);
+}
+
+/// The wall time and path end of particles [my.lo, my.hi), and what the grid needs of them:
+/// how many take part, the fastest and whether a speed is not a number (in `my`).
+template <class Real>
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void walls_of(
+    const Box& box, const ParticlesOf<Real>& p, Buffer<double>& wall, Buffer<double>& end,
+    Mine& my) {
+  my.active = 0;
+  my.max2 = 0;
+  my.unordered = false;
+  for (int i = my.lo; i < my.hi; ++i) {
+    wall[i] = wall_candidate(box, p, i).t;
+    end[i] = sweep::path_end(wall[i]);
+    if (!(end[i] > 0)) continue;  // takes no part
+    const double v2 = speed2_of(p, i);
+    my.unordered |= (v2 != v2);
+    my.max2 = std::max(my.max2, v2);
+    ++my.active;
+  }
+}
+
 /// Slab 0's input, entries [lo, hi): the particles in `order` (the last step's slab-0 order),
 /// each with its last slab and its search; each filed for slab 0 when `count` is given.
 template <class Real>
@@ -247,7 +273,7 @@ inline void gather(Entries& first, const ParticlesOf<Real>& p, const Buffer<doub
 /// group into `out` in cell order, with each entry's midpoint position, and `start` of the row's
 /// cells. Each entry is filed for slab k + 1 on the way (count_entry(), into `next_count`); in
 /// slab 0, the particles in their new order also go to `order` (the next step's).
-inline void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, int r1,
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, int r1,
                       const sweep::Grid& g, int* next_count) {
   const double tm = sweep::slab_mid(k, g);
   const std::vector<int>& row_start = s.row_start[k % 2];
@@ -385,7 +411,7 @@ inline void narrow(const Box& box, const Entries& out, const std::vector<std::pa
 /// of slab 0's input `in` (the team's, read only) into `o`, the search, and the pairs' times (into
 /// `my.found`). One level and one move an entry: the slab is small enough to stay in cache.
 template <class Real>
-inline void slab_alone(const Box& box, Slab& o, Mine& my,
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void slab_alone(const Box& box, Slab& o, Mine& my,
                        const Entries& in, int n, int k, const sweep::Grid& g,
                        const sweep::Single& single) {
   const double tm = sweep::slab_mid(k, g);
@@ -536,23 +562,10 @@ void step_in(const Box& box, ParticlesOf<Real>& p) {
     }
     // Wall times, and what the grid needs to know (sweep::choose(), by the team): how many take
     // part, the fastest, and a sample of the speeds (every stride-th of those that take part).
-    const auto speed2 = [&](int i) {
-      return double(p.vx[i]) * double(p.vx[i]) + double(p.vy[i]) * double(p.vy[i]);
-    };
+    const auto speed2 = [&](int i) { return speed2_of(p, i); };
     my.lo = share(n, t, threads);
     my.hi = share(n, t + 1, threads);
-    my.active = 0;
-    my.max2 = 0;
-    my.unordered = false;
-    for (int i = my.lo; i < my.hi; ++i) {
-      wall[i] = wall_candidate(box, p, i).t;
-      end[i] = sweep::path_end(wall[i]);
-      if (!(end[i] > 0)) continue;  // takes no part
-      const double v2 = speed2(i);
-      my.unordered |= (v2 != v2);
-      my.max2 = std::max(my.max2, v2);
-      ++my.active;
-    }
+    walls_of(box, p, wall, end, my);
     phases.lap(t, Part::kWalls);
 #pragma omp barrier
     phases.lap(t, Part::kWait);
