@@ -228,9 +228,8 @@ inline double speed2_of(const ParticlesOf<Real>& p, int i) {
 /// The wall time and path end of particles [my.lo, my.hi), and what the grid needs of them:
 /// how many take part, the fastest and whether a speed is not a number (in `my`).
 template <class Real>
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void walls_of(
-    const Box& box, const ParticlesOf<Real>& p, Buffer<double>& wall, Buffer<double>& end,
-    Mine& my) {
+PLAB_CPU_CLONES void walls_of(const Box& box, const ParticlesOf<Real>& p, Buffer<double>& wall,
+                              Buffer<double>& end, Mine& my) {
   my.active = 0;
   my.max2 = 0;
   my.unordered = false;
@@ -273,8 +272,8 @@ inline void gather(Entries& first, const ParticlesOf<Real>& p, const Buffer<doub
 /// group into `out` in cell order, with each entry's midpoint position, and `start` of the row's
 /// cells. Each entry is filed for slab k + 1 on the way (count_entry(), into `next_count`); in
 /// slab 0, the particles in their new order also go to `order` (the next step's).
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, int r1,
-                      const sweep::Grid& g, int* next_count) {
+PLAB_CPU_CLONES void sort_rows(Slab& s, const Entries& in, Entries& out, int k, int r0, int r1,
+                               const sweep::Grid& g, int* next_count) {
   const double tm = sweep::slab_mid(k, g);
   const std::vector<int>& row_start = s.row_start[k % 2];
   Sorted& o = s.sorted[k % 2];
@@ -411,9 +410,8 @@ inline void narrow(const Box& box, const Entries& out, const std::vector<std::pa
 /// of slab 0's input `in` (the team's, read only) into `o`, the search, and the pairs' times (into
 /// `my.found`). One level and one move an entry: the slab is small enough to stay in cache.
 template <class Real>
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void slab_alone(const Box& box, Slab& o, Mine& my,
-                       const Entries& in, int n, int k, const sweep::Grid& g,
-                       const sweep::Single& single) {
+PLAB_CPU_CLONES void slab_alone(const Box& box, Slab& o, Mine& my, const Entries& in, int n,
+                                int k, const sweep::Grid& g, const sweep::Single& single) {
   const double tm = sweep::slab_mid(k, g);
   Buffer<int>& cell = o.from;  // per input entry: its cell, or -1
   Sorted& to_search = o.sorted[0];
