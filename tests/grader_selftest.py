@@ -44,14 +44,14 @@ def submission(name, tree="solutions", mutations=()):
     return root
 
 
-def grade(name, root, *extra):
-    """Grades stages 01-03 of `root`; the race check (on by default) only where a case asks for
+def grade(name, root, *extra, stages="01,02,03"):
+    """Grades `stages` of `root`; the race check (on by default) only where a case asks for
     it ("--races") or grades the solutions as they are ("--default")."""
     out = scratch / f"{name}.json"
     out.unlink(missing_ok=True)
     extra = [e for e in extra if e != "--default"] if "--default" in extra else \
         (list(extra) if "--races" in extra else [*extra, "--no-races"])
-    done = subprocess.run([plab, "grade", "--submission", root, "--stages", "01,02,03", "--out",
+    done = subprocess.run([plab, "grade", "--submission", root, "--stages", stages, "--out",
                            out, "--hidden-seed", "7", *extra], capture_output=True, text=True)
     (scratch / f"{name}.log").write_text(done.stdout + done.stderr)
     assert out.exists(), f"{name}: no results.json written:\n{done.stdout[-3000:]}{done.stderr}"
@@ -179,9 +179,35 @@ def case_hostile():
     check("flood", "output cap" in flood, flood.splitlines()[0])
 
 
+def case_hang_large():
+    """A stage that hangs only on scenes of more than 100 particles: its first time-out holds back
+    the later scenes as large or larger, never the smaller ones, which keep their points; a
+    second time-out (none here) would hold back everything after it."""
+    root = submission("hang-large", mutations=mutants_of("hang-large"))
+    tests, _ = grade("hang-large", root, stages="01")
+    names = [n for n in tests if n.startswith("01: public") or n.startswith("01: hidden")]
+    first = next((n for n in names if "time limit" in tests[n]["output"]), None)
+    check("hang-large", first is not None, f"a time-out among {len(names)} tests")
+    if first is None:
+        return
+    later = names[names.index(first) + 1:]
+    held = [n for n in later if tests[n]["output"].startswith("not run: an earlier test")]
+    ran = [n for n in later if n not in held]
+    check("hang-large", held and all(f"({first.split(' ', 2)[2]}, N = " in tests[n]["output"]
+                                     for n in held),
+          f"{len(held)} later tests held back, naming the scene and its N: "
+          f"{tests[held[0]]['output'].splitlines()[0] if held else 'none'}")
+    check("hang-large", ran and all(tests[n]["status"] == "passed" for n in ran),
+          f"the {len(ran)} later scenes of at most 100 particles ran and passed: "
+          f"{', '.join(n.split(' ', 2)[2] for n in ran)}")
+    score = sum(t["score"] for t in tests.values())
+    check("hang-large", 0 < score < sum(t["max_score"] for t in tests.values()),
+          f"{score:g} points: those of the scenes it finishes")
+
+
 CASES = {"solutions": case_solutions, "starting-points": case_starting_points,
          "mutants-a": case_mutants_a, "mutants-b": case_mutants_b, "mutants-hidden": case_mutants_hidden,
-         "hostile": case_hostile}
+         "hostile": case_hostile, "hang-large": case_hang_large}
 scratch.mkdir(parents=True, exist_ok=True)
 for name, case in CASES.items():
     if not only or name in only:

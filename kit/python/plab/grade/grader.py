@@ -142,7 +142,11 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
         if isinstance(program, str):
             self.notes.append(f"{st.title}: " + " ".join(program.splitlines()[:2]))
         limits = self.rubric["limits"]
-        stopped = None  # why later runs of this stage are not started (a time-out)
+        stopped = None  # why no later run of this stage is started (a second time-out)
+        # After a first time-out on a scene of N particles: (N, why) no later scene of N or more
+        # is started (each would take the whole limit), but the smaller ones still are, so a
+        # stage that hangs only on large scenes keeps the points of the small ones
+        too_large = None
         folder = self.private / f"stage{st.key}"
         folder.mkdir()
         if st.gpu and st.idea and st.idea["kind"] == "gpu" and st.key not in self.idea_done:
@@ -159,8 +163,11 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
         faked = None  # a run on several ranks with the right text whose ranks did not share
         for name, scene, expected, points, hidden, how in tests:
             test = f"{st.key}: {'hidden' if hidden else 'public'} {name}"
-            if isinstance(program, str) or stopped:
-                why = unbuilt(st.sid, program) if isinstance(program, str) else stopped
+            n = self.scene_n(scene) if too_large else None  # (read only after a time-out)
+            held = stopped or (too_large[1] if too_large and (n is None or n >= too_large[0])
+                               else None)
+            if isinstance(program, str) or held:
+                why = unbuilt(st.sid, program) if isinstance(program, str) else held
                 self.results.add(test, 0, points, False, f"not run: {why}", hidden)
                 all_right = False
                 continue
@@ -177,7 +184,13 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
                 if verdict:  # the idea faked off its test's scene: the folder's points go
                     faked = faked or f"{name}: {verdict}"
             if run.reason and "time limit" in run.reason:
-                stopped = f"an earlier test of stage {st.key} ran out of time ({name})"
+                n = n if too_large else self.scene_n(scene)
+                if too_large is None and n is not None:
+                    too_large = (n, f"an earlier test of stage {st.key} ran out of time ({name}, "
+                                    f"N = {n}): no later scene of {n} particles or more is started")
+                else:
+                    stopped = (f"a second test of stage {st.key} ran out of time ({name}): no "
+                               "later test is started")
                 self.idea_not_to_blame(st, name, budget, self.ref_seconds(st, scene))
             self.add_correctness(st, test, points if verdict is None else 0, points,
                                  verdict is None, verdict or "same text as the reference, bit for bit",
@@ -186,7 +199,10 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
             any_right |= verdict is None
         if faked:
             self.void_folder(st, faked)
-        all_right &= self.one_step(st, program, stopped, folder)
+        one_step_n = int(self.rubric["correctness"]["one_step_scene"]["n"])
+        all_right &= self.one_step(st, program, stopped or (
+            too_large[1] if too_large and one_step_n >= too_large[0] else None), folder)
+        stopped = stopped or (too_large[1] if too_large else None)
         correct = (all_right and not stopped and not self.idea_failed.get(st.sid)
                    and not self.idea_failed.get(st.key))
         if st.conf.get("races") and not self.a.no_races:
@@ -196,6 +212,13 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
             self.performance(st, program, correct,
                              "its idea test must pass first" if all_right and not stopped and idea
                              else "every correctness test must pass first")
+
+    def scene_n(self, scene):
+        """The number of particles of `scene` (the kit's reader), None if it cannot be read."""
+        try:
+            return int(self.kit_programs.read_scene(scene)["n"])
+        except (plabio.FormatError, plabio.ProgramError, KeyError, ValueError):
+            return None
 
     def void_folder(self, st, why):
         """Stage folder st.sid fails its idea after all (`why`: a correctness scene on several
