@@ -201,6 +201,14 @@ def release_tests(out, kit):
         "-DPLAB_ENABLE_CUDA=OFF")
     run("cmake", "--build", build, "-j", "2")
     print("the release configures and builds on its own")
+    listed = run(build / "bin" / "plab", "--help").stdout
+    for command in ("grade", "release", "gradescope", "golden", "similar"):
+        check(not re.search(rf"^\s+{command}\s", listed, re.MULTILINE),
+              f"the release's `plab --help` lists the instructor's command {command}:\n{listed}")
+    for command in ("test", "run", "diff", "demo"):
+        check(re.search(rf"^\s+{command}\s", listed, re.MULTILINE),
+              f"the release's `plab --help` does not list {command}:\n{listed}")
+    print("its `plab --help` lists a student's commands and demo, no instructor's command")
     r = run("ctest", "--test-dir", build, "-L", "^kit$", "-E", "render")
     print("its kit tests pass: " + next((l for l in r.stdout.splitlines() if "tests passed" in l), ""))
     for stage in ("01", "02", "03"):

@@ -39,13 +39,17 @@ int main(int argc, char** argv) {
   plab::cli::add_accuracy(app);
   plab::cli::add_stress(app);
   // The help lists a student's commands first, then the instructor's, then the kit's own tools.
+  // A student's copy (no solutions/) lists no instructor's command but `demo` (the compiled
+  // reference on the course scenes): the others need the solutions, and say so if called.
+  const bool student_copy = plab::cli::default_impl() == "student";
   const char* student = "For students";
-  const char* instructor = "For instructors";
+  const char* instructor = student_copy ? "" : "For instructors";  // "": not listed
   const char* kit = "The kit's tools";
   for (CLI::App* c : app.get_subcommands({})) {
     const std::string n = c->get_name();
     if (n == "run" || n == "test" || n == "diff" || n == "render" || n == "view" ||
-        n == "bench" || n == "report" || n == "gen" || n == "read" || n == "docs")
+        n == "bench" || n == "report" || n == "gen" || n == "read" || n == "docs" ||
+        (n == "demo" && student_copy))
       c->group(student);
     else if (n == "grade" || n == "release" || n == "gradescope" || n == "golden" ||
              n == "similar" || n == "demo")
