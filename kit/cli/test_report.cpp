@@ -102,6 +102,15 @@ std::string ranks_of(const std::string& message) {
   return std::regex_search(message, m, re) ? ", on " + m[1].str() : "";
 }
 
+/// " --ranks 3" when a failure message says its run was on several ranks, else "": the
+/// reproduce commands then run the same (on one rank a stage on several processes may print the
+/// reference's output, and `plab diff` says `equal`).
+std::string ranks_option(const std::string& message) {
+  static const std::regex re(R"(\bon (\d+) ranks\b)");
+  std::smatch m;
+  return std::regex_search(message, m, re) ? " --ranks " + m[1].str() : "";
+}
+
 /// A failing case's lines, the reason first: GoogleTest prints "Failed" before the reason of
 /// ADD_FAILURE() << "why" and FAIL() << "why", and what the programs the case ran printed (mpirun's
 /// notes on a crashed rank) comes before it. Without that line, the lines as they are.
@@ -280,11 +289,25 @@ Explainer explainer(const FirstFailure& f, const std::string& scene) {
   return {"", ""};
 }
 
+/// The command that plays the failing run against `expected` in the browser (`name`.html): the
+/// stage run by plab view on one process, or, for a run on several ranks, the output `mine.out`
+/// that the reproduce commands wrote (on one process the stage may print the expected text).
+void print_play(const FirstFailure& f, const std::string& scene, const std::string& expected,
+                const std::string& name) {
+  if (ranks_option(f.c.message).empty())
+    std::printf("  play it:  ./plab view %s --stage %s --impl %s --compare %s --out %s.html\n",
+                scene.c_str(), f.id.c_str(), f.impl.c_str(), expected.c_str(), name.c_str());
+  else
+    std::printf("  play it:  ./plab view mine.out --scene %s --compare %s --out %s.html\n",
+                scene.c_str(), expected.c_str(), name.c_str());
+}
+
 /// The reproduce and draw commands (and the event that should have happened) for a golden scene.
 void explain_golden(const FirstFailure& f, const Dataset& d, const Manifest& m, const Found& diff) {
   const std::string scene = shown_path(m.scene_path(d));
   const std::string golden = shown_path(m.golden_path(d));
-  const std::string run = "./plab run --stage " + f.id + " --impl " + f.impl + " " + scene;
+  const std::string run = "./plab run --stage " + f.id + " --impl " + f.impl +
+                          ranks_option(f.c.message) + " " + scene;
   std::printf("  the scene: %s\n", d.tests.c_str());
   // A threaded stage's race changes the output from run to run: the commands below may then
   // print `equal`, which reads as a contradiction without this line.
@@ -331,8 +354,7 @@ void explain_golden(const FirstFailure& f, const Dataset& d, const Manifest& m, 
   // click and compare in the browser.
   std::printf("  draw it:  ./plab render %s --diff %s mine.out --out %s-diff.gif\n",
               scene.c_str(), golden.c_str(), d.name.c_str());
-  std::printf("  play it:  ./plab view %s --stage %s --impl %s --compare %s --out %s.html\n",
-              scene.c_str(), f.id.c_str(), f.impl.c_str(), golden.c_str(), d.name.c_str());
+  print_play(f, scene, golden, d.name);
 }
 
 /// The same for a generated scene of the stage-against-stage test (its `plab gen` line).
@@ -357,7 +379,8 @@ void explain_generated(const FirstFailure& f, const Found& diff) {
     std::printf("  its scene is built in the test itself (%s, in tests/)\n", f.c.name.c_str());
     return;
   }
-  const std::string run = "./plab run --stage " + f.id + " --impl " + f.impl + with + " scene.in";
+  const std::string run = "./plab run --stage " + f.id + " --impl " + f.impl + with +
+                          ranks_option(f.c.message) + " scene.in";
   const long long step = std::atoll(diff.step.c_str());
   std::printf("  reproduce it:\n    ./plab gen %s --out scene.in\n", g[1].str().c_str());
   const Explainer how = explainer(f, "scene.in");
@@ -371,14 +394,20 @@ void explain_generated(const FirstFailure& f, const Found& diff) {
     std::printf("    %s --explain %lld:%s\n", how.command.c_str(), step > 0 ? step - 1 : 0,
                 diff.particle.c_str());
   std::printf("  draw it:  ./plab render scene.in --diff expected.out mine.out --out diff.gif\n");
-  std::printf("  play it:  ./plab view scene.in --stage %s --impl %s --compare expected.out --out "
-              "diff.html\n", f.id.c_str(), f.impl.c_str());
+  print_play(f, "scene.in", "expected.out", "diff");
 }
 
 /// The page about the first failing case: what differs, why the scene exists, and how to see it.
 void explain_first(const FirstFailure& f, const Manifest& m) {
   const auto diff = find_difference(f.c.message);
-  const auto d = scene_of(m, f.c.name);
+  auto d = scene_of(m, f.c.name);
+  // A dataset on several ranks (tests/stage_test.cpp's Ranks: `random_1000_3`, the dataset's
+  // name and the ranks)
+  if (static const std::regex on_ranks(R"(^(\w+?)_(\d+)$)"); !d) {
+    std::smatch r;
+    if (std::regex_match(f.c.name, r, on_ranks) && !ranks_option(f.c.message).empty())
+      d = scene_of(m, r[1].str());
+  }
   std::printf("first failure: %s, %s\n", f.test.c_str(), d ? ("scene " + d->name).c_str()
                                                            : f.c.name.c_str());
   if (!diff) {
