@@ -453,8 +453,9 @@ std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::t
   else if (status > 128)
     ADD_FAILURE() << where << ": a rank crashed (signal " << status - 128 << ", "
                   << strsignal(status - 128) << ") after step " << done;
-  else
-    EXPECT_EQ(status, 0) << command;
+  else  // (not the command line: its scratch folder is gone when the student reads it)
+    EXPECT_EQ(status, 0) << where << ": exited with status " << status
+                         << " (what the ranks printed is above)";
   return status == 0 ? plab::read_file(out) : std::string();
 }
 

@@ -66,11 +66,12 @@ def read_events(plab, path, first, last, n):
 
 
 def infer_events(frames, first, last):
-    """Collisions of each step read from the velocities of the next (none for the last)."""
+    """Collisions of each step read from the velocities of the next; None for a step with no next
+    (the last): its collisions are not known."""
     kinds = {}
     for s in range(first, last + 1):
         now = frames[s]
-        kinds[s] = np.zeros(len(now), dtype=int)
+        kinds[s] = np.zeros(len(now), dtype=int) if s + 1 in frames else None
         if s + 1 in frames:
             v0, v1 = now[:, 2:4], frames[s + 1][:, 2:4]
             changed = np.any(v0 != v1, axis=1)
@@ -116,7 +117,9 @@ class Panel:
 
     def draw(self, step, mark=None):
         state = self.frames[step][self.shown]
-        kinds = self.kinds[step][self.shown]
+        known = self.kinds[step] is not None
+        every = self.kinds[step] if known else np.zeros(len(self.frames[step]), dtype=int)
+        kinds = every[self.shown]
         colours = np.array([COLOURS["none"], COLOURS["wall"], COLOURS["pair"]])[kinds]
         self.disks.set_offsets(state[:, 0:2])
         if self.follow is not None:
@@ -125,10 +128,11 @@ class Panel:
                              if s <= step])
             self.trail.set_data(path[:, 0], path[:, 1])
         self.disks.set_facecolors(colours)
-        walls = int(np.sum(self.kinds[step] == 1))
-        pairs = int(np.sum(self.kinds[step] == 2)) // 2
-        self.label.set_text(f"{self.title}step {step}: {pairs} pair and {walls} wall collisions"
-                            f"{self.note}")
+        walls = int(np.sum(every == 1))
+        pairs = int(np.sum(every == 2)) // 2
+        what = (f"{pairs} pair and {walls} wall collisions" if known else
+                "its collisions not known (read from the next step's velocities: none follows)")
+        self.label.set_text(f"{self.title}step {step}: {what}{self.note}")
         self.label.set_fontsize(9)
         if self.ring is not None:
             self.ring.remove()
