@@ -101,6 +101,10 @@ void add_run(CLI::App& app) {
                                             fs::path(a->scene).filename().string(),
                                         a->timeout, status, a->ranks});
     fs::remove(status);
+    // A run ended from outside (--timeout, a signal) leaves the output it had begun: the runner
+    // writes --out's file as FILE.partial and renames it when the run succeeds.
+    std::error_code ignored;
+    if (g_status != 0 && !a->out.empty()) fs::remove(a->out + ".partial", ignored);
   });
 }
 
