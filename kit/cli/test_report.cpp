@@ -456,6 +456,18 @@ std::string lower(std::string s) {
   return s;
 }
 
+/// A test's CTest status as one word for the progress lines: passed, failed, skipped, crashed
+/// (CTest's "Subprocess aborted***Exception:", "Exception: SegFault", ...), timeout.
+std::string progress_word(const std::string& status) {
+  const std::string s = lower(status);
+  if (s == "passed" || s == "failed" || s == "skipped" || s == "timeout") return s;
+  if (s.find("not run") != std::string::npos) return "not run";
+  if (s.find("exception") != std::string::npos || s.find("abort") != std::string::npos ||
+      s.find("segfault") != std::string::npos)
+    return "crashed";
+  return s;
+}
+
 /// Starts ctest with its output into `log`; returns its process id.
 pid_t start_ctest(const std::vector<std::string>& args, const std::string& log) {
   std::fflush(nullptr);
@@ -505,7 +517,7 @@ int follow(pid_t pid, const std::string& log) {
       if (const auto started = parse_start_line(line)) running[*started] = {Clock::now()};
       if (const auto r = parse_result_line(line)) {
         running.erase(r->name);
-        std::printf("  %-8s %s (%.1f s)\n", lower(r->status).c_str(), r->name.c_str(),
+        std::printf("  %-8s %s (%.1f s)\n", progress_word(r->status).c_str(), r->name.c_str(),
                     r->seconds);
       }
     }
