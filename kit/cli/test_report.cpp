@@ -94,21 +94,26 @@ std::optional<Found> find_difference(const std::string& message) {
 
 std::string first_line(const std::string& text) { return text.substr(0, text.find('\n')); }
 
-/// ", on 3 ranks" when a failure message says on how many ranks its run was (a stage on several
-/// processes: tests/stage_test.cpp's "run here on 3 ranks", "(on 3 ranks)"), else "".
-std::string ranks_of(const std::string& message) {
-  static const std::regex re(R"(\bon (\d+ ranks?)\b)");
+/// How many ranks a failure message says its run was on (a stage on several processes:
+/// tests/stage_test.cpp's "run here on 3 ranks", "(on 3 ranks)"), 0 when it says none.
+int ranks_in(const std::string& message) {
+  static const std::regex re(R"(\bon (\d+) ranks?\b)");
   std::smatch m;
-  return std::regex_search(message, m, re) ? ", on " + m[1].str() : "";
+  return std::regex_search(message, m, re) ? std::atoi(m[1].str().c_str()) : 0;
+}
+
+/// ", on 3 ranks" when a failure message says on how many ranks its run was, else "".
+std::string ranks_of(const std::string& message) {
+  const int ranks = ranks_in(message);
+  return ranks ? ", on " + std::to_string(ranks) + (ranks == 1 ? " rank" : " ranks") : "";
 }
 
 /// " --ranks 3" when a failure message says its run was on several ranks, else "": the
 /// reproduce commands then run the same (on one rank a stage on several processes may print the
 /// reference's output, and `plab diff` says `equal`).
 std::string ranks_option(const std::string& message) {
-  static const std::regex re(R"(\bon (\d+) ranks\b)");
-  std::smatch m;
-  return std::regex_search(message, m, re) ? " --ranks " + m[1].str() : "";
+  const int ranks = ranks_in(message);
+  return ranks > 1 ? " --ranks " + std::to_string(ranks) : "";
 }
 
 /// A failing case's lines, the reason first: GoogleTest prints "Failed" before the reason of
