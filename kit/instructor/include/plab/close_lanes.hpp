@@ -18,8 +18,9 @@
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 /// A loop's function compiled three times, for x86-64-v4 (AVX-512), v3 (AVX2) and the baseline,
 /// the widest the CPU has chosen when the program loads (GCC's target_clones): scalar code gains
-/// the newer instructions (a floor in one instruction, more registers). No FMA is formed in any of
-/// them (-ffp-contract=off), so every clone gives the same bits.
+/// the newer instructions (a floor in one instruction instead of the baseline's five, among
+/// others). No FMA is formed in any of them (-ffp-contract=off), so every clone gives the same
+/// bits.
 #define PLAB_CPU_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
 /// One compilation for the baseline (not x86-64 with GCC).
