@@ -27,7 +27,7 @@ TEST(Stage01Spec, TheNextMinimumIsTakenAmongTheFreeParticles) { expect_case(chai
 TEST(Stage01Spec, ParticlesWithoutEventsMoveFreely) {
   // 0: walls at ((20 - 3) - 1)/2 = 8 and ((20 - 4) - 1)/1 = 15; 1 at rest: no wall. The pair:
   // 0 heads straight for 1 (d = -5 dv): c = 121, b = -50, a = 5, t1 = (50 - sqrt(80))/10 > 1.
-  expect_state(state({{5, 5, 2, 1}, {13, 9, 0, 0}}, {0, 0}, {0, 0}),
+  EXPECT_STATE(state({{5, 5, 2, 1}, {13, 9, 0, 0}}, {0, 0}, {0, 0}),
                run({20, 1}, disks({{3, 4, 2, 1}, {13, 9, 0, 0}})));
 }
 

@@ -41,7 +41,7 @@ TEST(Stage06Spec, AFastDiskFindsItsPartnerInAFarCell) {
   const plab::Particles start = fine_lattice_and({{5, 50, 86, 0}, {28.5, 50, 0, 0}});
   plab::Particles expected = fine_lattice_and({{26.5, 50, 0, 0}, {93, 50, 86, 0}});
   expected.pc[400] = expected.pc[401] = 1;
-  expect_state(expected, run({100, 1}, start));
+  EXPECT_STATE(expected, run({100, 1}, start));
 }
 
 // The overlap rule holds in the grid: two disks 1 apart, moving apart, meet at time 0 (t1 = -1.5,
@@ -50,7 +50,7 @@ TEST(Stage06Spec, AnOverlappingPairMovingApartIsFound) {
   const plab::Particles start = lattice_and({{44, 50, -1, 0}, {45, 50, 1, 0}});
   plab::Particles expected = lattice_and({{45, 50, 1, 0}, {44, 50, -1, 0}});
   expected.pc[20] = expected.pc[21] = 1;
-  expect_state(expected, run({100, 1}, start));
+  EXPECT_STATE(expected, run({100, 1}, start));
 }
 
 // A particle's path ends at its wall: 21 reaches the wall at ((100 - 98) - 1)/2 = 0.5, before 20
@@ -60,7 +60,7 @@ TEST(Stage06Spec, APairAfterAWallIsNeverTaken) {
   const plab::Particles start = lattice_and({{93.75, 50, 5, 0}, {98, 50, 2, 0}});
   plab::Particles expected = lattice_and({{98.75, 50, 5, 0}, {98, 50, -2, 0}});
   expected.wc[21] = 1;
-  expect_state(expected, run({100, 1}, start));
+  EXPECT_STATE(expected, run({100, 1}, start));
 }
 
 // Pairs that cannot meet in the step get no event, however close: two disks touching side by
@@ -71,7 +71,7 @@ TEST(Stage06Spec, PairsThatCannotMeetMoveFreely) {
       lattice_and({{40, 45, 3, 0}, {40, 47, 3, 0}, {56, 52.5, -4, 0}, {52, 50, 4, 0}});
   plab::Particles expected =
       lattice_and({{43, 45, 3, 0}, {43, 47, 3, 0}, {52, 52.5, -4, 0}, {56, 50, 4, 0}});
-  expect_state(expected, run({100, 1}, start));
+  EXPECT_STATE(expected, run({100, 1}, start));
 }
 
 // The hand-built cases of stages 01-03 (a few disks: one cell, or a grid of a few).

@@ -13,7 +13,7 @@ using namespace plab::spec;
 // b = -6, c = 5, a = 4, disc = 16: t = 5 / (6 + 4) = 0.5, at x = 3.5 and 5.5; then
 // the collision: f = (-2 * 2) / 4 = -1, v0 = 1 - 2 = -1, v1 = -1 + 2 = 1; at t = 1: 3 and 6.
 TEST(Stage07Spec, HeadOnPairCollidesAtTheContactTime) {
-  expect_state(state({{3, 5, -1, 0}, {6, 5, 1, 0}}, {1, 1}, {0, 0}),
+  EXPECT_STATE(state({{3, 5, -1, 0}, {6, 5, 1, 0}}, {1, 1}, {0, 0}),
                run({10, 1}, disks({{3, 5, 1, 0}, {6, 5, -1, 0}})));
 }
 
@@ -23,7 +23,7 @@ TEST(Stage07Spec, HeadOnPairCollidesAtTheContactTime) {
 // v0 = v0 - f d = (4, -3) (its tangential part) and v1 = v1 + f d = (3, 4); at t = 1 they are at
 // (14, 7) and (16, 18), receding.
 TEST(Stage07Spec, AnObliqueCollisionExchangesTheNormalComponents) {
-  expect_state(state({{14, 7, 4, -3}, {16, 18, 3, 4}}, {1, 1}, {0, 0}),
+  EXPECT_STATE(state({{14, 7, 4, -3}, {16, 18, 3, 4}}, {1, 1}, {0, 0}),
                run({40, 2.5}, disks({{10, 10, 7, 1}, {13, 14, 0, 0}})));
 }
 
@@ -31,7 +31,7 @@ TEST(Stage07Spec, AnObliqueCollisionExchangesTheNormalComponents) {
 // the second): from 8.5 at speed 16 in [1, 9]: x = 9 at (9 - 8.5)/16 = 1/32, x = 1 at 1/32 + 8/16,
 // then 16 * (1 - 17/32) = 7.5 further: 8.5, moving right again, two wall hits.
 TEST(Stage07Spec, ADiskHitsBothWallsWithinOneStep) {
-  expect_state(state({{8.5, 5, 16, 0}}, {0}, {2}), run({10, 1}, disks({{8.5, 5, 16, 0}})));
+  EXPECT_STATE(state({{8.5, 5, 16, 0}}, {0}, {2}), run({10, 1}, disks({{8.5, 5, 16, 0}})));
 }
 
 // A disk collides twice within one unit of time (the stepped model allows one event a step):
@@ -39,14 +39,14 @@ TEST(Stage07Spec, ADiskHitsBothWallsWithinOneStep) {
 // and stops at 3; 1 takes speed 4 and meets 2 at 0.25 + 1/4 = 0.5, stopping at 6; 2 moves from 8
 // at speed 4 for 0.5: 10. Disk 1 counts two collisions.
 TEST(Stage07Spec, ACollisionChainPassesMomentumOnInOneStep) {
-  expect_state(state({{3, 5, 0, 0}, {6, 5, 0, 0}, {10, 5, 4, 0}}, {1, 2, 1}, {0, 0, 0}),
+  EXPECT_STATE(state({{3, 5, 0, 0}, {6, 5, 0, 0}, {10, 5, 4, 0}}, {1, 2, 1}, {0, 0, 0}),
                run({20, 1}, disks({{2, 5, 4, 0}, {5, 5, 0, 0}, {8, 5, 0, 0}})));
 }
 
 // An exact corner reflects both axes at once (one wall hit): from (8.5, 8.5) at (1, 1), both
 // axes reach 9 at 0.5; at t = 1: (8.5, 8.5) moving (-1, -1).
 TEST(Stage07Spec, ACornerReflectsBothAxesAtOnce) {
-  expect_state(state({{8.5, 8.5, -1, -1}}, {0}, {1}), run({10, 1}, disks({{8.5, 8.5, 1, 1}})));
+  EXPECT_STATE(state({{8.5, 8.5, -1, -1}}, {0}, {1}), run({10, 1}, disks({{8.5, 8.5, 1, 1}})));
 }
 
 // Reading the state at whole times does not change the run (particles are stored at their own
@@ -61,7 +61,7 @@ TEST(Stage07Spec, ReadingAtWholeTimesDoesNotChangeTheRun) {
     stage->step();
     stage->read(each);
   }
-  expect_state(run(box, start, 7), each);
+  EXPECT_STATE(run(box, start, 7), each);
   long long pairs = 0, walls = 0;
   for (std::size_t i = 0; i < each.size(); ++i) pairs += each.pc[i], walls += each.wc[i];
   EXPECT_GE(pairs, 4) << "at least two collisions (each counted by both disks)";

@@ -30,7 +30,7 @@ struct Case {
 inline void expect_case(const Case& c,
                         const StageOptions& options = {}) {
   SCOPED_TRACE(c.rule);
-  expect_state(c.expected, run(c.box, c.start, c.steps, options));
+  EXPECT_STATE(c.expected, run(c.box, c.start, c.steps, options));
 }
 
 /// Three disks in a row (L = 20): pairs (1,2) at 0.25, (0,1) at 0.5, (0,2) at 0.875.

@@ -89,6 +89,15 @@ inline std::string missing_device() {
 
 }  // namespace plab::spec
 
+/// expect_state() with the calling test's file and line in a failure's "Google Test trace" (the
+/// failure itself is reported at the EXPECT in this header): a student reads which test's
+/// expected state it was.
+#define EXPECT_STATE(...)                                           \
+  do {                                                              \
+    SCOPED_TRACE("the expected state of the test at this line");   \
+    ::plab::spec::expect_state(__VA_ARGS__);                        \
+  } while (0)
+
 /// A CUDA stage's spec cases skip, with the runtime's reason, where no GPU can be used.
 #define PLAB_SPEC_SKIP_WITHOUT_DEVICE()                                         \
   if (const std::string why = ::plab::spec::missing_device(); !why.empty())     \
