@@ -2,12 +2,15 @@
 /// \brief `plab run`: simulate a scene with one stage.
 #include "common.hpp"
 
+#include "../runner/stage_options.hpp"
+
 namespace plab::cli {
 
 void add_run(CLI::App& app) {
   struct Args {
     std::string stage, impl, scene, out, digest, events, schedule, explain, speed, mode;
-    std::string device, off, simd, sweep_alpha;  // the stage's options, passed on as given
+    std::string device, off, simd;  // the stage's options, passed on as given
+    double sweep_alpha = 0;
     long long steps = -1;
     int threads = 0;
     int ranks = 0;
@@ -57,22 +60,11 @@ void add_run(CLI::App& app) {
                 "kit's oracle, from this stage's state at the start of step K; a student's copy "
                 "has no oracle: kit/reference/bin/plab-reference SCENE --explain K:I answers)");
   // The stage's own options (stage.hpp's StageOptions), passed to its program as given: each
-  // stage's handout says which it reads (`plab-run-NN-IMPL --help` lists them all).
-  c->add_option("--device", a->device,
-                "auto, cpu or gpu: a stage with a GPU path (04-06) runs it when a GPU can be "
-                "used; cpu or gpu to choose (default: PLAB_DEVICE, else auto)")
-      ->check(CLI::IsMember({"auto", "cpu", "gpu"}));
-  c->add_option("--off", a->off,
-                "A,B: turn these changes off to measure what each buys (stage 05's graph, "
-                "streams, branchless)");
-  c->add_option("--simd", a->simd,
-                "narrower vectors than the widest the CPU has (portable, avx2; stages that "
-                "declare them: 06)");
-  c->add_option("--sweep-alpha", a->sweep_alpha,
-                "stage 06's grid: slabs per sqrt(N) v / L (0: the measured best)");
+  // stage's handout says which it reads
+  runner::add_stage_options(*c, a->device, a->simd, a->off, a->sweep_alpha);
   c->add_option("scene", a->scene, "scene file")->required()->check(CLI::ExistingFile);
   time_only->excludes(out);
-  c->callback([a] {
+  c->callback([a, c] {
     const std::string impl = a->impl.empty() ? default_impl() : a->impl;
     check_impl(impl);
     wait_as_the_grader(impl);
@@ -91,7 +83,8 @@ void add_run(CLI::App& app) {
     if (!a->device.empty()) args.insert(args.end(), {"--device", a->device});
     if (!a->off.empty()) args.insert(args.end(), {"--off", a->off});
     if (!a->simd.empty()) args.insert(args.end(), {"--simd", a->simd});
-    if (!a->sweep_alpha.empty()) args.insert(args.end(), {"--sweep-alpha", a->sweep_alpha});
+    if (c->count("--sweep-alpha") > 0)
+      args.insert(args.end(), {"--sweep-alpha", fmt_double(a->sweep_alpha)});
     if (a->time_only) args.emplace_back("--time-only");
     if (a->quiet) args.emplace_back("--quiet");
     const std::string status = temp_path("run.status");

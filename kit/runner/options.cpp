@@ -7,6 +7,7 @@
 
 #include "plab/generate.hpp"
 #include "runner.hpp"
+#include "stage_options.hpp"
 
 namespace plab::runner {
 
@@ -76,24 +77,11 @@ void add_options(CLI::App& app, Options& o) {
   auto* stage = app.add_option_group("stage options", "what reaches the stage (stage.hpp's "
                                      "StageOptions; the environment's PLAB_DEVICE, PLAB_SIMD, "
                                      "PLAB_CUDA_OFF and PLAB_SWEEP_ALPHA set their defaults)");
-  stage->add_option("--device", o.device,
-                    "auto: the GPU path when a GPU can be used; cpu or gpu to choose (default: "
-                    "PLAB_DEVICE, else auto)")
-      ->check(CLI::IsMember({"auto", "cpu", "gpu"}));
   stage->add_option("--real", o.real,
                     "plab accuracy: run the model in float (stages that declare a float path: "
                     "06) instead of model.md's double; never for golden outputs")
       ->check(CLI::IsMember({"double", "float"}))->capture_default_str();
-  stage->add_option("--simd", o.stage.simd,
-                    "narrower vectors than the widest the CPU has (portable, avx2; stages that "
-                    "declare them: 06)");
-  stage->add_option("--off", o.off,
-                    "turn these changes off to measure what each buys (stages that declare "
-                    "switches: 05's graph, streams, branchless)")
-      ->type_name("A,B");
-  stage->add_option("--sweep-alpha", o.stage.sweep_alpha,
-                    "stage 06's grid (the engine's CPU path too): slabs per sqrt(N) v/L (0: the measured "
-                    "best)");
+  add_stage_options(*stage, o.device, o.stage.simd, o.off, o.stage.sweep_alpha);
 }
 
 void finish_options(Options& o) {
