@@ -41,12 +41,15 @@ and, measured by the grader outside the student's code (each must score nothing)
                   scene's rounds), 07 with a linear scan for the next event, 08 whose rank 0 steps
                   everything through gathers and scatters (bytes counted in every MPI call), 08
                   whose rank 0 takes every particle once and steps them alone while the others
-                  spin in MPI_Barrier (the work outside MPI calls, sampled by the kit), 08
+                  spin in MPI_Barrier (the driver's check of each rank's particles), 08
                   whose every rank gathers every particle once and steps them all itself,
-                  keeping its slab's (even shares; the work in all, against the solution's), 08
+                  keeping its slab's (even shares; the work in all, against the solution's, and
+                  again with the work checks off, as a stepper of its own fast enough to pass
+                  them would see: the bytes of that one gather), 08
                   that steps its slab on the idea test's scene only and gathers on rank 0
                   elsewhere (its random-1000 and random-2000 must earn nothing); and
-                  03 as one parallel region with dynamic and guided loops, which keeps its points
+                  03 as one parallel region with dynamic and guided loops and 08's solution,
+                  which keep their points
   ties            02 whose heap orders events by time only loses the hidden-ties scene
   shortcuts       the one-step answers (next-state), a stage 02 that skips the work on the timed
                   scene (no performance points), the untouched starting point of 03 (no race points)
@@ -1311,12 +1314,37 @@ def rounds_07():
     return [(name, "07", False)]
 
 
+def rubric_08(name, **idea):
+    """rubric.json without refused calls, with stage 08's idea test changed by `idea` (and, when
+    the work checks are off, without the correctness runs' work check either)."""
+    rubric = json.loads(without_refused_calls().read_text())
+    rubric["stages"]["08-ranks3"]["idea"].update(idea)
+    if idea.get("max_work_multiple"):
+        rubric["correctness"].pop("ranks_work", None)
+    path = scratch / f"rubric-{name}.json"
+    path.write_text(json.dumps(rubric))
+    return path
+
+
 def rounds_08():
     """Stage 08's gradings of case rounds-08: rank 0 steps everything (the solution's step renamed,
-    and a step around it)."""
+    and a step around it). The gather on rank 0 every step is stopped by the bytes; rank 0 taking
+    every particle once and stepping them alone, by the driver's check of the owners. Every rank
+    stepping every particle after one all-gather is stopped twice over: by the work in all,
+    graded with the bytes' most as it was when that check was written (20), and by the bytes
+    alone, the work checks off: what a stepper of the student's own, fast enough to pass them
+    (a red team's, 2.5 times the kit's, scored 164 of 164 so in 2026-12-07's first session),
+    meets. The solution itself, graded the same way, keeps every point."""
     gradings = []
-    for cheat, step in (("gather", GATHER_08), ("barrier", WAIT_08),
-                        ("redundant", REDUNDANT_08)):
+    bytes_over = "bytes a particle and step (at most"
+    slow = rubric_08("08-work", max_bytes_per_particle_step=20)
+    fast = rubric_08("08-fast", share=0, max_share=1, max_work_share=1, min_work_multiple=0,
+                     max_work_multiple=1e9)
+    for cheat, step, rubric, why in (
+            ("gather", GATHER_08, None, bytes_over),
+            ("barrier", WAIT_08, None, "owns particle"),
+            ("redundant", REDUNDANT_08, slow, "work outside MPI calls in all"),
+            ("redundant-fast", REDUNDANT_08, fast, bytes_over)):
         name = f"redteam-rounds-{cheat}-08"
         shutil.rmtree(scratch / name, ignore_errors=True)
         if patched(name, "08", "solutions/08-mpi", [(
@@ -1325,7 +1353,13 @@ def rounds_08():
                 ("}  // namespace plab::dist\n", step),
                 ("#include <vector>\n", "#include <cstring>\n#include <vector>\n")],
                 f"stage 08's solution no longer has the shape the {cheat} patch needs"):
-            gradings.append((name, "08-ranks3", False))
+            gradings.append((name, "08-ranks3", False, rubric, why))
+    # The control: the solution itself keeps every point, its idea test passed (0.19 bytes a
+    # particle and step on the idea scene, each rank 25% to 40% of the work).
+    name = "redteam-rounds-honest-08"
+    shutil.rmtree(scratch / name, ignore_errors=True)
+    patched(name, "08", "solutions/08-mpi", [], "")
+    gradings.append((name, "08-ranks3", True, None, None))
     return gradings
 
 
@@ -1339,8 +1373,10 @@ def case_rounds(sid):
     everything through gathers and scatters must score nothing on correctness; 03 written as one
     parallel region with dynamic and guided `omp for` loops keeps every correctness point."""
     gradings = {"03": rounds_03, "07": rounds_07, "08": rounds_08}[sid]()
-    for name, key, honest in gradings:
-        tests, doc, _ = grade(name, scratch / name, key, "--no-races")
+    for name, key, honest, *variant in gradings:
+        rubric, why = variant or (None, None)
+        tests, doc, _ = grade(name, scratch / name, key, "--no-races",
+                              *(("--rubric", str(rubric)) if rubric else ()))
         idea = next((t for n, t in tests.items() if n.startswith(f"{key[:2]}: idea")), None)
         mine = correctness(tests, key)
         got = sum(t["score"] for t in mine.values())
@@ -1354,6 +1390,8 @@ def case_rounds(sid):
         else:
             check("rounds", idea is not None and idea["status"] == "failed" and got == 0,
                   f"{name} scored {got} of {most} on correctness; its idea test: {said!r}")
+            if why:  # stopped by the check it is graded for
+                check("rounds", why in said, f"{name}'s idea test fails on {why!r}: {said!r}")
     if sid == "08":
         largest_08()
 

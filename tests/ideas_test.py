@@ -15,7 +15,7 @@ import pathlib
 import tempfile
 import unittest
 
-from plab.grade.ideas import Ideas
+from plab.grade.ideas import Ideas, gather_once
 from plab.grade.run import launcher_crashed
 
 IDEA = {"scene": {"n": 1000, "steps": 10}, "max_bytes_per_particle_step": 20, "ranks": 3,
@@ -55,6 +55,24 @@ class BytesSent(unittest.TestCase):
     def test_everything_sent_fails(self):
         problem, _ = check(75.0 * 1000 * 10)
         self.assertIn("75.0 bytes a particle and step (at most 20", problem)
+
+    def test_one_gather_of_every_particle_fails(self):
+        # The rubric's idea scene and most: 10 steps on 3 ranks, at most 1 byte. Rank 0 taking
+        # every particle's 32-byte state once and sending it back at the end, or every rank
+        # taking every particle once (a stepper of the student's own, fast enough for the work
+        # checks), is over; the kit's solution (0.2 there) is under.
+        idea = dict(IDEA, scene={"n": 1000, "steps": 10}, max_bytes_per_particle_step=1)
+        one, every = gather_once(3, 10)
+        self.assertAlmostEqual(one, 4.27, places=2)
+        self.assertAlmostEqual(every, 6.4)
+        for per in (one / 2, one, every):  # rank 0's gather alone too (its return is the output)
+            problem, _ = Ideas.bytes_sent(None, idea, Run(json.dumps({"bytes_sent": per * 10000})),
+                                          "ran")
+            self.assertIn(f"{per:.1f} bytes a particle and step (at most 1 may", problem)
+            self.assertIn("to rank 0 and back is 4.3, to every rank 6.4", problem)
+        problem, _ = Ideas.bytes_sent(None, idea, Run(json.dumps({"bytes_sent": 0.19 * 10000})),
+                                      "ran")
+        self.assertIsNone(problem)
 
     def test_no_report_fails(self):
         problem, _ = Ideas.bytes_sent(None, IDEA, Run(""), "ran")

@@ -178,8 +178,14 @@ class Ideas:
     def bytes_sent(self, idea, run, text):
         """(problem or None, text): the bytes the ranks sent a particle and step, counted by the
         kit's MPI layer, against the rubric's most. The halo and the rounds' messages of a
-        slow scene are a few bytes; every particle sent to one rank and back, about 75; none at
-        all, ranks that never worked together (rank 0 stepping alone while the others spin)."""
+        slow scene are a fraction of a byte; every particle sent to one rank and back, about 75
+        a step; none at all, ranks that never worked together (rank 0 stepping alone while the
+        others spin). The most is also what keeps out a stepper of the student's own fast
+        enough to pass the work checks below: rank 0 stepping everything must receive every
+        other rank's particles at least once and send them back at the end, and ranks that
+        each step every particle must each receive them all once; at 32 bytes a particle's
+        state (its position and velocity, the least that holds it exactly) over the scene's
+        few steps, both are above the most (`gather_once()`)."""
         sc, most = idea["scene"], idea["max_bytes_per_particle_step"]
         try:
             sent = float(json.loads(run.read_output("report.json") or "")["bytes_sent"])
@@ -192,9 +198,12 @@ class Ideas:
                     f"particles: no halo, no round's message, so no rank stepped a slab of "
                     f"its own with the others. {idea['hint']}"), text
         if per > most:
+            one, every = gather_once(idea["ranks"], sc["steps"])
             return (f"its ranks sent {per:.1f} bytes a particle and step (at most {most:g} may: "
-                    f"the halo and the rounds' messages; every particle sent to one rank and "
-                    f"back is about 75). {idea['hint']}"), text
+                    f"the halo and the rounds' messages; every particle's state sent once in the "
+                    f"{sc['steps']} steps to rank 0 and back is {one:.1f}, to every rank "
+                    f"{every:.1f}, and every particle sent to one rank and back every step about "
+                    f"75). {idea['hint']}"), text
         return None, text
 
     def work_outside_mpi(self, idea, run, text, own=None):
@@ -331,6 +340,15 @@ class Ideas:
                     f"{100 * most:.0f}% may). CPU seconds of its {who}: {shown} (total "
                     f"{total:.2f}). {idea['hint']}"), text
         return None, text
+
+
+def gather_once(ranks, steps, state=32):
+    """(to rank 0 and back, to every rank): the fewest bytes a particle and step that a stage
+    sends to hold every particle on one rank (or every rank) for `steps` steps, gathering each
+    particle's exact state (`state` bytes: position and velocity in double) once. Rank 0 receives
+    the (ranks - 1) / ranks of the particles that are not its own and sends them back at the
+    end; every rank receiving every other rank's particles is ranks - 1 copies of the scene."""
+    return 2 * state * (ranks - 1) / ranks / steps, state * (ranks - 1) / steps
 
 
 def own_work(report):
