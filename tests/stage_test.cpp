@@ -247,21 +247,71 @@ void expect_same_with_switches(const std::string& expected, const plab::Scene& s
   stage_options = saved;
 }
 
+/// Writes `scene` into `scratch` as scene.in; returns its path.
+std::string write_scene(const plab::test::ScratchDir& scratch, const plab::Scene& scene) {
+  const std::string path = scratch.file("scene.in");
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  const std::string text = plab::format_scene(scene);
+  std::fwrite(text.data(), 1, text.size(), f);
+  std::fclose(f);
+  return path;
+}
+
+/// Where a scene built in the test itself is kept when the test fails, so that the failure's
+/// commands (`plab test`'s report) can run it: failed-scenes/STAGE-IMPL/SUITE.TEST.in in the
+/// test's working folder (the build's tests/), absolute. Generated scenes are not kept (their
+/// `plab gen` line makes them again).
+std::string kept_scene_path() {
+  const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = plab::stage_info().id + "-" + plab::stage_info().impl + "/" +
+                     test->test_suite_name() + "." + test->name();
+  for (char& c : name)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '_' && c != '-' &&
+        c != '/')
+      c = '_';
+  return (std::filesystem::absolute("failed-scenes") / (name + ".in")).string();
+}
+
+/// `how_made` of a scene built in the test itself, naming where the scene is kept if it fails;
+/// `how_made` as it is for a generated scene.
+std::string naming_kept(const std::string& how_made) {
+  if (how_made.find("plab gen") != std::string::npos) return how_made;
+  return how_made + " (its scene, kept when this test fails: " + kept_scene_path() + ")";
+}
+
+/// When a test on a scene built in it ends, however it ends: keeps `scene_file` at
+/// kept_scene_path() if the test failed, and removes a copy kept by an earlier failing run if it
+/// passed.
+struct KeepSceneIfFailed {
+  const std::string& how_made;
+  const std::string& scene_file;
+  ~KeepSceneIfFailed() {
+    if (how_made.find("plab gen") != std::string::npos) return;
+    const std::filesystem::path kept = kept_scene_path();
+    std::error_code ignored;
+    if (!::testing::Test::HasFailure()) {
+      std::filesystem::remove(kept, ignored);
+      for (const auto& folder : {kept.parent_path(), kept.parent_path().parent_path()})
+        if (std::filesystem::is_empty(folder, ignored)) std::filesystem::remove(folder, ignored);
+      return;
+    }
+    std::filesystem::create_directories(kept.parent_path(), ignored);
+    std::filesystem::copy_file(scene_file, kept, std::filesystem::copy_options::overwrite_existing,
+                               ignored);
+  }
+};
+
 /// Writes `scene` to a file, runs the other stage's solution on it, and checks that this stage
 /// prints the same text in each of its variants: threads and schedules on the CPU
 /// (expect_same_on_cpu()), each switch of a CUDA stage (expect_same_with_switches()).
-void expect_same_as_other(const plab::Scene& scene, const std::string& how_made) {
+void expect_same_as_other(const plab::Scene& scene, const std::string& made) {
   const std::string other = plab::test::kOtherProgram;
   if (other.empty()) GTEST_SKIP() << "no other stage's solution is built to compare with";
   const plab::test::ScratchDir scratch;
-  const std::string scene_file = scratch.file("scene.in");
+  const std::string scene_file = write_scene(scratch, scene);
   const std::string out_file = scratch.file("reference.out");
-  {
-    std::FILE* f = std::fopen(scene_file.c_str(), "w");
-    const std::string text = plab::format_scene(scene);
-    std::fwrite(text.data(), 1, text.size(), f);
-    std::fclose(f);
-  }
+  const std::string how_made = naming_kept(made);
+  const KeepSceneIfFailed keep{how_made, scene_file};
   const std::string command = other + " --quiet --out " + out_file + " " + scene_file;
   plab::test::watch(reference_name() + " on " + how_made, 0);
   ASSERT_EQ(plab::test::run_watched(command), 0) << command;
@@ -616,20 +666,16 @@ TEST(RanksTraffic, EngineStartsInItsBlocks) {
 
 /// A scene that stresses the cut, on 1 to `most` ranks (with the runner's `options`): the other
 /// stage's solution's text.
-void expect_same_on_ranks(const plab::Scene& scene, const std::string& how_made,
+void expect_same_on_ranks(const plab::Scene& scene, const std::string& made,
                           const std::string& options = "", int most = 4) {
   if (!plab::stage_info().mpi) GTEST_SKIP() << this_name() << " runs on one process";
   const std::string other = plab::test::kOtherProgram;
   if (other.empty()) GTEST_SKIP() << "no other stage's solution is built to compare with";
   PLAB_SKIP_AFTER_STALL();
   const plab::test::ScratchDir scratch;
-  const std::string scene_file = scratch.file("scene.in");
-  {
-    std::FILE* f = std::fopen(scene_file.c_str(), "w");
-    const std::string text = plab::format_scene(scene);
-    std::fwrite(text.data(), 1, text.size(), f);
-    std::fclose(f);
-  }
+  const std::string scene_file = write_scene(scratch, scene);
+  const std::string how_made = naming_kept(made);
+  const KeepSceneIfFailed keep{how_made, scene_file};  // (a failed run returns early)
   const std::string reference = scratch.file("reference.out");
   plab::test::watch(reference_name() + " on " + how_made, 0);
   ASSERT_EQ(plab::test::run_watched(other + " --quiet --out " + reference + " " + scene_file), 0);

@@ -380,14 +380,31 @@ void explain_generated(const FirstFailure& f, const Found& diff) {
                   "still writes)\n",
                   th[1].str().c_str(), th[2].str().c_str(), f.impl.c_str(), f.id.c_str());
   }
-  if (!std::regex_search(f.c.message, g, gen) || !std::regex_search(f.c.message, o, other)) {
+  // A scene built in the test itself (tests/stage_test.cpp's naming_kept()): kept on failure.
+  static const std::regex kept(R"(\(its scene, kept when this test fails: ([^)]*)\))");
+  std::smatch k;
+  const bool built = std::regex_search(f.c.message, k, kept);
+  if ((!built && !std::regex_search(f.c.message, g, gen)) ||
+      !std::regex_search(f.c.message, o, other)) {
     std::printf("  its scene is built in the test itself (%s, in tests/)\n", f.c.name.c_str());
+    return;
+  }
+  if (built && !fs::exists(k[1].str())) {
+    std::printf("  its scene is built in the test itself (%s, in tests/); its copy %s is gone\n",
+                f.c.name.c_str(), k[1].str().c_str());
     return;
   }
   const std::string run = "./plab run --stage " + f.id + " --impl " + f.impl + with +
                           ranks_option(f.c.message) + " scene.in";
   const long long step = std::atoll(diff.step.c_str());
-  std::printf("  reproduce it:\n    ./plab gen %s --out scene.in\n", g[1].str().c_str());
+  if (built) {  // (the build's folder, said from the kit's root where it lies inside it)
+    const fs::path at = fs::path(k[1].str()).lexically_relative(source_dir());
+    const bool inside = !at.empty() && *at.begin() != "..";
+    std::printf("  reproduce it (the test's scene, kept):\n    cp %s scene.in\n",
+                inside ? at.string().c_str() : k[1].str().c_str());
+  } else {
+    std::printf("  reproduce it:\n    ./plab gen %s --out scene.in\n", g[1].str().c_str());
+  }
   const Explainer how = explainer(f, "scene.in");
   if (fs::is_directory(fs::path(source_dir()) / "solutions"))
     std::printf("    ./plab run --stage %s --impl solution scene.in --out expected.out\n",
