@@ -31,8 +31,8 @@ using Clock = std::chrono::steady_clock;
 /// What the program is doing now, shared with the watchdog thread.
 struct Watched {
   std::mutex mutex;
-  std::string what = "the test program, before its first scene";
-  long long steps = 0;
+  std::string what = "the test program, before its first test";
+  long long steps = -1;  //!< the watched run's steps (0: not known); -1: no run watched yet
   std::atomic<long long> done{0};
   std::atomic<Clock::rep> last{Clock::now().time_since_epoch().count()};
   std::atomic<pid_t> child{0};
@@ -147,6 +147,7 @@ std::string position() {
   Watched& w = state();
   std::lock_guard lock(w.mutex);
   const long long done = w.done.load();
+  if (w.steps < 0) return w.what;  // a test that runs no watched scene (a Spec test)
   std::string at = w.what + ": ";
   at += "finished " + std::to_string(done);
   at += w.steps > 0 ? " of " + std::to_string(w.steps) + " steps" : " steps";
@@ -172,6 +173,18 @@ void watchdog() {
     }
   }
 }
+
+/// Names the test that runs now, for the watchdog's message until the test watches a run of its
+/// own (watch()): a test that steps no scene (the Spec tests) is named as "test Suite.Name".
+class CurrentTest : public testing::EmptyTestEventListener {
+ public:
+  void OnTestStart(const testing::TestInfo& info) override {
+    Watched& w = state();
+    std::lock_guard lock(w.mutex);
+    w.what = std::string("test ") + info.test_suite_name() + "." + info.name();
+    w.steps = -1;
+  }
+};
 
 /// Says so when a program ends having checked no case: CTest's SKIP_REGULAR_EXPRESSION matches
 /// "plab: no case was checked" and reports the test as skipped, with the first reason.
@@ -214,6 +227,7 @@ class WatchedStepper final : public Stepper {
 /// Installs the listener and starts the watchdog before main() runs.
 [[maybe_unused]] const bool installed = [] {
   testing::UnitTest::GetInstance()->listeners().Append(new NoCaseChecked);
+  testing::UnitTest::GetInstance()->listeners().Append(new CurrentTest);
   install_scratch_cleanup();
   std::thread(watchdog).detach();
   return true;
