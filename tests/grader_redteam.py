@@ -1126,6 +1126,16 @@ void step(const Box& box, const Ranks& r, Local& s) {
 }  // namespace plab::dist
 """
 
+# Stage 08: REDUNDANT_08 whose all-gather is made in place (MPI_IN_PLACE: MPI reads each rank's
+# block from the receive buffer and ignores the send count, which the kit's count read: a red-team
+# session of 2026-12-07 all-gathered every particle so, counted as nothing).
+REDUNDANT_IN_PLACE_08 = REDUNDANT_08.replace(
+    """    MPI_Allgatherv(mine.data(), bytes, MPI_BYTE, all.data(), counts.data(), at.data(), MPI_BYTE,
+                   r.comm);""",
+    """    std::memcpy(reinterpret_cast<char*>(all.data()) + at[r.rank], mine.data(), bytes);
+    MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_BYTE, all.data(), counts.data(), at.data(), MPI_BYTE,
+                   r.comm);""")
+
 # Stage 08: every particle gathered on rank 0 (MPI_Gather(v)), stepped there alone, and
 # scattered back to its owner (MPI_Scatter(v)): rooted collectives only.
 GATHER_08 = """
@@ -1334,7 +1344,8 @@ def rounds_08():
     graded with the bytes' most as it was when that check was written (20), and by the bytes
     alone, the work checks off: what a stepper of the student's own, fast enough to pass them
     (a red team's, 2.5 times the kit's, scored 164 of 164 so in 2026-12-07's first session),
-    meets. The solution itself, graded the same way, keeps every point."""
+    meets; and the same with its all-gather made in place (MPI_IN_PLACE, which the kit once
+    counted as nothing: a red team's 164 of 164 in the second session). The solution itself, graded the same way, keeps every point."""
     gradings = []
     bytes_over = "bytes a particle and step (at most"
     slow = rubric_08("08-work", max_bytes_per_particle_step=20)
@@ -1344,7 +1355,8 @@ def rounds_08():
             ("gather", GATHER_08, None, bytes_over),
             ("barrier", WAIT_08, None, "owns particle"),
             ("redundant", REDUNDANT_08, slow, "work outside MPI calls in all"),
-            ("redundant-fast", REDUNDANT_08, fast, bytes_over)):
+            ("redundant-fast", REDUNDANT_08, fast, bytes_over),
+            ("redundant-in-place-fast", REDUNDANT_IN_PLACE_08, fast, bytes_over)):
         name = f"redteam-rounds-{cheat}-08"
         shutil.rmtree(scratch / name, ignore_errors=True)
         if patched(name, "08", "solutions/08-mpi", [(

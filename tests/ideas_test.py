@@ -130,9 +130,9 @@ class WorkOutsideMpi(unittest.TestCase):
         self.assertIn("too little to judge", text)
 
     def test_sampling_stopped_fails(self):
-        # a program that ignores SIGPROF or stops the timer: nothing sampled, CPU time used
+        # a program that arms a process timer or changes SIGPROF: nothing measured, CPU time used
         problem, _ = work([0.0, 0.0, 0.0], [0.0, 0.0, 0.0], {(1, 1): 0.9, (2, 2): 0.5, (3, 3): 0.5})
-        self.assertIn("(SIGPROF) was changed", problem)
+        self.assertIn("a timer or a signal (SIGPROF) was changed", problem)
         problem, _ = work([0.3, 0.3, 0.3], [0.1, 0.1, 0.1], {(1, 1): 0.9, (2, 2): 0.5, (3, 3): 0.5})
         self.assertIsNone(problem)
 

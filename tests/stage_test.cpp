@@ -619,7 +619,7 @@ TEST(RanksTraffic, ReportedWithAStatusFile) {
   const nlohmann::json j = nlohmann::json::parse(plab::read_file(report));
   EXPECT_EQ(j.at("ranks").get<int>(), 2) << j.dump();
   EXPECT_GT(j.at("bytes_sent").get<double>(), 0) << j.dump();
-  // Each rank's sampled CPU seconds in its steps, outside and inside MPI calls (plab grade's
+  // Each rank's measured CPU seconds in its steps, outside and inside MPI calls (plab grade's
   // idea test of stage 08 reads them)
   for (const char* key : {"rank_work_seconds", "rank_mpi_seconds"}) {
     ASSERT_EQ(j.at(key).size(), 2u) << j.dump();

@@ -118,6 +118,21 @@ GROUP_CASES = [
      '#include <pthread.h>\nint f() { pthread_t t; return pthread_create(&t, nullptr, [](void*) -> void* { return nullptr; }, nullptr); }',
      "calls pthread_create"),
     ("fork", "step.cpp.o", '#include <unistd.h>\nint f() { return fork(); }', "calls fork"),
+    ("the C library's fortified open", "step.cpp.o",
+     'extern "C" int __open_2(const char*, int);\nint f() { return __open_2("/proc/self/cmdline", 0); }',
+     "calls __open_2"),
+    ("the C library's internal fopen", "step.cpp.o",
+     '#include <cstdio>\nextern "C" FILE* _IO_fopen(const char*, const char*);\nvoid* f() { return _IO_fopen("x", "r"); }',
+     "calls _IO_fopen"),
+    ("the kit's own reader: every rank reads the scene itself (a red team's stage 08)", "step.cpp.o",
+     '#include <string>\nnamespace plab { std::string read_file(const std::string&); }\n'
+     'std::string f() { return plab::read_file("/proc/self/cmdline"); }', "opens no file"),
+    ("the kit's scene loader", "step.cpp.o",
+     '#include <cstdint>\n#include <string>\nnamespace plab { struct Scene; struct GenParams; '
+     'Scene load_scene(const std::string&, std::uint64_t, const GenParams*); }\n'
+     'void* f() { return reinterpret_cast<void*>(&plab::load_scene); }', "opens no file"),
+    ("a function of its own named like a reader", "step.cpp.o",
+     'namespace mine { int read_file_count(int); }\nint f() { return mine::read_file_count(2); }', None),
     ("the kit's entry points (kit/mpi/stage_entry.cpp) are the kit's", "stage_entry.cpp.o",
      '#include <fstream>\nvoid f() { std::ofstream("x") << 1; }', None),
 ]

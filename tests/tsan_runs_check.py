@@ -7,11 +7,13 @@ engine    Stage 06's engine on many cores: its team path, where every thread wor
           and slab k + 1 is sorted while slab k is searched, on a scene larger than the engine's
           small-scene limit (N = 36 000: the golden scenes are small enough for each thread to
           take whole slabs alone). Three and four threads, against the solution.
-sampling  Stage 08's sampled work (kit/mpi/ranks.cpp) with its profiling signal taken by every
-          thread of the process, not only the stage's. The kit's profiling timer (ITIMER_PROF)
-          rings the process, and the kernel may hand the ring to any of its threads: MPI's own
-          progress thread too. CI's TSan run once stopped on a race between the handler on that
-          thread and the handler on the main thread (a one-in-many event there). This check makes
+sampling  Stage 08's measured work (kit/mpi/ranks.cpp) with its SIGPROF handler run on every
+          thread of the process, not only the stage's. Until 2026-12-07 a profiling timer
+          (ITIMER_PROF) rang the process, and the kernel could hand the ring to any of its
+          threads, MPI's own progress thread too; CI's TSan run once stopped on a race between the
+          handler on that thread and the handler on the main thread (a one-in-many event there).
+          No timer is armed now, but the handler stays and reads the clock as the main thread's
+          changes of state do, from any thread a ring reaches. This check makes
           the event certain: while stage 08's solution runs, it sends SIGPROF to each of the
           process's threads in turn, many times a second. Against stage 02 (the signals change
           no result).

@@ -64,7 +64,7 @@ void report(const Options& o, const RunStats& stats) {
               format_fixed(stats.traffic.work_seconds[q], 3) + " (" +
               format_fixed(stats.traffic.mpi_seconds[q], 3) + ")";
     std::fprintf(stderr, "stage %s (%s), CPU seconds of each rank's steps outside MPI calls "
-                 "(inside), sampled: %s\n", info.id.c_str(), info.impl.c_str(), work.c_str());
+                 "(inside), measured: %s\n", info.id.c_str(), info.impl.c_str(), work.c_str());
   }
   if (stats.device_bytes)
     std::fprintf(stderr, "stage %s (%s): %.2f MB of device memory held\n", info.id.c_str(),

@@ -40,10 +40,10 @@ class Stepper {
     double comm_seconds = 0;  //!< seconds in exchanges and reductions (waits included), on
                               //!< the rank that spent the most
     int ranks = 1;            //!< processes
-    /// Per rank: CPU seconds of its steps outside the stage's MPI calls, sampled every ms of
-    /// CPU time (kit/mpi: the work each rank did; empty for a stage on one process).
+    /// Per rank: CPU seconds of its steps outside the stage's MPI calls, the process's CPU clock
+    /// read at each change (kit/mpi: the work each rank did; empty for a stage on one process).
     std::vector<double> work_seconds;
-    /// Per rank: CPU seconds of its steps inside the stage's MPI calls (waits that spin), sampled.
+    /// Per rank: CPU seconds of its steps inside the stage's MPI calls (waits that spin).
     std::vector<double> mpi_seconds;
   };
   /// This run's Traffic (a stage on several processes asks every rank: call it after the steps).

@@ -66,7 +66,9 @@ def parser():
                          "resume)")
     ap.add_argument("--stages", default="", metavar="LIST", type=stage_list,
                     help="stages to grade, e.g. 01,06 (default: every stage the submission has; "
-                         "06 means 06 on the CPU and, with a GPU, 06-gpu)")
+                         "06 means 06 on the CPU and, with a GPU, 06-gpu; 08 every entry of 08; "
+                         "with an entry named alone, as in 06-gpu or 08,08-ranks3, the entries "
+                         "named only)")
     ap.add_argument("--out", default=None,
                     help="results.json to write (default results.json; always written; the "
                          "summary goes beside it, NAME.summary.txt); with --class, the folder of "

@@ -261,7 +261,10 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
     def grade(self):
         self.kit_folders = {p.name[:2]: p.name for p in sorted((self.kit / "stages").iterdir())
                             if p.is_dir() and p.name[:2].isdigit()}
-        wanted = [s.split("-")[0] for s in self.a.stages.split(",")] if self.a.stages else []
+        named = self.a.stages.split(",") if self.a.stages else []
+        # Each stage once, in order ("08,08-ranks2" names stage 08 twice: it was graded twice, and
+        # the second grading found the first's folders and ended in a grader error).
+        wanted = list(dict.fromkeys(s.split("-")[0] for s in named))
         for sid in wanted:
             self.entries([sid])  # a stage the rubric does not know: refused before any work
         try:
@@ -285,8 +288,8 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
                 print(note, flush=True)
                 found = {sid: f for sid, f in found.items() if sid not in given}
         stages = self.entries(wanted or sorted(found))
-        if self.a.stages and any("-" in s for s in self.a.stages.split(",")):
-            stages = [s for s in stages if s.key in self.a.stages.split(",")]
+        if any("-" in s for s in named):  # entries named one by one: those only
+            stages = [s for s in stages if s.key in named]
         runnable = []
         for st in stages:
             if st.gpu and not self.gpu_here():

@@ -32,7 +32,7 @@ class Ideas:
                    by the kit's preloaded libplab-ompcount.so, the rounds from plab-rounds);
           ranks:   the stage under mpirun on `ranks` processes: it sent at most
                    `max_bytes_per_particle_step` and more than none (counted by the kit's MPI
-                   layer), every rank did `share` of the steps' work outside MPI calls (sampled
+                   layer), every rank did `share` of the steps' work outside MPI calls (measured
                    by the kit's MPI layer: `min_work_seconds`), the ranks' work in all was at most
                    `max_work_multiple` times the kit's solution's on the same scene and ranks
                    (ranks that each step every particle, or burn CPU while one steps them all),
@@ -208,8 +208,8 @@ class Ideas:
 
     def work_outside_mpi(self, idea, run, text, own=None):
         """(problem or None, text): the CPU time each rank spent in its steps outside MPI calls,
-        sampled by the kit's MPI layer (a profiling timer; kit/mpi marks every MPI call of the
-        stage, waits and tests included), against the rubric's `share` and `max_share`. MPI's
+        measured by the kit's MPI layer (the process's CPU clock read as each step and each MPI
+        call of the stage, waits and tests included, starts and ends), against the rubric's `share` and `max_share`. MPI's
         waits spin, so a rank that waits in MPI_Barrier while rank 0 steps every particle uses
         as much CPU time as rank 0 (work_shared() cannot tell them apart): here it did no work.
         `own`: the same sum of the kit's solution on the same scene and ranks; the ranks' work in
@@ -231,14 +231,16 @@ class Ideas:
         if len(work) != idea["ranks"]:
             return (f"its run reported the work of {len(work)} ranks, not {idea['ranks']}. "
                     f"{idea['hint']}"), text
-        # The sampling rings on SIGPROF: a program that stops the timer or the signal reports
-        # no work at all, while /proc shows its ranks' CPU time (the solution: about 60% of it
-        # sampled in its steps, the rest reading, scattering, printing)
+        # The kit reads the CPU clock at every change of state: a program that arms a process
+        # timer (Linux then reads the clock from the timer's sums, which stand still between
+        # ticks) or changes the kit's SIGPROF handler may report little work, while /proc shows
+        # its ranks' CPU time (the solution: about 60% of it in its steps, the rest reading,
+        # scattering, printing)
         used = sum(getattr(run, "cpu", {}).values())
         if total + sum(waiting) < 0.2 * used and used >= idea["min_cpu_seconds"]:
-            return (f"the kit's sampling of its ranks' work saw {total + sum(waiting):.3f} s of "
-                    f"the {used:.2f} s of CPU time its ranks used: the profiling timer or its "
-                    f"signal (SIGPROF) was changed. {idea['hint']}"), text
+            return (f"the kit's measurement of its ranks' steps saw {total + sum(waiting):.3f} s "
+                    f"of the {used:.2f} s of CPU time its ranks used: a timer or a signal "
+                    f"(SIGPROF) was changed. {idea['hint']}"), text
         if total < idea["min_work_seconds"]:
             return None, text + " (too little to judge: not held against it)"
         least = idea.get("min_work_multiple")
@@ -264,14 +266,14 @@ class Ideas:
             return (f"rank {which} did {100 * work[which] / total:.0f}% of the work of the "
                     f"steps (each rank at least {100 * idea['share']:.0f}%, at most "
                     f"{100 * most_share:.0f}%: CPU time outside MPI calls, "
-                    f"sampled by the kit; a rank waiting in an MPI call does no work, even "
+                    f"measured by the kit; a rank waiting in an MPI call does no work, even "
                     f"when the wait spins). CPU seconds of its ranks' steps outside MPI calls: "
                     f"{shown}. {idea['hint']}"), text
         return None, text
 
     def ranks_work(self, st, run, scene, stem):
         """None, or why a run on several ranks that printed the reference's text still fails
-        (rubric.json's correctness.ranks_work): once its ranks' sampled work outside MPI calls
+        (rubric.json's correctness.ranks_work): once its ranks' work outside MPI calls
         reaches `min_work_seconds` (the scenes of a thousand particles and more), every rank
         must have done `share` of it and all of them at most `max_work_multiple` times the kit's
         solution's on the same scene and ranks (run now, `stem`.out and `stem`.json). So a stage
@@ -293,7 +295,7 @@ class Ideas:
         if low < conf["share"] * total:
             return (f"the output is right, but rank {work.index(low)} of {st.ranks} did "
                     f"{100 * low / total:.0f}% of the work of the steps (each rank at least "
-                    f"{100 * conf['share']:.0f}%: CPU time outside MPI calls, sampled by the "
+                    f"{100 * conf['share']:.0f}%: CPU time outside MPI calls, measured by the "
                     f"kit). CPU seconds of its ranks' steps outside MPI calls: {shown}. Every "
                     f"rank steps the particles of its own slab, on every scene")
         stem.parent.mkdir(parents=True, exist_ok=True)

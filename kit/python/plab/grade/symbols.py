@@ -38,7 +38,7 @@ the grade) and open no file, map no memory and change no descriptor (`files`: a 
 03 read the OpenMP counter's secret from /proc/self/maps and took its file over with dup2);
 stage 08's ranks, whose work the kit samples and whose messages
 it counts, open no files and map no memory (which would move particles between ranks past the
-count, or change the kit's report), change no signal or timer (the sampling's SIGPROF), and
+count, or change the kit's report), change no signal or timer (the kit's reading of each rank's CPU clock: an armed process timer makes it coarse), and
 start no thread or process (work beside a rank's MPI wait).
 
 The names are read from the symbol tables the compiler wrote, so a macro or a wrapper in the
@@ -84,7 +84,13 @@ CALL_GROUPS = {
         r"mmap|mmap64|shm_open|memfd_create|shmget|shmat|mkstemp|mkstemp64|mkostemp|tmpfile|"
         r"tmpfile64|truncate|ftruncate|rename|unlink|syscall|dup|dup2|dup3|mprotect|"
         r"pkey_mprotect|process_vm_readv|process_vm_writev|opendir|fdopendir)$"
-        r"|.*(basic_ofstream|basic_ifstream|basic_fstream|basic_filebuf|St10filesystem).*"),
+        # the C library's other doors to a file (__open_2, _IO_fopen, fts_open, __mmap, ...)
+        r"|(?!_Z)\w*(open|mmap)\w*$"
+        r"|.*(basic_ofstream|basic_ifstream|basic_fstream|basic_filebuf|St10filesystem).*"
+        # the kit's own functions that read or write files: a red-team stage 08 read the scene on
+        # every rank with plab::load_scene() (its path from /proc/self/cmdline, plab::read_file())
+        r"|_Z\w*4plab\w*(9read_file|10load_scene|13load_manifest|10OutputFile|"
+        r"22keep_stdout_for_output|11with_status)"),
         "calls {name}: a stage's step gets its particles from the kit and gives them back to it, "
         "and opens no file, maps no memory and changes no descriptor of its own (a file could "
         "hold an answer or change what the kit measures; on MPI, files and shared memory would "
@@ -93,8 +99,9 @@ CALL_GROUPS = {
     "signals": (re.compile(
         r"(signal|sigaction|sigprocmask|pthread_sigmask|sigset|sysv_signal|__sysv_signal|"
         r"bsd_signal|setitimer|timer_create|timer_settime|timer_delete|alarm|ualarm)$"),
-        "calls {name}: the kit samples where each rank's CPU time goes with a profiling timer "
-        "(SIGPROF); a stage changes no signal and no timer"),
+        "calls {name}: the kit measures where each rank's CPU time goes by reading the process's "
+        "CPU clock, which a process timer makes coarse, and keeps a handler for SIGPROF; a stage "
+        "changes no signal and no timer"),
     "threads": (re.compile(
         r"(pthread_create|fork|vfork|clone|clone3|execve|execv|execvp|execvpe|execl|execlp|"
         r"execle|posix_spawn|posix_spawnp|system|popen|GOMP_\w+)$"
