@@ -45,6 +45,12 @@ CASES = [
     ("the loaded libraries walked (to find the kit's counter in memory)", "step.cpp.o",
      '#include <link.h>\nint f() { return dl_iterate_phdr([](dl_phdr_info*, size_t, void*) { return 0; }, nullptr); }',
      "calls dl_iterate_phdr"),
+    ("the C library's clock replaced (a red-team stage 08 hid its work so)", "step.cpp.o",
+     '#include <time.h>\nextern "C" int clock_gettime(clockid_t, timespec* t) { t->tv_sec = 0; t->tv_nsec = 0; return 0; }',
+     "defines clock_gettime, a function with a C name"),
+    ("a helper of its own with a C name", "helpers.cpp.o", 'extern "C" int add_one(int x) { return x + 1; }',
+     "helpers.cpp defines add_one, a function with a C name"),
+    ("a global variable and a C++ function", "step.cpp.o", "int calls = 0;\nint f() { return ++calls; }", None),
     ("dlsym in a CUDA object (the runtime's start-up code)", "step.cu.o",
      '#include <dlfcn.h>\nvoid* f() { return dlsym(RTLD_NEXT, "x"); }', None),
 ]
@@ -84,6 +90,9 @@ MPI_CASES = [
      'int f(int* k) { return MPI_Type_create_keyval(0, 0, k, 0); }', "calls MPI_Type_create_keyval"),
     ("the default error handling set", 'extern "C" int MPI_Comm_set_errhandler(int, int);\n'
      'int f() { return MPI_Comm_set_errhandler(0, 0); }', None),
+    ("a communicator split by a colour of each rank's own (data to every rank, uncounted)",
+     'extern "C" int MPI_Comm_split(int, int, int, int*);\nint f(int* c) { return MPI_Comm_split(0, 7, 0, c); }',
+     "calls MPI_Comm_split, which the kit does not count"),
     ("new processes", 'extern "C" int MPI_Comm_spawn(const char*, char**, int, int, int, int, int*, int*);\n'
      'int f() { return MPI_Comm_spawn(0, 0, 1, 0, 0, 0, 0, 0); }', "calls MPI_Comm_spawn"),
 ]

@@ -8,6 +8,7 @@
 #include "plab/mpi/ranks.hpp"
 #include "plab/runtime.hpp"
 
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -30,7 +31,10 @@ enum Command : int { kStart, kStep, kRead, kTraffic, kStop, kExit };
 
 /// This process's messages so far: bytes it sent, seconds in exchanges and reductions (counted
 /// by the MPI_ functions at the end of this file).
-Stepper::Traffic traffic_here;
+struct Traffic {
+  double bytes_sent = 0;    //!< bytes this rank sent to the others, envelopes included
+  double comm_seconds = 0;  //!< seconds in exchanges and reductions (waits included)
+};
 
 /// Where this rank's CPU time goes in the stage's steps: the process's CPU time is read at every
 /// change of state (a step starts or ends, the stage's first MPI call under way starts or its
@@ -60,8 +64,50 @@ struct Sampled {
   std::atomic<long long> waiting_ns{0};     //!< CPU time given to MPI calls, in steps
 };
 static_assert(std::atomic<int>::is_always_lock_free && std::atomic<long long>::is_always_lock_free,
-              "the profiling timer's handler needs lock-free atomics");
-Sampled sampled;
+              "the counts are read from a signal handler's side too: lock-free atomics");
+
+/// The page size the counts' page is laid out for (x86-64, and most of AArch64's kernels).
+constexpr std::size_t kPage = 4096;
+
+/// What the grader reads of a rank (its bytes, its time in messages, where its CPU time went), on
+/// a page of its own that the process may only read, but while the kit's own code writes it
+/// (Writable): a red-team stage 08 of 2026-12-07 found these counts by scanning its own memory
+/// and wrote its own numbers over them (164 of 164 with rank 0 stepping every particle). A
+/// stage's code may not call mprotect (plab grade refuses it), so a write of the stage's own to
+/// the page ends the run (SIGSEGV). No code of the stage runs while the page is writable: the
+/// kit's MPI functions make it so from their start to their end, and MPI calls no function of
+/// the stage's (plab grade refuses the calls that would hand it one).
+struct alignas(kPage) Counts {
+  Traffic traffic;         //!< this rank's messages
+  Sampled sampled;         //!< where its CPU time went
+  int depth = 0;           //!< Writable guards alive (nested)
+  bool protecting = false;  //!< the page is kept read-only (set once, where the page size is kPage)
+};
+Counts counts;
+Traffic& traffic_here = counts.traffic;  //!< this rank's messages (on the counts' page)
+Sampled& sampled = counts.sampled;       //!< where its CPU time went (on the counts' page)
+
+/// A copy of Counts::depth in ordinary memory, read before the page is made writable: a stage
+/// that changes it can only make the kit write to the page while it is read-only (a crash), never
+/// leave the page writable.
+int writable_hint = 0;
+
+/// Makes the counts' page writable from its making to its end (nested: the outermost guard
+/// protects the page again).
+class Writable {
+ public:
+  Writable() {
+    if (writable_hint == 0 && counts.protecting)
+      mprotect(&counts, sizeof counts, PROT_READ | PROT_WRITE);
+    writable_hint = ++counts.depth;
+  }
+  ~Writable() {
+    writable_hint = --counts.depth;
+    if (counts.depth == 0 && counts.protecting) mprotect(&counts, sizeof counts, PROT_READ);
+  }
+  Writable(const Writable&) = delete;
+  Writable& operator=(const Writable&) = delete;
+};
 
 /// The process's CPU time in ns (async-signal-safe).
 long long cpu_ns() {
@@ -73,6 +119,7 @@ long long cpu_ns() {
 /// Gives the process's CPU time since the last reading to the state it was spent in (the state
 /// now: call it before changing the state), and reads it again (async-signal-safe).
 void account() {
+  const Writable writable;
   const long long now = cpu_ns();
   const long long since = now - sampled.last_ns.exchange(now, std::memory_order_relaxed);
   if (!sampled.in_step.load(std::memory_order_relaxed)) return;
@@ -82,7 +129,9 @@ void account() {
     sampled.work_ns.fetch_add(since, std::memory_order_relaxed);
 }
 
-void on_ring(int) { account(); }
+/// SIGPROF's handler: nothing (until 2026-12-07 a profiling timer's ring read the clock here; the
+/// handler stays so that a stray SIGPROF does not end the process).
+void on_ring(int) {}
 
 /// Installs the SIGPROF handler and reads the CPU clock (once a process; SA_RESTART: a system call
 /// a ring interrupts goes on).
@@ -95,7 +144,9 @@ void start_sampling() {
   act.sa_flags = SA_RESTART;
   sigemptyset(&act.sa_mask);
   sigaction(SIGPROF, &act, nullptr);
+  const Writable writable;
   sampled.last_ns = cpu_ns();
+  counts.protecting = sysconf(_SC_PAGESIZE) == static_cast<long>(kPage);  // read-only from now on
 }
 
 /// Marks the time from its making to its end as the stage's time in an MPI call (sampled).
@@ -103,7 +154,7 @@ class InMpi {
  public:
   // The stage's MPI calls are made by its one thread (a stage 08 starts none: plab grade refuses
   // it), so the outermost call is the one that finds the counter at 0 (or leaves it at 1).
-  InMpi() {
+  InMpi() {  // (writable_ first: the page stays writable until the call's end)
     if (sampled.in_step.load(std::memory_order_relaxed) &&
         sampled.in_mpi.load(std::memory_order_relaxed) == 0)
       account();  // the work until now
@@ -117,6 +168,9 @@ class InMpi {
   }
   InMpi(const InMpi&) = delete;
   InMpi& operator=(const InMpi&) = delete;
+
+ private:
+  Writable writable_;  //!< the counts' page, writable for the call
 };
 
 /// Counts the time from its making to its end as time in messages (and in MPI, sampled).
@@ -132,12 +186,20 @@ class InMessages {
   double t0_;
 };
 
-/// Counts `count` items of `type` sent to rank `to` of `comm` (nothing to this rank itself).
+/// Bytes counted for every message to another rank besides its data: its envelope (a tag, a
+/// count, a source) carries information too. A red-team stage 08 sent every particle as some
+/// two million empty messages whose tags held the data, counted as nothing.
+constexpr double kEnvelopeBytes = 16;
+
+/// Counts `count` items of `type` sent to rank `to` of `comm`, and the message's envelope
+/// (nothing to this rank itself).
 void count_sent(int count, MPI_Datatype type, int to, MPI_Comm comm) {
   int me = 0, size = 0;
   PMPI_Comm_rank(comm, &me);
   PMPI_Type_size(type, &size);
-  if (to != me && to != MPI_PROC_NULL) traffic_here.bytes_sent += 1.0 * count * size;
+  const Writable writable;
+  if (to != me && to != MPI_PROC_NULL)
+    traffic_here.bytes_sent += 1.0 * count * size + kEnvelopeBytes;
 }
 
 /// The ranks of this process (set by start_mpi()).
@@ -322,10 +384,13 @@ struct Run {
 void act(int command, const Ranks& r, Run& run, Particles* all) {
   switch (command) {
     case kStart: {
-      traffic_here = {};
-      sampled.work_ns = 0;
-      sampled.waiting_ns = 0;
       start_sampling();
+      {
+        const Writable writable;
+        traffic_here = {};
+        sampled.work_ns = 0;
+        sampled.waiting_ns = 0;
+      }
       double head[4] = {run.box.L, run.box.r, the_ranks.gpu ? 1.0 : 0.0, run.slabs ? 1.0 : 0.0};
       PMPI_Bcast(head, 4, MPI_DOUBLE, 0, r.comm);
       run.box = {head[0], head[1]};
@@ -336,11 +401,17 @@ void act(int command, const Ranks& r, Run& run, Particles* all) {
       break;
     }
     case kStep:
-      account();  // the time before the step: neither
-      sampled.in_step = 1;
+      {
+        const Writable writable;
+        account();  // the time before the step: neither
+        sampled.in_step = 1;
+      }
       the_step(run.box, r, run.s);
-      account();  // the step's last stretch
-      sampled.in_step = 0;
+      {
+        const Writable writable;
+        account();  // the step's last stretch
+        sampled.in_step = 0;
+      }
       if (run.slabs) check_owned_after_step(r, run.s);
       break;
     case kRead:
@@ -470,6 +541,7 @@ using plab::dist::count_sent;
 using plab::dist::InMessages;
 using plab::dist::InMpi;
 using plab::dist::traffic_here;
+using plab::dist::kEnvelopeBytes;
 
 namespace {
 
@@ -602,7 +674,7 @@ int MPI_Allreduce(const void* sendbuf, void* recvbuf, int count, MPI_Datatype ty
   int size = 0, bytes = 0;
   PMPI_Comm_size(comm, &size);
   PMPI_Type_size(type, &bytes);
-  if (size > 1) traffic_here.bytes_sent += 1.0 * count * bytes;
+  if (size > 1) traffic_here.bytes_sent += 1.0 * count * bytes + kEnvelopeBytes;
   return PMPI_Allreduce(sendbuf, recvbuf, count, type, op, comm);
 }
 

@@ -70,6 +70,7 @@ RULES = [
      "the kit's measurements; call them by name in the code", True),
 ]
 GLOBAL = set("TWDBRVGSiu")  # nm -P types of a global symbol the object defines
+C_FUNCTION = set("TWi")  # nm -P types of a global function (text, weak, indirect) it defines
 
 # Calls a stage's code may be refused by group (a rubric entry's `refuse_calls`): (pattern of the
 # called symbol's name, as nm prints it, mangled; the reason)
@@ -111,12 +112,14 @@ CALL_GROUPS = {
 }
 
 # MPI calls that move no data of the stage from one rank to another (or only receive what another
-# rank's counted call sent): a stage may call them though kit/mpi does not count them.
+# rank's counted call sent): a stage may call them though kit/mpi does not count them. Not the
+# communicators made from each rank's own arguments (MPI_Comm_split's colour and key,
+# MPI_Comm_create's group): every call moves a few numbers of each rank to all the others.
 NO_DATA = set("""
 MPI_Init MPI_Init_thread MPI_Initialized MPI_Finalize MPI_Finalized MPI_Abort MPI_Query_thread
 MPI_Is_thread_main MPI_Get_processor_name MPI_Get_version MPI_Get_library_version MPI_Wtime
-MPI_Wtick MPI_Error_string MPI_Error_class MPI_Comm_rank MPI_Comm_size MPI_Comm_dup MPI_Comm_split
-MPI_Comm_split_type MPI_Comm_create MPI_Comm_free MPI_Comm_group MPI_Comm_compare MPI_Comm_set_name
+MPI_Wtick MPI_Error_string MPI_Error_class MPI_Comm_rank MPI_Comm_size MPI_Comm_dup
+MPI_Comm_free MPI_Comm_group MPI_Comm_compare MPI_Comm_set_name
 MPI_Comm_get_name MPI_Comm_set_errhandler MPI_Comm_get_errhandler MPI_Comm_test_inter
 MPI_Recv MPI_Irecv MPI_Mrecv MPI_Imrecv MPI_Probe MPI_Iprobe MPI_Mprobe MPI_Improbe MPI_Get_count
 MPI_Get_elements MPI_Get_elements_x MPI_Wait MPI_Waitall MPI_Waitany MPI_Waitsome MPI_Test
@@ -169,7 +172,14 @@ def problems(nm_lines, mpi_kit=None, refuse_calls=()):
             found.append(f"{source} " + reason.format(name=name, plain=plain))
             break
         else:
-            if mpi_kit is not None and kind == "U" and CALLBACKS.match(name):
+            if (kind in C_FUNCTION and not name.startswith("_Z") and name != "main"
+                    and not member.endswith(".cu.o")):
+                found.append(f"{source} defines {name}, a function with a C name: it would "
+                             f"replace the C library's or the kit's function of that name in the "
+                             f"whole program, the kit's measurements included (a red-team stage "
+                             f"08 replaced clock_gettime, with which the kit measures each rank's "
+                             f"work); give it a C++ name (no extern \"C\")")
+            elif mpi_kit is not None and kind == "U" and CALLBACKS.match(name):
                 found.append(f"{source} calls {name}: MPI would run a function of the stage's "
                              f"own inside its calls, where the kit counts the CPU time as time in "
                              f"MPI, not as work. Use MPI's predefined operations (MPI_MAX, "
