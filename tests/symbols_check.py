@@ -142,6 +142,8 @@ GROUP_CASES = [
      'void* f() { return reinterpret_cast<void*>(&plab::load_scene); }', "opens no file"),
     ("a function of its own named like a reader", "step.cpp.o",
      'namespace mine { int read_file_count(int); }\nint f() { return mine::read_file_count(2); }', None),
+    ("dlopen in a CUDA object (NVTX's start-up code, through CUB: stage 06 refuses files)", "step.cu.o",
+     '#include <dlfcn.h>\nvoid* f() { return dlopen("libnvToolsExt.so", RTLD_LAZY); }', None),
     ("the kit's entry points (kit/mpi/stage_entry.cpp) are the kit's", "stage_entry.cpp.o",
      '#include <fstream>\nvoid f() { std::ofstream("x") << 1; }', None),
 ]
