@@ -51,6 +51,8 @@ CASES = [
     ("a helper of its own with a C name", "helpers.cpp.o", 'extern "C" int add_one(int x) { return x + 1; }',
      "helpers.cpp defines add_one, a function with a C name"),
     ("a global variable and a C++ function", "step.cpp.o", "int calls = 0;\nint f() { return ++calls; }", None),
+    ("clang's own helper (a noexcept function's terminate, in the TSan build)", "step.cpp.o",
+     'extern "C" __attribute__((weak, visibility("hidden"))) void __clang_call_terminate(void*) {}', None),
     ("dlsym in a CUDA object (the runtime's start-up code)", "step.cu.o",
      '#include <dlfcn.h>\nvoid* f() { return dlsym(RTLD_NEXT, "x"); }', None),
 ]

@@ -4,6 +4,7 @@ fast."""
 import json
 import os
 import pathlib
+import random
 import shutil
 import subprocess
 import tempfile
@@ -159,6 +160,8 @@ class Ideas:
         self.kit_programs.gen(scene, "--n", sc["n"], "--l", sc["L"], "--r", sc["r"], "--steps",
                               sc["steps"], "--mode", "perf", "--seed",
                               (self.seed * 13 + int(st.sid)) % 2**32, *speed)
+        if st.idea["kind"] == "ranks":
+            unguessable(scene)
         return scene, f"hidden scene N = {sc['n']}, L = {sc['L']}, S = {sc['steps']}"
 
     @staticmethod
@@ -185,7 +188,8 @@ class Ideas:
         other rank's particles at least once and send them back at the end, and ranks that
         each step every particle must each receive them all once; at 32 bytes a particle's
         state (its position and velocity, the least that holds it exactly) over the scene's
-        few steps, both are above the most (`gather_once()`)."""
+        few steps, both are above the most (`gather_once()`). The scene's particles are moved by
+        a secret amount (`unguessable()`), so no rank can make them again from the generator."""
         sc, most = idea["scene"], idea["max_bytes_per_particle_step"]
         try:
             sent = float(json.loads(run.read_output("report.json") or "")["bytes_sent"])
@@ -342,6 +346,29 @@ class Ideas:
                     f"{100 * most:.0f}% may). CPU seconds of its {who}: {shown} (total "
                     f"{total:.2f}). {idea['hint']}"), text
         return None, text
+
+
+def unguessable(scene, shift=1e-3):
+    """Moves every particle of `scene` (a scene file with its particle lines) by a secret random
+    amount, at most `shift` in each coordinate of its position (kept within [r, L - r]) and of its
+    velocity, drawn from the system's random source. Stage 08's idea scene is so: the kit's
+    generator (SplitMix64) can be run backwards, and a red-team stage 08 recovered the seed from
+    particle 0's position, rebuilt all 2 x 10^5 particles on every rank from one 8-byte message and
+    stepped them all (164 of 164, the bytes' most beaten). The moved values are no generator's
+    output, so a rank holds another's particles only by receiving them. Not replayed by --seed."""
+    draw = random.SystemRandom()
+    lines = pathlib.Path(scene).read_text().split("\n")
+    L, r = float(lines[1]), float(lines[2])
+    out = lines[:5]
+    for line in lines[5:]:
+        fields = line.split()
+        if len(fields) != 5:
+            out.append(line)
+            continue
+        x, y, vx, vy = (float(f) + draw.uniform(-shift, shift) for f in fields[1:])
+        x, y = min(max(x, r), L - r), min(max(y, r), L - r)
+        out.append(f"{fields[0]} {x!r} {y!r} {vx!r} {vy!r}")
+    pathlib.Path(scene).write_text("\n".join(out))
 
 
 def gather_once(ranks, steps, state=32):

@@ -173,8 +173,8 @@ def problems(nm_lines, mpi_kit=None, refuse_calls=()):
             found.append(f"{source} " + reason.format(name=name, plain=plain))
             break
         else:
-            if (kind in C_FUNCTION and not name.startswith("_Z") and name != "main"
-                    and not member.endswith(".cu.o")):
+            if (kind in C_FUNCTION and not name.startswith(("_Z", "__clang_")) and name != "main"
+                    and not member.endswith(".cu.o")):  # (clang's __clang_call_terminate)
                 found.append(f"{source} defines {name}, a function with a C name: it would "
                              f"replace the C library's or the kit's function of that name in the "
                              f"whole program, the kit's measurements included (a red-team stage "
