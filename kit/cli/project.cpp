@@ -89,9 +89,15 @@ std::vector<std::string> on_ranks(const std::string& id, const std::string& impl
     setenv("TMPDIR", templ.c_str(), 1);
     setenv("OMPI_MCA_btl_vader_backing_directory", templ.c_str(), 1);
   }
-  std::vector<std::string> args{"mpirun", "--quiet", "--oversubscribe", "-np",
-                                std::to_string(ranks)};
-  if (!bound) args.insert(args.begin() + 1, {"--bind-to", "none"});
+  // Each run its own folder for Open MPI's session files: runs at once in one folder (plab
+  // bench --ceiling's copies) race as one removes the session folder another is making
+  // ("ORTE_ERROR_LOG: Error in file ../../../orte/util/session_dir.c", seen in CI).
+  static int runs = 0;
+  const std::string own = g_mpi_scratch.path + "/" + std::to_string(++runs);
+  fs::create_directories(own);
+  std::vector<std::string> args{"env", "TMPDIR=" + own, "mpirun", "--quiet", "--oversubscribe",
+                                "-np", std::to_string(ranks)};
+  if (!bound) args.insert(args.begin() + 3, {"--bind-to", "none"});
   args.insert(args.end(), program_and_args.begin(), program_and_args.end());
   return args;
 }
