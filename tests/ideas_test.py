@@ -15,7 +15,7 @@ import pathlib
 import tempfile
 import unittest
 
-from plab.grade.ideas import Ideas, gather_once
+from plab.grade.ideas import Ideas, gather_once, unguessable
 from plab.grade.run import launcher_crashed
 
 IDEA = {"scene": {"n": 1000, "steps": 10}, "max_bytes_per_particle_step": 20, "ranks": 3,
@@ -211,6 +211,30 @@ class RanksWork(unittest.TestCase):
         grader = Graded(2.4)
         said = grader.ranks_work(Stage(), Run(""), "scene.in", pathlib.Path("unused"))
         self.assertIn("left no report of the work of its ranks", said)
+
+
+class Unguessable(unittest.TestCase):
+    """Stage 08's idea scene, moved by a secret amount (no generator's output any more: a red team
+    rebuilt the generated scene on every rank from its recovered seed)."""
+
+    def test_every_value_moves_a_little_and_stays_in_the_box(self):
+        head = ["3", "100", "1", "10", "perf"]
+        particles = [(0, 1.0, 50.0, 2.5, -3.0), (1, 99.0, 99.0, 0.0, 0.0), (2, 50.5, 1.0, 1e-9, 7.0)]
+        with tempfile.TemporaryDirectory() as d:
+            scene = pathlib.Path(d) / "idea.in"
+            scene.write_text("\n".join(head + [" ".join(repr(v) for v in p) for p in particles]) + "\n")
+            unguessable(scene)
+            lines = scene.read_text().split("\n")
+        self.assertEqual(lines[:5], head)
+        moved = [[float(f) for f in line.split()] for line in lines[5:] if line.strip()]
+        self.assertEqual([int(m[0]) for m in moved], [0, 1, 2])
+        changed = 0
+        for before, after in zip(particles, moved):
+            for k in range(1, 5):
+                self.assertLessEqual(abs(after[k] - before[k]), 1e-3)
+                changed += after[k] != before[k]
+            self.assertTrue(1 <= after[1] <= 99 and 1 <= after[2] <= 99, after)
+        self.assertGreaterEqual(changed, 9)  # (a value at the box's edge may be clamped back)
 
 
 if __name__ == "__main__":
