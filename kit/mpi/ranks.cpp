@@ -59,12 +59,12 @@ struct Traffic {
 struct Sampled {
   std::atomic<int> in_step{0};              //!< the stage's step is running
   std::atomic<int> in_mpi{0};               //!< MPI calls of the stage under way (nested)
-  std::atomic<long long> last_ns{0};        //!< the process's CPU time at the last ring
+  std::atomic<long long> last_ns{0};        //!< the CPU clock at the last account()
   std::atomic<long long> work_ns{0};        //!< CPU time given to work, in steps
   std::atomic<long long> waiting_ns{0};     //!< CPU time given to MPI calls, in steps
 };
 static_assert(std::atomic<int>::is_always_lock_free && std::atomic<long long>::is_always_lock_free,
-              "the counts are read from a signal handler's side too: lock-free atomics");
+              "the counts stay lock-free atomics (a SIGPROF handler may run on any thread)");
 
 /// The page size the counts' page is laid out for (x86-64, and most of AArch64's kernels).
 constexpr std::size_t kPage = 4096;
@@ -171,7 +171,8 @@ void start_sampling() {
   sampled.last_ns = cpu_ns();
 }
 
-/// Marks the time from its making to its end as the stage's time in an MPI call (sampled).
+/// Marks the time from its making to its end as the stage's time in an MPI call (the CPU clock
+/// read around it: account()).
 class InMpi {
  public:
   // The stage's MPI calls are made by its one thread (a stage 08 starts none: plab grade refuses

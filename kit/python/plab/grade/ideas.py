@@ -212,15 +212,15 @@ class Ideas:
 
     def work_outside_mpi(self, idea, run, text, own=None):
         """(problem or None, text): the CPU time each rank spent in its steps outside MPI calls,
-        measured by the kit's MPI layer (the process's CPU clock read as each step and each MPI
-        call of the stage, waits and tests included, starts and ends), against the rubric's `share` and `max_share`. MPI's
-        waits spin, so a rank that waits in MPI_Barrier while rank 0 steps every particle uses
-        as much CPU time as rank 0 (work_shared() cannot tell them apart): here it did no work.
-        `own`: the same sum of the kit's solution on the same scene and ranks; the ranks' work in
-        all may be at most `max_work_multiple` times it. The stepping is the kit's (local.hpp),
-        so an honest stage does about the solution's work; ranks that each step every particle
-        do R times it, and ranks that burn CPU outside MPI (so that their shares look even) while
-        one steps everything, at least 1 / max_share times it."""
+        measured by the kit's MPI layer (the process's CPU clock read as each step and each MPI call
+        of the stage, waits and tests included, starts and ends), against the rubric's `share` and
+        `max_share`. MPI's waits spin, so a rank that waits in MPI_Barrier while rank 0 steps every
+        particle uses as much CPU time as rank 0 (work_shared() cannot tell them apart): here it did
+        no work. `own`: the same sum of the kit's solution on the same scene and ranks; the ranks'
+        work in all may be at most `max_work_multiple` times it. The stepping is the kit's
+        (local.hpp), so an honest stage does about the solution's work; ranks that each step every
+        particle do R times it, and ranks that burn CPU outside MPI (so that their shares look even)
+        while one steps everything, at least 1 / max_share times it."""
         try:
             report = json.loads(run.read_output("report.json") or "")
             work = [float(x) for x in report["rank_work_seconds"]]

@@ -36,9 +36,10 @@ runs the compiled reference, whose `--explain --json` answers every step, or ano
 none of its own work; the grader's sandbox holds neither, but a student learned that only from
 the grade) and open no file, map no memory and change no descriptor (`files`: a red-team stage
 03 read the OpenMP counter's secret from /proc/self/maps and took its file over with dup2);
-stage 08's ranks, whose work the kit samples and whose messages
+stage 08's ranks, whose work the kit measures and whose messages
 it counts, open no files and map no memory (which would move particles between ranks past the
-count, or change the kit's report), change no signal or timer (the kit's reading of each rank's CPU clock: an armed process timer makes it coarse), and
+count, or change the kit's report), change no signal or timer (the kit reads each rank's CPU
+clock, which an armed process timer makes coarse), and
 start no thread or process (work beside a rank's MPI wait).
 
 The names are read from the symbol tables the compiler wrote, so a macro or a wrapper in the
