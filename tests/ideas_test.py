@@ -47,6 +47,11 @@ class BytesSent(unittest.TestCase):
         self.assertIsNone(problem)
         self.assertIn("0.2 bytes a particle and step", text)
 
+    def test_a_few_bytes_do_not_read_as_none(self):
+        problem, text = check(300.0)  # 0.03 bytes a particle and step: not "0.0"
+        self.assertIsNone(problem)
+        self.assertIn("sent 0.03 bytes a particle and step", text)
+
     def test_nothing_sent_fails(self):
         problem, _ = check(0.0)
         self.assertIsNotNone(problem)

@@ -196,7 +196,9 @@ class Ideas:
         except (ValueError, KeyError, TypeError):
             return "its run left no report of the bytes its ranks sent", text
         per = sent / (sc["n"] * sc["steps"])
-        text += f"; its ranks sent {per:.1f} bytes a particle and step"
+        # one decimal, but a few hundred bytes in all must not read as none
+        shown = f"{per:.1f}" if per >= 0.1 else f"{per:.2g}"
+        text += f"; its ranks sent {shown} bytes a particle and step"
         if sent <= 0:  # ranks that share no halo and no round: each ran alone (or idled)
             return (f"its ranks sent each other nothing in {sc['steps']} steps of {sc['n']} "
                     f"particles: no halo, no round's message, so no rank stepped a slab of "
