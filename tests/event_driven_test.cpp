@@ -21,6 +21,7 @@
 #include "plab/plan.hpp"
 #include "plab/stage.hpp"
 #include "plab/theory.hpp"
+#include "honesty.hpp"
 
 #if PLAB_HAVE_ORACLE
 #include "plab/oracle.hpp"
@@ -33,11 +34,24 @@ const plab::Manifest& manifest() {
   return m;
 }
 
-std::string run_exact(const plab::Scene& scene) {
+/// The stage's stepper on `p`, under the watchdog: if a step never ends (an endless loop in the
+/// queue, say), the test stops within the stall limit and names `what` and the last step
+/// finished, instead of running out the test's whole limit.
+std::unique_ptr<plab::Stepper> watched_stepper(const plab::Box& box, plab::Particles& p,
+                                               const std::string& what, long long steps) {
+  plab::test::watch("stage 07, " + what, steps);
+  return plab::test::watched([](const plab::Box& b, plab::Particles& q) {
+    return plab::make_stepper(b, q);
+  })(box, p);
+}
+
+/// The stage's output on `scene` (named `what` by the watchdog).
+std::string run_exact(const plab::Scene& scene, const std::string& what) {
   plab::OutputWriter out(nullptr);
-  plab::simulate(scene, [](const plab::Box& box, plab::Particles& p) {
-    return plab::make_stepper(box, p);
+  plab::simulate(scene, [&](const plab::Box& box, plab::Particles& p) {
+    return watched_stepper(box, p, what, scene.steps);
   }, out);
+  plab::test::unwatch();
   return out.text();
 }
 
@@ -93,7 +107,7 @@ TEST(ExactGolden, EveryScene) {
     SCOPED_TRACE(d.name);
     const plab::Scene scene = plab::load_scene(manifest().scene_path(d), plab::kDefaultSeed);
     const std::string want = plab::read_file(manifest().exact_golden_path(d));
-    const auto diff = plab::first_difference(want, run_exact(scene));
+    const auto diff = plab::first_difference(want, run_exact(scene, "scene " + d.name));
     EXPECT_FALSE(diff) << d.name << ": " << diff->describe();
     ++checked;
   }
@@ -121,19 +135,19 @@ plab::Scene row(double L) {
 
 TEST(Jammed, TouchingRowStopsWithAMessage) {
   try {
-    run_exact(row(8));
+    run_exact(row(8), "a jammed row");
     FAIL() << "a jammed row ran to its end";
   } catch (const plab::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("jammed"), std::string::npos) << e.what();
   }
-  EXPECT_NO_THROW(run_exact(row(9)));
+  EXPECT_NO_THROW(run_exact(row(9), "a row with a gap"));
 }
 
 TEST(Conservation, DenseGas) {
   const plab::Scene scene = gas(600, 0.35, 40, 11);
   plab::Particles p = scene.particles;
   const double e0 = energy(p);
-  const auto stage = plab::make_stepper(scene.box, p);
+  const auto stage = watched_stepper(scene.box, p, "a dense gas (N = 600)", scene.steps);
   double worst_drift = 0, worst_overlap = 0, worst_outside = 0;
   for (long long s = 1; s <= scene.steps; ++s) {
     stage->step();
@@ -161,9 +175,9 @@ TEST(Conservation, DenseGas) {
 
 /// Whether no particle meets two events in one step, by the exact run's counters. Then model.md's
 /// stepped model is exact too, and both must agree to the printed 8 decimals.
-bool one_event_per_step(const plab::Scene& scene) {
+bool one_event_per_step(const plab::Scene& scene, const std::string& what) {
   plab::Particles p = scene.particles;
-  const auto stage = plab::make_stepper(scene.box, p);
+  const auto stage = watched_stepper(scene.box, p, what, scene.steps);
   std::vector<long long> before(p.size(), 0);
   for (long long s = 0; s < scene.steps; ++s) {
     stage->step();
@@ -218,12 +232,12 @@ TEST(AgreesWithSteps, CourseAndHandScenes) {
     }
     plab::Scene scene = plab::load_scene(manifest().scene_path(d), plab::kDefaultSeed);
     scene.mode = plab::Mode::kPrint;
-    if (!one_event_per_step(scene)) {
+    if (!one_event_per_step(scene, "scene " + d.name)) {
       not_qualify.push_back(d.name);
       continue;
     }
     qualify.push_back(d.name);
-    expect_agree(run_exact(scene), run_stepped(scene), d.name);
+    expect_agree(run_exact(scene, "scene " + d.name), run_stepped(scene), d.name);
   }
   std::string q, nq;
   for (const auto& n : qualify) q += " " + n;
@@ -252,8 +266,8 @@ TEST(AgreesWithSteps, SparseSlowScenes) {
     s.steps = 40;
     s.mode = plab::Mode::kPrint;
     s.particles = plab::generate(s.box, 16, seed, plab::SpeedRange{0.5, 2});
-    if (!one_event_per_step(s)) continue;
-    const std::string exact = run_exact(s);
+    if (!one_event_per_step(s, "sparse seed " + std::to_string(seed))) continue;
+    const std::string exact = run_exact(s, "sparse seed " + std::to_string(seed));
     long long pc = 0;
     const auto blocks = plab::parse_output(exact, "exact");
     for (const long long c : blocks.back().particles.pc) pc += c;
@@ -272,7 +286,8 @@ TEST(AgreesWithSteps, SparseSlowScenes) {
 double rate_ratio(std::size_t n, double eta, std::uint64_t seed) {
   const plab::Scene scene = gas(n, eta, 0, seed);
   plab::Particles p = scene.particles;
-  const auto stage = plab::make_stepper(scene.box, p);
+  const auto stage =
+      watched_stepper(scene.box, p, "a gas of seed " + std::to_string(seed), 30 + 250);
   const double L = scene.box.L, r = scene.box.r, margin = 20 * r;
   auto in_bulk = [&](std::size_t i) {
     return p.x[i] > margin && p.x[i] < L - margin && p.y[i] > margin && p.y[i] < L - margin;

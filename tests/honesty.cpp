@@ -183,6 +183,7 @@ class CurrentTest : public testing::EmptyTestEventListener {
     std::lock_guard lock(w.mutex);
     w.what = std::string("test ") + info.test_suite_name() + "." + info.name();
     w.steps = -1;
+    w.armed = false;  // a stepper the last test left watched does not stall this one
   }
 };
 
@@ -241,6 +242,16 @@ void watch(const std::string& what, long long steps) {
     std::lock_guard lock(w.mutex);
     w.what = what;
     w.steps = steps;
+  }
+  stepped(0);
+  w.armed = true;
+}
+
+void watch_test(long long steps) {
+  Watched& w = state();
+  {
+    std::lock_guard lock(w.mutex);
+    w.steps = steps;  // w.what: the test's name, from CurrentTest
   }
   stepped(0);
   w.armed = true;

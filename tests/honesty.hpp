@@ -19,6 +19,10 @@ namespace plab::test {
 /// how many steps it will take (0 when unknown). Resets the step count and the clock.
 void watch(const std::string& what, long long steps);
 
+/// Starts watching the running test itself (named "test Suite.Name" in the watchdog's messages),
+/// which will take `steps` steps: a test that steps a hand-built scene.
+void watch_test(long long steps);
+
 /// Records that the watched work finished step `done`.
 void stepped(long long done);
 

@@ -221,7 +221,26 @@ void print_cases(const std::vector<Case>& cases, const Manifest& m) {
                 skip.second.c_str());
 }
 
-/// One line for a test that is not per scene: how many cases failed, and the first one.
+/// Whether a test compares a stage's output with golden files: a test per scene (`.Golden`) or
+/// one over every scene (stage 07's `.ExactGolden`). Its failures name a scene to reproduce, so
+/// the first failure's page goes to them before a statistical or invariant test's.
+bool is_golden(const std::string& test) {
+  return test.find(".Golden") != std::string::npos ||
+         test.find(".ExactGolden") != std::string::npos;
+}
+
+/// The scenes a test over every scene names before their differences ("dense-box: first
+/// difference ..."), in order.
+std::vector<std::string> named_scenes(const std::string& message) {
+  static const std::regex named(R"((?:^|\n)([\w.-]+): first difference)");
+  std::vector<std::string> names;
+  for (std::sregex_iterator i(message.begin(), message.end(), named), end; i != end; ++i)
+    names.push_back((*i)[1].str());
+  return names;
+}
+
+/// One line for a test that is not per scene: how many cases failed, and the first one (with
+/// its scene, and the other scenes that differ, for a test over every scene).
 void print_summary(const std::string& head, const std::vector<Case>& cases) {
   int failed = 0, skipped = 0, after_stall = 0;
   const Case* first = nullptr;
@@ -246,6 +265,14 @@ void print_summary(const std::string& head, const std::vector<Case>& cases) {
            (f ? "step " + f->step + (f->particle.empty() ? "" : ", particle " + f->particle) +
                     ", " + f->field + ranks_of(first->message)
               : failure_line(first->message));
+    const std::vector<std::string> scenes = named_scenes(first->message);
+    if (f && !scenes.empty()) {
+      what.insert(what.find(": step ") + 2, "scene " + scenes[0] + ", ");
+      std::string all;
+      for (const std::string& name : scenes) all += (all.empty() ? "" : ", ") + name;
+      what += " (" + std::to_string(scenes.size()) +
+              (scenes.size() == 1 ? " scene differs: " : " scenes differ: ") + all + ")";
+    }
   }
   std::printf("%s%s\n", head.c_str(), what.c_str());
 }
@@ -430,8 +457,15 @@ void explain_first(const FirstFailure& f, const Manifest& m) {
     if (std::regex_match(f.c.name, r, on_ranks) && !ranks_option(f.c.message).empty())
       d = scene_of(m, r[1].str());
   }
-  std::printf("first failure: %s, %s\n", f.test.c_str(), d ? ("scene " + d->name).c_str()
-                                                           : f.c.name.c_str());
+  // A test over every scene (stage 07's ExactGolden) names the scene before its difference
+  std::optional<Dataset> scene;
+  if (const auto names = named_scenes(f.c.message); !d && !names.empty())
+    for (const Dataset& each : m.datasets)
+      if (each.name == names[0]) scene = each;
+  std::printf("first failure: %s, %s\n", f.test.c_str(),
+              d       ? ("scene " + d->name).c_str()
+              : scene ? (f.c.name + ", scene " + scene->name).c_str()
+                      : f.c.name.c_str());
   if (!diff) {
     for (const std::string& line : message_lines(f.c.message)) std::printf("  %s\n", line.c_str());
     return;
@@ -451,13 +485,6 @@ void explain_first(const FirstFailure& f, const Manifest& m) {
     std::printf("  the two differ only in their last digits: rounding, not the logic. A formula "
                 "typed again instead of called from kit/include/plab/model.hpp, or its operations "
                 "in another order, or contracted into an FMA (handouts/model.md, Why every stage prints the same bits)\n");
-  // A test over every scene (stage 07's ExactGolden) names the scene before its difference
-  static const std::regex named(R"((?:^|\n)([\w.-]+): first difference)");
-  std::smatch s;
-  std::optional<Dataset> scene;
-  if (!d && std::regex_search(f.c.message, s, named))
-    for (const Dataset& each : m.datasets)
-      if (each.name == s[1].str()) scene = each;
   if (d) {
     explain_golden(f, *d, m, *diff);
   } else if (scene && m.has_exact_golden(*scene) && f.c.name.rfind("ExactGolden", 0) == 0) {
@@ -648,8 +675,8 @@ void print_failures(const std::vector<TestResult>& tests) {
     print_stalled_run(stopped, t.name, m);
     if (stopped.empty()) print_crash(t, cases, m);
     // The page goes to the first failing scene of a golden test, else to the first failing case.
-    const bool golden = t.name.find(".Golden") != std::string::npos;
-    if ((first && (!golden || first->test.find(".Golden") != std::string::npos)) ||
+    const bool golden = is_golden(t.name);
+    if ((first && (!golden || is_golden(first->test))) ||
         !std::regex_match(t.name, s, stage_test))
       continue;
     for (const Case& c : cases)

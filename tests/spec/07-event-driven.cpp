@@ -56,10 +56,12 @@ TEST(Stage07Spec, ReadingAtWholeTimesDoesNotChangeTheRun) {
   const plab::Box box{12, 1};
   const plab::Particles start = disks({{2, 5, 4, 0.5}, {5, 5.25, 0, 0}, {8, 4.5, -1, 0.25}});
   plab::Particles each = start;
+  plab::test::watch_test(7);
   const auto stage = plab::make_stepper(box, each, {});
   for (int s = 0; s < 7; ++s) {
     stage->step();
     stage->read(each);
+    plab::test::stepped(s + 1);
   }
   EXPECT_STATE(run(box, start, 7), each);
   long long pairs = 0, walls = 0;

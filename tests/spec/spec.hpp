@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "../honesty.hpp"
 #include "plab/stage.hpp"
 
 namespace plab::spec {
@@ -42,9 +43,16 @@ inline Particles disks(std::initializer_list<Disk> list) { return disks(std::vec
 /// `p` after `steps` steps of the stage under test, started through plab::make_stepper().
 inline Particles run(const Box& box, Particles p, int steps = 1,
                      const StageOptions& options = {}) {
+  // Under the watchdog: a step that never ends stops the test within the stall limit, naming
+  // the test and the steps done, instead of running out the test program's whole limit
+  test::watch_test(steps);
   const auto stage = make_stepper(box, p, options);
-  for (int s = 0; s < steps; ++s) stage->step();
+  for (int s = 0; s < steps; ++s) {
+    stage->step();
+    test::stepped(s + 1);
+  }
   stage->read(p);
+  test::unwatch();
   return p;
 }
 
