@@ -192,7 +192,13 @@ class CurrentTest : public testing::EmptyTestEventListener {
 class NoCaseChecked : public testing::EmptyTestEventListener {
  public:
   void OnTestPartResult(const testing::TestPartResult& r) override {
-    if (r.skipped() && reason_.empty()) reason_ = r.message();
+    // the first reason, but one that concerns this stage before one that does not
+    const auto not_this_stage = [](const std::string& why) {
+      return why.rfind(kNotThisStage, 0) == 0;
+    };
+    if (r.skipped() && (reason_.empty() || (not_this_stage(reason_) &&
+                                            !not_this_stage(r.message()))))
+      reason_ = r.message();
   }
   void OnTestIterationEnd(const testing::UnitTest& u, int) override {
     if (u.successful_test_count() > 0 || u.failed_test_count() > 0) return;

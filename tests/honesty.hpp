@@ -15,6 +15,12 @@
 
 namespace plab::test {
 
+/// The start of a skip message for a case that does not apply to the stage under test (an
+/// engine's switch, a test of ranks on a stage of one process): when every case of a test skips,
+/// the line CTest reports gives another case's reason first (a student's stage 04 without a GPU
+/// read "PLAB_ENGINE_PHASES on the CPU is stage 06's engine's" instead of "no CUDA device").
+inline constexpr const char* kNotThisStage = "not for this stage: ";
+
 /// Starts watching one piece of work: `what` names it ("stage 03, scene course-2"), `steps` is
 /// how many steps it will take (0 when unknown). Resets the step count and the clock.
 void watch(const std::string& what, long long steps);

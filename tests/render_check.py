@@ -13,6 +13,11 @@ from PIL import Image
 plab, datasets, scratch = sys.argv[1], pathlib.Path(sys.argv[2]), pathlib.Path(sys.argv[3])
 scratch.mkdir(parents=True, exist_ok=True)
 scene = datasets / "scenes" / "dense-box.in"
+golden = datasets / "golden" / "dense-box.out"  # print mode: every step
+# The instructor's copy draws the kit's solution's run; a student's copy (no solutions/), whose
+# stage 02 may not be done yet, draws the golden file: this test checks plab render, not a stage
+source = (("--impl", "solution") if (datasets.parent / "solutions").is_dir()
+          else ("--from", golden))
 
 
 def run(*args):
@@ -23,7 +28,7 @@ def run(*args):
 
 
 gif = scratch / "dense-box.gif"
-run("render", scene, "--steps", "3:14", "--follow", "5", "--out", gif)
+run("render", scene, *source, "--steps", "3:14", "--follow", "5", "--out", gif)
 with Image.open(gif) as im:
     assert im.format == "GIF", im.format
     assert im.n_frames == 12, f"{im.n_frames} frames for steps 3..14, expected 12"
@@ -31,14 +36,13 @@ with Image.open(gif) as im:
 print(f"{gif.name}: 12 frames, {im.size[0]} x {im.size[1]}")
 
 svg = scratch / "dense-box.svg"
-run("render", scene, "--steps", "0:4", "--out", svg)
+run("render", scene, *source, "--steps", "0:4", "--out", svg)
 text = svg.read_text()
 assert text.lstrip().startswith("<?xml") and "<svg" in text, "not an SVG"
 assert "step 0:" in text or "step 0" in text
 print(f"{svg.name}: one frame, {len(text)} bytes")
 
-expected, actual = scratch / "expected.out", scratch / "actual.out"
-run("run", "--stage", "02", "--out", expected, scene)
+expected, actual = golden, scratch / "actual.out"
 lines = expected.read_text().splitlines()
 changed = [ln if not ln.startswith("9 7 ") else "9 7 " + " ".join(
     f"{float(v) + 0.5:.8f}" if k == 0 else v for k, v in enumerate(ln.split()[2:]))

@@ -372,7 +372,7 @@ INSTANTIATE_TEST_SUITE_P(
 /// part's time per thread on stderr when the run ends, and the golden output all the same.
 TEST(PhasesInvariants, OneLineOnTheCpu) {
   if (plab::stage_info().id != "06" || plab::stage_info().impl != "engine")
-    GTEST_SKIP() << "PLAB_ENGINE_PHASES on the CPU is stage 06's engine's";
+    GTEST_SKIP() << plab::test::kNotThisStage << "PLAB_ENGINE_PHASES on the CPU is stage 06's engine's";
   const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
   const std::vector<plab::Dataset> all = datasets(false);
   ASSERT_FALSE(all.empty());
@@ -576,7 +576,7 @@ GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(Ranks);
 /// each rank on stderr, and the golden output all the same.
 TEST(RanksPhases, OneLineEachRank) {
   if (!plab::stage_info().mpi || plab::stage_info().impl != "engine")
-    GTEST_SKIP() << "PLAB_ENGINE_PHASES is the MPI engine's";
+    GTEST_SKIP() << plab::test::kNotThisStage << "PLAB_ENGINE_PHASES is the MPI engine's";
   PLAB_SKIP_AFTER_STALL();
   const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
   const std::vector<plab::Dataset> all = rank_datasets();
@@ -602,7 +602,7 @@ TEST(RanksPhases, OneLineEachRank) {
 /// The runner's report on 2 ranks with a status file (as `plab run --ranks` and the tests above
 /// start it): the ranks and the bytes they sent, which the grader's idea check reads.
 TEST(RanksTraffic, ReportedWithAStatusFile) {
-  if (!plab::stage_info().mpi) GTEST_SKIP() << this_name() << " runs on one process";
+  if (!plab::stage_info().mpi) GTEST_SKIP() << plab::test::kNotThisStage << this_name() << " runs on one process";
   PLAB_SKIP_AFTER_STALL();
   const plab::Manifest m = plab::load_manifest(PLAB_DATASETS_DIR);
   const std::vector<plab::Dataset> all = rank_datasets();
@@ -633,7 +633,7 @@ TEST(RanksTraffic, ReportedWithAStatusFile) {
 /// moved half the particles to their blocks and sent 3.6 MB).
 TEST(RanksTraffic, EngineStartsInItsBlocks) {
   if (!plab::stage_info().mpi || plab::stage_info().impl != "engine")
-    GTEST_SKIP() << "the engine's ranks own blocks; the stage's own slabs";
+    GTEST_SKIP() << plab::test::kNotThisStage << "the engine's ranks own blocks; the stage's own slabs";
   PLAB_SKIP_AFTER_STALL();
   const plab::test::ScratchDir scratch;
   double bytes[2] = {};
@@ -668,7 +668,7 @@ TEST(RanksTraffic, EngineStartsInItsBlocks) {
 /// stage's solution's text.
 void expect_same_on_ranks(const plab::Scene& scene, const std::string& made,
                           const std::string& options = "", int most = 4) {
-  if (!plab::stage_info().mpi) GTEST_SKIP() << this_name() << " runs on one process";
+  if (!plab::stage_info().mpi) GTEST_SKIP() << plab::test::kNotThisStage << this_name() << " runs on one process";
   const std::string other = plab::test::kOtherProgram;
   if (other.empty()) GTEST_SKIP() << "no other stage's solution is built to compare with";
   PLAB_SKIP_AFTER_STALL();
@@ -805,7 +805,7 @@ GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(GpuPath);
 
 /// The scenes that stress the cut, on 1 to 3 ranks with `--device gpu`: the other stage's text.
 TEST(GpuPathScenes, CutScenes) {
-  if (!plab::stage_info().mpi) GTEST_SKIP() << this_name() << " runs on one process";
+  if (!plab::stage_info().mpi) GTEST_SKIP() << plab::test::kNotThisStage << this_name() << " runs on one process";
   PLAB_SKIP_WITHOUT_GPU_PATH();
   const std::string gpu = "--device gpu";
   expect_same_on_ranks(dense_scene(), "a dense scene on the GPU", gpu, 3);

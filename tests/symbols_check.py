@@ -6,6 +6,7 @@ as the kit's build names it, are refused or let through as a student's would be.
   symbols_check.py [KIT_BUILD_DIR]   (with it, the kit's own stage libraries too: none refused,
                                      but stage 08's engine for its driver)
 """
+import json
 import pathlib
 import shutil
 import subprocess
@@ -151,12 +152,31 @@ GROUP_CASES = [
 ]
 
 
-def library(work, member, source):
+# The stages given one thread (01, 02, 04, 05, 07: rubric.json's one_thread), timed against the
+# reference on one thread: a red-team stage 02 split its pair loop over two std::threads (ratio
+# 0.55, every point kept). (name, source, expected; compiled with -fopenmp)
+ONE_THREAD_CASES = [
+    ("a pair loop split over two std::threads (a red team's stage 02)",
+     '#include <thread>\nvoid f() { std::thread t([] {}); t.join(); }', "runs on the one thread"),
+    ("std::async", '#include <future>\nint f() { return std::async(std::launch::async, [] { return 1; }).get(); }',
+     "runs on the one thread"),
+    ("an OpenMP loop", 'void f(double* a, int n) {\n#pragma omp parallel for\n  for (int i = 0; i < n; ++i) a[i] *= 2;\n}',
+     "calls GOMP_parallel"),
+    ("pthread_create",
+     '#include <pthread.h>\nint f() { pthread_t t; return pthread_create(&t, nullptr, [](void*) -> void* { return nullptr; }, nullptr); }',
+     "calls pthread_create"),
+    ("a heap of its own, std::sort, a mutex-free vector (no thread)",
+     '#include <algorithm>\n#include <queue>\n#include <vector>\nint f(std::vector<int> v) { std::sort(v.begin(), v.end()); std::priority_queue<int> q(v.begin(), v.end()); return q.top(); }',
+     None),
+]
+
+
+def library(work, member, source, flags=()):
     """A stage library holding one object named `member`, compiled from `source`."""
     cpp = work / "unit.cpp"
     cpp.write_text(source + "\n")
     obj = work / member
-    subprocess.run(["g++", "-O0", "-c", str(cpp), "-o", str(obj)], check=True)
+    subprocess.run(["g++", "-O0", *flags, "-c", str(cpp), "-o", str(obj)], check=True)
     lib = work / "libplab_stage_99_student.a"
     lib.unlink(missing_ok=True)
     subprocess.run(["ar", "rcs", str(lib), str(obj)], check=True)
@@ -179,6 +199,13 @@ try:
         print(f"{'ok  ' if ok else 'FAIL'} stages 01-07's refused calls: {name}: {said or 'let through'}")
         if not ok:
             failures.append(f"processes: {name}")
+    for name, source, expected in ONE_THREAD_CASES:
+        said = symbols.check(library(work, "step.cpp.o", source, ("-fopenmp",)), None,
+                             ("processes", "files", "one_thread"))
+        ok = not said if expected is None else any(expected in s for s in said)
+        print(f"{'ok  ' if ok else 'FAIL'} a stage given one thread: {name}: {said or 'let through'}")
+        if not ok:
+            failures.append(f"one thread: {name}")
     kit_mpi = library(work, "ranks.cpp.o", MPI_KIT).rename(work / "libplab_mpi.a")
     for name, source, expected in MPI_CASES:
         said = symbols.check(library(work, "step.cpp.o", source), kit_mpi)
@@ -202,10 +229,15 @@ try:
     if len(sys.argv) > 1:  # the kit's own stage libraries (solutions, starting points, engine)
         libs = sorted(pathlib.Path(sys.argv[1]).glob("*/*/libplab_stage_*.a"))
         mpi = pathlib.Path(sys.argv[1]) / "kit" / "libplab_mpi.a"
+        rubric = json.loads((pathlib.Path(__file__).parents[1] / "kit/grade/rubric.json").read_text())
         for lib in libs:
             on_mpi = "_08_" in lib.name and mpi.is_file()
-            said = symbols.check(lib, mpi if on_mpi else None,
-                                 GROUPS if on_mpi and "_engine" not in lib.name else ())
+            sid = lib.name.split("_")[2]  # libplab_stage_NN_IMPL.a
+            # each stage library against its stage's refused groups in the rubric (the engines,
+            # never graded, are faster than one thread: only stage 08's is judged, for its MPI)
+            groups = (() if "_engine" in lib.name else
+                      GROUPS if on_mpi else symbols.refused_groups(rubric, sid))
+            said = symbols.check(lib, mpi if on_mpi else None, groups)
             # stage 08's engine (never graded) owns blocks, not slabs: its driver is refused
             if lib.name == "libplab_stage_08_engine.a":
                 if not said or any("mpi_stage_any_cut" not in s for s in said):
@@ -220,4 +252,5 @@ finally:
     shutil.rmtree(work, ignore_errors=True)
 if failures:
     sys.exit("symbols check FAILED: " + "; ".join(failures))
-print(f"{len(CASES) + len(PROCESS_CASES) + len(MPI_CASES) + len(GROUP_CASES) + 1} objects judged as expected")
+print(f"{len(CASES) + len(PROCESS_CASES) + len(ONE_THREAD_CASES) + len(MPI_CASES) + len(GROUP_CASES) + 1} "
+      "objects judged as expected")

@@ -672,6 +672,13 @@ void print_failures(const std::vector<TestResult>& tests) {
     } else {
       print_summary(head, cases);
     }
+    if (cases.empty() && stopped.empty()) {  // a script's check (render, report): its last words
+      std::vector<std::string> said;
+      for (const std::string& line : lines_of(t.output))
+        if (line.find_first_not_of(' ') != std::string::npos) said.push_back(line);
+      for (std::size_t i = said.size() > 3 ? said.size() - 3 : 0; i < said.size(); ++i)
+        std::printf("  %s\n", said[i].c_str());
+    }
     print_stalled_run(stopped, t.name, m);
     if (stopped.empty()) print_crash(t, cases, m);
     // The page goes to the first failing scene of a golden test, else to the first failing case.

@@ -4,9 +4,9 @@ median time on the leaderboard."""
 import os
 import shutil
 import statistics
-import subprocess
 
 from plab.grade import leaderboard
+from plab.grade.ideas import unguessable
 
 
 class Performance:
@@ -27,12 +27,6 @@ class Performance:
         limits = self.rubric["limits"]
         own = self.solution(st.sid)
         kit_prog = own if own.exists() else self.solution(self.manifest["reference_stage"])
-        r = subprocess.run([kit_prog, scene, "--quiet", "--threads", st.threads, "--out",
-                            self.private / f"perf-{st.key}.out"], capture_output=True, text=True,
-                           env=dict(os.environ, **st.env))
-        if r.returncode != 0:
-            raise RuntimeError(f"the reference failed on {scene}: {r.stderr}")
-        expected = (self.private / f"perf-{st.key}.out").read_text()
         ref_prog = self.sandbox.shared_dir("bin") / f"reference-{st.key}"  # the sandbox's uid
         shutil.copyfile(kit_prog, ref_prog)  # may not read the kit's build folder
         os.chmod(ref_prog, 0o755)
@@ -42,25 +36,35 @@ class Performance:
         # falls on both alike; the reference runs in the same sandbox, paying its costs alike.
         ref, mine = [], []
         try:
-            self.timed_runs(st, program, ref_prog, scene, args, cap, ref, mine, expected)
+            self.timed_runs(st, program, ref_prog, scene, args, cap, ref, mine)
         finally:
             ref_prog.unlink()  # no later stage may find a correct program beside its own
         if len(mine) < perf["runs"]:
             return
         self.score_performance(st, test, ref, mine)
 
-    def timed_runs(self, st, program, ref_prog, scene, args, cap, ref, mine, expected):
-        """Alternate runs of the reference and the submission; each of the submission's outputs
-        is compared with the reference's like any other run's (a fast wrong program earns
-        nothing)."""
+    def timed_runs(self, st, program, ref_prog, scene, args, cap, ref, mine):
+        """Alternate runs of the reference and the submission, each pair on the timed scene
+        moved by a secret amount of its own (ideas.unguessable(): every value by at most 10^-3),
+        so that no run can be answered from an earlier one (a red-team stage kept its first
+        run's final state in the names of symbolic links under /tmp, where the sandbox without
+        namespaces lets them last, and wrote it back in 10 ms on the next four runs); each of the
+        submission's outputs is compared with the reference's on the same scene, like any other
+        run's (a fast wrong program earns nothing)."""
         limits, perf = self.rubric["limits"], self.rubric["performance"]
         test = f"{st.key}: performance"
-        for _ in range(perf["runs"]):
-            r = self.run_program(ref_prog, scene, args, 3600, cap, st)
-            if r.rc != 0:
-                raise RuntimeError(f"the reference failed on {scene}: {r.stderr}")
+        for k in range(perf["runs"]):
+            moved = self.private / f"perf-{st.key}-{k}.in"
+            shutil.copyfile(scene, moved)
+            unguessable(moved)
+            r = self.run_program(ref_prog, moved, args, 3600, cap, st)
+            if r.rc != 0 or r.reason:
+                raise RuntimeError(f"the reference failed on {moved}: {r.reason or ''} {r.stderr}")
             ref.append(r.seconds)
-            r = self.run_program(program, scene, args,
+            expected = r.read_output()
+            if not expected:
+                raise RuntimeError(f"the reference wrote no output on {moved}")
+            r = self.run_program(program, moved, args,
                                  max(limits["min_seconds"], limits["time_multiple"] * max(ref)),
                                  cap, st)
             if r.rc != 0 or r.reason:

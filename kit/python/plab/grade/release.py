@@ -213,6 +213,28 @@ def cut_instructor_links(release):
             f.write_text(new)
 
 
+# What the docs' main page says to instructors only: its section, and the commands that need the
+# instructor's copy (solutions/ and the grader), which a student's copy would only refuse.
+INSTRUCTOR_SECTION = "## An instructor starts here"
+INSTRUCTOR_ROWS = ("| `./plab golden", "| `./plab grade", "| `./plab release")
+
+
+def cut_instructor_parts(release):
+    """handouts/index.md without its section for instructors and the table rows of the commands
+    only an instructor's copy runs (a student found `plab grade` and `plab release` listed, and
+    `plab grade` then answered that it needs the instructor's kit)."""
+    index = release / "handouts" / "index.md"
+    if not index.exists():
+        return
+    kept, skipping = [], False
+    for line in index.read_text().splitlines(keepends=True):
+        if line.startswith("## "):
+            skipping = line.strip() == INSTRUCTOR_SECTION
+        if not skipping and not line.startswith(INSTRUCTOR_ROWS):
+            kept.append(line)
+    index.write_text("".join(kept))
+
+
 def copy_files(kit, head, work, say, through=None):
     """Writes the files of the release (from HEAD) into work / "release"; returns (the full HEAD
     tree, the release folder)."""
@@ -248,6 +270,7 @@ def copy_files(kit, head, work, say, through=None):
         shutil.copy2(src, dst)
     shutil.copy2(full / STUDENT_README, release / "README.md")
     cut_instructor_links(release)
+    cut_instructor_parts(release)
     for why, paths in sorted(dropped.items()):
         tops = sorted({p.split("/")[0] + "/" if p.startswith(("solutions/", ".ci/")) else
                        "/".join(p.split("/")[:2]) + "/" if p.startswith("stages/") else p

@@ -36,7 +36,9 @@ runs the compiled reference, whose `--explain --json` answers every step, or ano
 none of its own work; the grader's sandbox holds neither, but a student learned that only from
 the grade) and open no file, map no memory and change no descriptor (`files`: a red-team stage
 03 read the OpenMP counter's secret from /proc/self/maps and took its file over with dup2);
-stage 08's ranks, whose work the kit measures and whose messages
+the stages given one thread (01, 02, 04, 05, 07) start no thread (`one_thread`: their time is
+compared with the reference's on one thread); stage 08's ranks, whose work the kit measures and
+whose messages
 it counts, open no files and map no memory (which would move particles between ranks past the
 count, or change the kit's report), change no signal or timer (the kit reads each rank's CPU
 clock, which an armed process timer makes coarse), and
@@ -111,6 +113,14 @@ CALL_GROUPS = {
         r"|.*St6thread15_M_start_thread.*"),
         "calls {name}: each rank is one thread of one process (the kit samples its CPU time as "
         "work or as time in MPI calls: another thread's work would look like a wait)"),
+    # A stage given one thread (rubric: "threads": 1) is timed against the reference on one
+    # thread: a red-team stage 02 split its pair loop over two std::threads and was timed at 0.55
+    # of the reference's time, every correctness point kept
+    "one_thread": (re.compile(
+        r"(pthread_create|thrd_create|clone|clone3|GOMP_\w+)$"
+        r"|.*St6thread15_M_start_thread.*|_ZN(6oneapi)?3tbb\w*"),
+        "calls {name}: this stage runs on the one thread it is given (its time is compared with "
+        "the reference's on one thread); threads are stage 03's idea"),
 }
 
 # MPI calls that move no data of the stage from one rank to another (or only receive what another
