@@ -24,7 +24,11 @@ void add_grade(CLI::App& app) {
   c->set_help_flag();
   c->callback([c] {
     if (default_impl() != "solution")
-      throw std::runtime_error("grading needs the instructor's kit (with solutions/)");
+      throw std::runtime_error(
+          "grading needs the instructor's kit (with solutions/). In a student's copy, `./plab "
+          "test --impl student --stage NN` checks your stage's output (what the grade checks "
+          "first, on scenes of its own too), and handouts/working.md, \"How a stage is "
+          "graded\", says how the grade measures each stage's idea outside your code");
     std::vector<std::string> args{"python3",      "-m",         "plab.grade",
                                   "--kit-source", source_dir(), "--kit-build",
                                   build_dir()};

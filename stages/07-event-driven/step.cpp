@@ -291,7 +291,8 @@ class EventDriven final : public Stepper {
                      "disks cannot resolve (give them a gap: the stepped stages 01-06 run it), "
                      "or the stage meets the same events again and again (a collision of disks "
                      "not brought to now, a stale event collided or dropped instead of predicted "
-                     "again): every scene of datasets/scenes runs with the kit's solution.");
+                     "again, a wall or cell crossing taken for stale: only a pair event has a "
+                     "partner): every scene of datasets/scenes runs with the kit's solution.");
   }
 
   Box box_;
