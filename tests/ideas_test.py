@@ -16,6 +16,7 @@ import tempfile
 import unittest
 
 from plab.grade.ideas import Ideas, gather_once, unguessable
+from plab.grade.performance import more_threads
 from plab.grade.run import launcher_crashed
 
 IDEA = {"scene": {"n": 1000, "steps": 10}, "max_bytes_per_particle_step": 20, "ranks": 3,
@@ -240,6 +241,25 @@ class Unguessable(unittest.TestCase):
                 changed += after[k] != before[k]
             self.assertTrue(1 <= after[1] <= 99 and 1 <= after[2] <= 99, after)
         self.assertGreaterEqual(changed, 9)  # (a value at the box's edge may be clamped back)
+
+
+class TimedThreads(unittest.TestCase):
+    """performance.more_threads(): a timed run may keep busy the threads it is given, no more."""
+
+    class Timed:
+        def __init__(self, seconds, cpu):
+            self.seconds, self.cpu = seconds, dict(enumerate(cpu))
+
+    def test_threads_given_pass(self):
+        self.assertIsNone(more_threads(self.Timed(1.0, [0.98]), 1))
+        self.assertIsNone(more_threads(self.Timed(1.0, [0.99, 0.97, 0.01]), 2))
+        self.assertIsNone(more_threads(self.Timed(0.05, [0.06, 0.06]), 1))  # granularity
+
+    def test_more_cores_fail(self):
+        said = more_threads(self.Timed(0.5, [0.5] * 8), 2)  # num_threads(8) on a big machine
+        self.assertIn("used 4.00 s of CPU in 0.50 s, 8.0 cores' worth", said)
+        self.assertIn("timed on 2 threads", said)
+        self.assertIsNotNone(more_threads(self.Timed(1.0, [1.0, 0.9]), 1))
 
 
 if __name__ == "__main__":

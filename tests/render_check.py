@@ -54,7 +54,7 @@ with Image.open(scratch / "diff.gif") as im:
     assert im.n_frames == 10, f"{im.n_frames} frames for steps 1..10, expected 10"
 print("diff: first difference named (step 9, particle 7, x); 10 frames side by side")
 
-bad = subprocess.run([plab, "render", scene, "--steps", "5:2", "--out", scratch / "x.gif"],
+bad = subprocess.run([plab, "render", scene, *source, "--steps", "5:2", "--out", scratch / "x.gif"],
                      capture_output=True, text=True)
 assert bad.returncode != 0 and "--steps needs 0 <= FIRST <= LAST" in bad.stderr, bad.stderr
 print("bad --steps: refused with a message")

@@ -64,12 +64,17 @@ class Performance:
             expected = r.read_output()
             if not expected:
                 raise RuntimeError(f"the reference wrote no output on {moved}")
+            # A CPU stage on one process is watched: its threads' CPU time, read from /proc
+            watch = not st.gpu and st.ranks == 1
             r = self.run_program(program, moved, args,
                                  max(limits["min_seconds"], limits["time_multiple"] * max(ref)),
-                                 cap, st)
+                                 cap, st, watch=watch)
             if r.rc != 0 or r.reason:
                 self.results.add(test, 0, perf["points"], False,
                                  f"the timed run {r.reason or 'exited ' + str(r.rc)}")
+                return
+            if watch and (busy := more_threads(r, int(st.threads))):
+                self.results.add(test, 0, perf["points"], False, busy)
                 return
             if r.read_output() != expected:
                 self.results.add(test, 0, perf["points"], False,
@@ -104,3 +109,20 @@ class Performance:
         self.results.leaderboard.append(leaderboard.ratio_entry(st.key, ratio))
         self.results.add(test, perf["points"] * fraction, perf["points"], fraction >= 0.999, text,
                          False, sum(mine))
+
+
+def more_threads(run, threads):
+    """Why a watched timed run used more threads than the stage is given, or None: its threads'
+    CPU time in all (read from /proc, outside the program) above `threads` times its wall time,
+    with a margin for the readings' granularity. A stage timed on T threads that starts more
+    (OpenMP's num_threads, omp_set_num_threads) would be timed against a reference on T
+    threads while using every core of a larger grading machine (a red-team pass of 2026-12-07
+    found it possible on stages 03 and 06; the machine it ran on had only two cores)."""
+    used = sum(run.cpu.values())
+    if used <= threads * run.seconds * 1.2 + 0.1:
+        return None
+    return (f"the timed run used {used:.2f} s of CPU in {run.seconds:.2f} s, {used / run.seconds:.1f} "
+            f"cores' worth: the stage is timed on {threads} thread{'s' * (threads > 1)} (--threads "
+            f"{threads}, as the reference is), so it may keep at most {threads} busy (a parallel "
+            "region's num_threads or omp_set_num_threads above the threads given uses cores the "
+            "reference does not)")

@@ -80,9 +80,15 @@ C_FUNCTION = set("TWi")  # nm -P types of a global function (text, weak, indirec
 CALL_GROUPS = {
     "processes": (re.compile(
         r"(fork|vfork|clone|clone3|execve|execveat|fexecve|execv|execvp|execvpe|execl|execlp|"
-        r"execle|posix_spawn|posix_spawnp|system|popen|syscall)$"),
+        r"execle|posix_spawn|posix_spawnp|system|popen|syscall)$"
+        # the process's and threads' names and CPUs, by which the grader reads each thread's CPU
+        # time from /proc (a process renamed would hide its threads' work)
+        r"|(prctl|pthread_setname_np|sched_setaffinity|pthread_setaffinity_np|"
+        r"pthread_attr_setaffinity_np)$"),
         "calls {name}: a stage starts no other program (a step is the stage's own work: the kit's "
-        "reference program, its --explain and the other stages are not part of an answer)"),
+        "reference program, its --explain and the other stages are not part of an answer) and "
+        "leaves its process's and threads' names and CPUs as the kit started them (the grader "
+        "reads each thread's CPU time by them)"),
     "files": (re.compile(
         r"(open|open64|openat|openat64|creat|creat64|fopen|fopen64|freopen|freopen64|fdopen|"
         r"mmap|mmap64|shm_open|memfd_create|shmget|shmat|mkstemp|mkstemp64|mkostemp|tmpfile|"
@@ -117,7 +123,10 @@ CALL_GROUPS = {
     # thread: a red-team stage 02 split its pair loop over two std::threads and was timed at 0.55
     # of the reference's time, every correctness point kept
     "one_thread": (re.compile(
-        r"(pthread_create|thrd_create|clone|clone3|GOMP_\w+)$"
+        r"(\w*pthread_create\w*|thrd_create|(__)?clone3?|GOMP_\w+)$"
+        # the C library's calls that start a thread of their own to run a function or a request
+        # (SIGEV_THREAD timers and notifications, asynchronous I/O and name lookups)
+        r"|(timer_create|mq_notify|aio_\w+|lio_listio\w*|getaddrinfo_a)$"
         r"|.*St6thread15_M_start_thread.*|_ZN(6oneapi)?3tbb\w*"),
         "calls {name}: this stage runs on the one thread it is given (its time is compared with "
         "the reference's on one thread); threads are stage 03's idea"),
