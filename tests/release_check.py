@@ -213,7 +213,7 @@ def release_tests(out, kit):
         check(re.search(rf"^\s+{command}\s", listed, re.MULTILINE),
               f"the release's `plab --help` does not list {command}:\n{listed}")
     print("its `plab --help` lists a student's commands and demo, no instructor's command")
-    r = run("ctest", "--test-dir", build, "-L", "^kit$")  # render too: it needs no stage done
+    r = run("ctest", "--test-dir", build, "-L", "^kit$", "--output-on-failure")  # render too
     print("its kit tests pass: " + next((l for l in r.stdout.splitlines() if "tests passed" in l), ""))
     for stage in ("01", "02", "03"):
         r = run("ctest", "--test-dir", build, "-L", f"^stage{stage}$", "-LE", "long",
