@@ -234,13 +234,14 @@ class Unguessable(unittest.TestCase):
         self.assertEqual(lines[:5], head)
         moved = [[float(f) for f in line.split()] for line in lines[5:] if line.strip()]
         self.assertEqual([int(m[0]) for m in moved], [0, 1, 2])
-        changed = 0
         for before, after in zip(particles, moved):
             for k in range(1, 5):
                 self.assertLessEqual(abs(after[k] - before[k]), 1e-3)
-                changed += after[k] != before[k]
+                # a position at the box's edge (r or L - r) is clamped back half of the time;
+                # every other value moves (a flaky count of all twelve failed 1 time in 16)
+                if not (k <= 2 and before[k] in (1.0, 99.0)):
+                    self.assertNotEqual(after[k], before[k], (before, after, k))
             self.assertTrue(1 <= after[1] <= 99 and 1 <= after[2] <= 99, after)
-        self.assertGreaterEqual(changed, 9)  # (a value at the box's edge may be clamped back)
 
 
 class TimedThreads(unittest.TestCase):
