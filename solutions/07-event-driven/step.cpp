@@ -41,7 +41,7 @@ struct Event {
   int i;          //!< the particle whose prediction this is
   int j;          //!< the partner (kPairHit), or -1
   int axes;       //!< kWallHit / kCross: which axes (bit 1: x, bit 2: y)
-  long long cj;   //!< collisions of `j` when predicted (stale when it has changed)
+  long long cj;   //!< kPairHit: the partner's collision count (hits_[j]) when predicted
 };
 
 /// The particles in a binary min-heap by the time of their one predicted event (at the same time,

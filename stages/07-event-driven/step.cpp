@@ -41,7 +41,7 @@ struct Event {
   int i;          //!< the particle whose prediction this is
   int j;          //!< the partner (kPairHit), or -1
   int axes;       //!< kWallHit / kCross: which axes (bit 1: x, bit 2: y)
-  long long cj;   //!< collisions of `j` when predicted (stale when it has changed)
+  long long cj;   //!< kPairHit: the partner's collision count (hits_[j]) when predicted
 };
 
 /// The particles in a binary min-heap by the time of their one predicted event (at the same time,
@@ -232,8 +232,8 @@ class EventDriven final : public Stepper {
   /// (a collision of `e.i` itself replaces its prediction at once, so only the partner's can
   /// leave one behind). A stale event is not a collision: its particle is predicted again.
   [[nodiscard]] bool stale([[maybe_unused]] const Event& e) const {
-    // EXERCISE 2: in O(1), without searching the queue: what an event records when predicted
-    // (Event) against what the partner has done since (hits_).
+    // EXERCISE 2: in O(1), without searching the queue. Which kinds of event can go stale at
+    // all, and what does one record when it is predicted that tells you now?
     PLAB_EXERCISE(2, "tell a stale event");
   }
 
