@@ -53,19 +53,20 @@ class Performance:
         run's (a fast wrong program earns nothing)."""
         limits, perf = self.rubric["limits"], self.rubric["performance"]
         test = f"{st.key}: performance"
+        # A CPU stage on one process is watched (its threads' CPU time, read from /proc), and so
+        # is the reference, which pays the reading's cost alike
+        watch = not st.gpu and st.ranks == 1
         for k in range(perf["runs"]):
             moved = self.private / f"perf-{st.key}-{k}.in"
             shutil.copyfile(scene, moved)
             unguessable(moved)
-            r = self.run_program(ref_prog, moved, args, 3600, cap, st)
+            r = self.run_program(ref_prog, moved, args, 3600, cap, st, watch=watch)
             if r.rc != 0 or r.reason:
                 raise RuntimeError(f"the reference failed on {moved}: {r.reason or ''} {r.stderr}")
             ref.append(r.seconds)
             expected = r.read_output()
             if not expected:
                 raise RuntimeError(f"the reference wrote no output on {moved}")
-            # A CPU stage on one process is watched: its threads' CPU time, read from /proc
-            watch = not st.gpu and st.ranks == 1
             r = self.run_program(program, moved, args,
                                  max(limits["min_seconds"], limits["time_multiple"] * max(ref)),
                                  cap, st, watch=watch)
