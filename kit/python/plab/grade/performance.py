@@ -118,8 +118,10 @@ def more_threads(run, threads):
     with a margin for the readings' granularity. A stage timed on T threads that starts more
     (OpenMP's num_threads, omp_set_num_threads) would be timed against a reference on T
     threads while using every core of a larger grading machine (a red-team pass of 2026-12-07
-    found it possible on stages 03 and 06; the machine it ran on had only two cores)."""
-    used = sum(run.cpu.values())
+    found it possible on stages 03 and 06; the machine it ran on had only two cores). Read from
+    the whole process, so that threads that lived between two readings count too."""
+    # the whole processes' time (their threads that ended too), or the threads' where none
+    used = max(sum(run.cpu_total.values()), sum(run.cpu.values()))
     if used <= threads * run.seconds * 1.2 + 0.1:
         return None
     return (f"the timed run used {used:.2f} s of CPU in {run.seconds:.2f} s, {used / run.seconds:.1f} "

@@ -75,12 +75,14 @@ NAMES = {"bwrap": "bubblewrap (mount, PID, network, IPC, UTS and user namespaces
 
 class Run:
     """One run of an untrusted program, ended by its limits. `cpu`: when the run was watched,
-    {(process id, thread id): CPU seconds} of its program's threads (see `program_cpu()`)."""
+    {(process id, thread id): CPU seconds} of its program's threads (see `program_cpu()`);
+    `cpu_total`: {process id: CPU seconds of all its threads, those that ended included}."""
 
-    def __init__(self, rc, seconds, reason, stdout, stderr, out_dir, cpu=None):
+    def __init__(self, rc, seconds, reason, stdout, stderr, out_dir, cpu=None, cpu_total=None):
         self.rc, self.seconds, self.reason = rc, seconds, reason
         self.stdout, self.stderr, self.out_dir = stdout, stderr, out_dir
         self.cpu = cpu or {}
+        self.cpu_total = cpu_total or {}
 
     def read_output(self, name="out.txt"):
         """The text of a file the program wrote into its output folder, or None. Never follows a
@@ -135,11 +137,21 @@ def _root():
 TICK = os.sysconf("SC_CLK_TCK")
 
 
-def program_cpu(root_pid, name="stage"):
+def _seconds(stat_text):
+    """User + system CPU seconds from a /proc stat line (of a thread, or of a whole process:
+    then its threads that ended are counted too)."""
+    fields = stat_text[stat_text.rfind(")") + 2:].split()
+    return (int(fields[11]) + int(fields[12])) / TICK
+
+
+def program_cpu(root_pid, name="stage", totals=None):
     """{(pid, tid): CPU seconds (user + system)} of every thread of the processes below
     `root_pid` whose command name starts with `name` (a stage program runs as /plab/stage, or
     under the grader's own name stageNN). Read from the host's /proc, outside the program: what
-    the kernel counted, whatever the program says. Threads that ended are not seen."""
+    the kernel counted, whatever the program says. Threads that ended are not seen; `totals`
+    (a dict), when given, gets {pid: CPU seconds of the whole process}, which counts them (a
+    red-team stage started a thread for a millisecond inside every step, which no reading of
+    its threads saw)."""
     parents, names = {}, {}
     for entry in os.scandir("/proc"):
         if not entry.name.isdigit():
@@ -165,6 +177,8 @@ def program_cpu(root_pid, name="stage"):
             continue
         try:
             tasks = os.listdir(f"/proc/{pid}/task")
+            if totals is not None:
+                totals[pid] = _seconds(pathlib.Path(f"/proc/{pid}/stat").read_text())
         except OSError:
             continue
         for tid in tasks:
@@ -172,8 +186,7 @@ def program_cpu(root_pid, name="stage"):
                 text = pathlib.Path(f"/proc/{pid}/task/{tid}/stat").read_text()
             except OSError:
                 continue
-            fields = text[text.rfind(")") + 2:].split()
-            cpu[pid, int(tid)] = (int(fields[11]) + int(fields[12])) / TICK
+            cpu[pid, int(tid)] = _seconds(text)
     return cpu
 
 
@@ -312,11 +325,11 @@ class Sandbox:
                 os.close(fd)
             if feed:
                 threading.Thread(target=_feed, args=(feed, stdin_text), daemon=True).start()
-            reason, cpu = None, {}
+            reason, cpu, totals = None, {}, {}
             try:
                 if watch:  # the last reading of each thread before it ended (every 50 ms)
                     while proc.poll() is None and time.time() - start < seconds:
-                        cpu.update(program_cpu(proc.pid))
+                        cpu.update(program_cpu(proc.pid, totals=totals))
                         time.sleep(0.05)
                 proc.wait(timeout=max(0.0, seconds - (time.time() - start)))
             except subprocess.TimeoutExpired:
@@ -340,7 +353,7 @@ class Sandbox:
         if reason is None and rc != 0 and ("bad_alloc" in stderr or "memory" in stderr.lower()):
             reason = f"ran out of memory (limit {self.limits['memory_mb']} MB)"
         out_dir = pathlib.Path(rw.get("/plab/out", log_dir)) if rw else log_dir
-        return Run(rc, took, reason, log_dir / "stdout", stderr, out_dir, cpu)
+        return Run(rc, took, reason, log_dir / "stdout", stderr, out_dir, cpu, totals)
 
     def end_everything(self, proc):
         """Kills the program's process group and, under a dedicated uid, every process of that

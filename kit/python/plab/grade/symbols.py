@@ -73,6 +73,10 @@ RULES = [
      "the kit's measurements; call them by name in the code", True),
 ]
 GLOBAL = set("TWDBRVGSiu")  # nm -P types of a global symbol the object defines
+# nm -P types of a symbol the object uses and does not define: undefined, or weak undefined (a
+# red-team stage 02 declared pthread_create weak, which nm prints as "w", and the linker still
+# bound it to the C library's)
+UNDEFINED = set("Uwv")
 C_FUNCTION = set("TWi")  # nm -P types of a global function (text, weak, indirect) it defines
 
 # Calls a stage's code may be refused by group (a rubric entry's `refuse_calls`): (pattern of the
@@ -178,14 +182,14 @@ def problems(nm_lines, mpi_kit=None, refuse_calls=()):
         if member.startswith(("stage_info.cpp", "no_gpu_path.cpp", "stage_entry.cpp")):
             continue  # the kit's own objects in the stage's library
         source = member[:-2] if member.endswith(".o") else member  # step.cpp.o: step.cpp
-        group = next((g for g in groups if kind == "U" and g[1].match(name)), None)
+        group = next((g for g in groups if kind in UNDEFINED and g[1].match(name)), None)
         if group is not None:
             if (source, group[0]) not in said:
                 said.add((source, group[0]))
                 found.append(f"{source} " + group[2].format(name=demangled(name)))
             continue
         for pattern, want, reason, not_cuda in RULES:
-            if not pattern.match(name) or (kind == "U" if want == "D" else kind != "U"):
+            if not pattern.match(name) or ((kind in UNDEFINED) == (want == "D")):
                 continue
             if (want == "D" and kind not in GLOBAL) or (not_cuda and member.endswith(".cu.o")):
                 continue  # a local symbol replaces nothing; CUDA's start-up code calls dlsym
@@ -200,12 +204,12 @@ def problems(nm_lines, mpi_kit=None, refuse_calls=()):
                              f"whole program, the kit's measurements included (a red-team stage "
                              f"08 replaced clock_gettime, with which the kit measures each rank's "
                              f"work); give it a C++ name (no extern \"C\")")
-            elif mpi_kit is not None and kind == "U" and CALLBACKS.match(name):
+            elif mpi_kit is not None and kind in UNDEFINED and CALLBACKS.match(name):
                 found.append(f"{source} calls {name}: MPI would run a function of the stage's "
                              f"own inside its calls, where the kit counts the CPU time as time in "
                              f"MPI, not as work. Use MPI's predefined operations (MPI_MAX, "
                              f"MPI_MIN, MPI_SUM, MPI_LOR, ...) and its default error handling")
-            elif (mpi_kit is not None and kind == "U" and name.startswith("MPI_")
+            elif (mpi_kit is not None and kind in UNDEFINED and name.startswith("MPI_")
                     and name not in mpi_kit and name not in NO_DATA
                     and not name.startswith(NO_DATA_PREFIXES)):
                 found.append(f"{source} calls {name}, which the kit does not count: it could move "
