@@ -54,6 +54,12 @@ with Image.open(scratch / "diff.gif") as im:
     assert im.n_frames == 10, f"{im.n_frames} frames for steps 1..10, expected 10"
 print("diff: first difference named (step 9, particle 7, x); 10 frames side by side")
 
+other = datasets / "golden" / "random-150.out"  # another scene's output
+wrong = subprocess.run([plab, "render", scene, "--diff", other, other, "--out", scratch / "w.gif"],
+                       capture_output=True, text=True)
+assert wrong.returncode != 0 and "holds 150 particles a step, the scene 40" in wrong.stderr, wrong.stderr
+print("another scene's outputs: refused, with both counts")
+
 bad = subprocess.run([plab, "render", scene, *source, "--steps", "5:2", "--out", scratch / "x.gif"],
                      capture_output=True, text=True)
 assert bad.returncode != 0 and "--steps needs 0 <= FIRST <= LAST" in bad.stderr, bad.stderr

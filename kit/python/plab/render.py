@@ -144,6 +144,31 @@ class Panel:
                                                  linewidth=2))
 
 
+def particles_of(path):
+    """How many particles an output file's first step holds (its lines up to the next step)."""
+    first, n = None, 0
+    with open(path, errors="replace") as f:
+        for line in f:
+            token = line.split(maxsplit=1)
+            if not token:
+                continue
+            if first is None:
+                first = token[0]
+            elif token[0] != first:
+                break
+            n += 1
+    return n
+
+
+def same_particles(scene, path, option):
+    """Fails unless output `path` holds the scene's particles (a student drew a 1000-particle
+    output over a 25-particle scene, told only that the two outputs were equal)."""
+    n = particles_of(path)
+    if n != scene["n"]:
+        fail(f"{option}: {path} holds {n} particles a step, the scene {scene['n']}: an output of "
+             "another scene? (give the scene the outputs were made from)")
+
+
 def what_to_draw(plab, a, scratch):
     """The outputs to draw (paths), their titles, the events file (or None), the steps FIRST:LAST
     and the difference to ring (STEP, PARTICLE, TEXT or None), from the command's options: two
@@ -159,6 +184,7 @@ def what_to_draw(plab, a, scratch):
         for path in a.diff:
             if not pathlib.Path(path).is_file():
                 fail(f"--diff: {path} is not a file")
+            same_particles(scene, path, "--diff")
         d = plab.diff(*a.diff)
         mark = None
         if not d.get("comparable", True):
@@ -180,6 +206,7 @@ def what_to_draw(plab, a, scratch):
     if a.from_output:
         if not pathlib.Path(a.from_output).is_file():
             fail(f"--from: {a.from_output} is not a file")
+        same_particles(scene, a.from_output, "--from")
         return [a.from_output], [a.from_output], None, steps or default_steps, None
     steps = steps or default_steps
     last = steps.split(":")[-1]
