@@ -29,7 +29,8 @@ void say_what_is_graded_too(const std::string& stage) {
       what = idea["what"].get<std::string>();
   }
   if (what.empty() && !races) return;
-  std::printf("stage %s prints the reference's output. Graded too, outside your code:", id.c_str());
+  std::printf("stage %s prints the reference's output. Graded too, outside your code (not by "
+              "these tests):", id.c_str());
   if (!what.empty()) std::printf(" its idea (%s)", what.c_str());
   // A race may change no printed bit in the runs above, and the grader looks for it
   if (races)
@@ -57,9 +58,17 @@ int with_scratch_tmpdir(Body body) {
   for (const auto& e : fs::directory_iterator(scratch)) left.push_back(e.path().filename());
   if (!left.empty()) {
     std::sort(left.begin(), left.end());
-    std::printf("plab test: FAILED: the tests left %zu file(s) in their temporary folder "
-                "(TMPDIR=%s), e.g. %s: a test must remove its scratch files\n",
-                left.size(), scratch.c_str(), left.front().c_str());
+    // A stage that crashed (a double free, an abort) can end its test before the test's
+    // clean-up runs: then the leftover is the crash's, said so, and the crash is what to fix
+    if (status != 0)
+      std::printf("plab test: the tests left %zu file(s) in their temporary folder (removed "
+                  "now), e.g. %s: a test that crashed or was stopped above leaves its scratch "
+                  "files behind; fix that failure first\n",
+                  left.size(), left.front().c_str());
+    else
+      std::printf("plab test: FAILED: the tests left %zu file(s) in their temporary folder "
+                  "(TMPDIR=%s), e.g. %s: a test must remove its scratch files\n",
+                  left.size(), scratch.c_str(), left.front().c_str());
     // What is inside says who left it (a test's scratch folder, a tool's session files).
     std::error_code error;
     int shown = 0;
