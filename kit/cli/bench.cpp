@@ -96,7 +96,12 @@ void add_bench(CLI::App& app) {
   auto a = std::make_shared<Args>();
   auto* c = app.add_subcommand("bench", "Time stages on scenes like the 2019 report's (L = 20000, "
                                         "r = 1, model.md's speeds, perf mode): median of several "
-                                        "whole-process runs, spread, and speedup over 1 thread.");
+                                        "whole-process runs, spread, and speedup over 1 thread. "
+                                        "A stage's rows take their runs in turn (every row's first "
+                                        "run, then every row's second, ...), so that other work on "
+                                        "the machine falls on all rows alike; a stage without "
+                                        "OpenMP loops (02, 07) is timed at the first thread count "
+                                        "and schedule only.");
   c->add_option("--stage", a->stages, "stages, e.g. 02,03")->required()->delimiter(',');
   c->add_option("--threads", a->threads,
                 "thread counts, e.g. 1,2 (a student's or solution's threads wait passively at "
@@ -200,36 +205,58 @@ void add_bench(CLI::App& app) {
         const std::string program = programs.at(id);
         if (unfinished.count(id)) continue;
         try {
+          // The command line of one run on `count` threads (or ranks) under `schedule`, its report
+          // to `report_to`; ranks bound to cores as mpirun chooses unless `bound` is false.
+          const auto run_args = [&](const std::string& schedule, int count,
+                                    const std::string& report_to, bool bound = true) {
+            std::vector<std::string> args{program, scene, "--quiet", "--out", "/dev/null",
+                                          "--threads", by_ranks ? "1" : std::to_string(count),
+                                          "--schedule", schedule, "--report", report_to};
+            return by_ranks ? on_ranks(id, impl, count, args, bound) : args;
+          };
+          const auto check_ran = [&](int rc) {
+            if (rc == 3) throw Unfinished{};  // its "EXERCISE N ... is not done yet" said why
+            if (rc != 0)
+              throw std::runtime_error("stage " + id + " failed (exit " + std::to_string(rc) +
+                                       ") on " + scene);
+          };
+          // Every row's k-th run before any row's (k+1)-th: a spell of other work on the machine
+          // falls on every row alike, not on whole rows (a student's two rankings of the
+          // schedules, two minutes apart, disagreed when each row's runs came one after another)
+          struct Timed {
+            std::vector<double> t, steps_t;
+            nlohmann::json last;
+          };
+          std::map<std::pair<std::string, int>, Timed> timed;
+          // A GPU stage (not on ranks) runs its first count only, and a CPU stage without OpenMP
+          // loops (02, 07) its first count and schedule: its other rows would time the same run
+          bool on_gpu = false, serial = false;
+          for (int k = 0; k < a->runs; ++k)
+            for (const std::string& schedule : a->schedules)
+              for (const int threads : a->threads) {
+                if ((on_gpu || serial) && threads != a->threads.front()) continue;
+                if (serial && schedule != a->schedules.front()) continue;
+                if (stderr_is_terminal())
+                  std::fprintf(stderr, "\r  stage %s N=%lld threads=%d %s run %d/%d ", id.c_str(),
+                               n, threads, schedule.c_str(), k + 1, a->runs);
+                Timed& m = timed[{schedule, threads}];
+                const auto t0 = std::chrono::steady_clock::now();
+                check_ran(run_program(run_args(schedule, threads, report)));
+                m.t.push_back(wall_seconds(t0));
+                m.last = nlohmann::json::parse(read_file(report));
+                m.steps_t.push_back(m.last.at("step_seconds").get<double>());
+                on_gpu = on_gpu || (m.last.at("device").get<std::string>() != "cpu" && !by_ranks);
+                serial = serial || (!on_gpu && !by_ranks && !m.last.value("openmp", true));
+              }
+          if (stderr_is_terminal()) std::fprintf(stderr, "\r%70s\r", "");
           for (const std::string& schedule : a->schedules) {
-            // The command line of one run on `count` threads (or ranks), its report to `report_to`;
-            // ranks bound to cores as mpirun chooses unless `bound` is false.
-            const auto run_args = [&](int count, const std::string& report_to, bool bound = true) {
-              std::vector<std::string> args{program, scene, "--quiet", "--out", "/dev/null",
-                                            "--threads", by_ranks ? "1" : std::to_string(count),
-                                            "--schedule", schedule, "--report", report_to};
-              return by_ranks ? on_ranks(id, impl, count, args, bound) : args;
-            };
-            const auto check_ran = [&](int rc) {
-              if (rc == 3) throw Unfinished{};  // its "EXERCISE N ... is not done yet" said why
-              if (rc != 0)
-                throw std::runtime_error("stage " + id + " failed (exit " + std::to_string(rc) +
-                                         ") on " + scene);
-            };
             double one_thread = 0, one_thread_steps = 0;
             for (const int threads : a->threads) {
-              std::vector<double> t, steps_t;
-              nlohmann::json last;
-              for (int k = 0; k < a->runs; ++k) {
-                if (stderr_is_terminal())
-                  std::fprintf(stderr, "\r  stage %s N=%lld threads=%d run %d/%d ", id.c_str(), n,
-                               threads, k + 1, a->runs);
-                const auto t0 = std::chrono::steady_clock::now();
-                check_ran(run_program(run_args(threads, report)));
-                t.push_back(wall_seconds(t0));
-                last = nlohmann::json::parse(read_file(report));
-                steps_t.push_back(last.at("step_seconds").get<double>());
-              }
-              if (stderr_is_terminal()) std::fprintf(stderr, "\r%60s\r", "");
+              if (!timed.count({schedule, threads})) break;  // (a GPU or serial stage's others)
+              Timed& m = timed.at({schedule, threads});
+              std::vector<double>& t = m.t;
+              std::vector<double>& steps_t = m.steps_t;
+              const nlohmann::json& last = m.last;
               std::sort(t.begin(), t.end());
               std::sort(steps_t.begin(), steps_t.end());
               const double median = t[t.size() / 2];
@@ -312,7 +339,8 @@ void add_bench(CLI::App& app) {
                 }
                 // copies at once, unbound: a run of one rank alone is bound to the first core
                 std::vector<std::vector<std::string>> programs;
-                for (const std::string& r : reports) programs.push_back(run_args(first, r, false));
+                for (const std::string& r : reports)
+                  programs.push_back(run_args(schedule, first, r, false));
                 char progress[128];
                 std::snprintf(progress, sizeof progress,
                               "stage %s N=%lld: %d copies of the %d-%s run at once", id.c_str(), n,
