@@ -79,6 +79,15 @@ GLOBAL = set("TWDBRVGSiu")  # nm -P types of a global symbol the object defines
 UNDEFINED = set("Uwv")
 C_FUNCTION = set("TWi")  # nm -P types of a global function (text, weak, indirect) it defines
 
+# The calls that start a thread, one pattern for every group that refuses threads: pthread_create
+# under the C library's names too, C11's, clone, OpenMP's regions, std::thread (std::async and
+# std::jthread start theirs through it), TBB, and the C library's calls that start a thread of
+# their own to run a function or a request (SIGEV_THREAD timers and notifications, asynchronous
+# I/O and name lookups)
+THREAD_STARTS = (r"(\w*pthread_create\w*|thrd_create|(__)?clone3?|GOMP_\w+|timer_create|mq_notify|"
+                 r"aio_\w+|lio_listio\w*|getaddrinfo_a)$"
+                 r"|.*St6thread15_M_start_thread.*|_ZN(6oneapi)?3tbb\w*")
+
 # Calls a stage's code may be refused by group (a rubric entry's `refuse_calls`): (pattern of the
 # called symbol's name, as nm prints it, mangled; the reason)
 CALL_GROUPS = {
@@ -118,20 +127,14 @@ CALL_GROUPS = {
         "CPU clock, which a process timer makes coarse, and keeps a handler for SIGPROF; a stage "
         "changes no signal and no timer"),
     "threads": (re.compile(
-        r"(pthread_create|fork|vfork|clone|clone3|execve|execv|execvp|execvpe|execl|execlp|"
-        r"execle|posix_spawn|posix_spawnp|system|popen|GOMP_\w+)$"
-        r"|.*St6thread15_M_start_thread.*"),
+        r"(fork|vfork|execve|execv|execvp|execvpe|execl|execlp|execle|posix_spawn|posix_spawnp|"
+        r"system|popen)$|" + THREAD_STARTS),
         "calls {name}: each rank is one thread of one process (the kit samples its CPU time as "
         "work or as time in MPI calls: another thread's work would look like a wait)"),
     # A stage given one thread (rubric: "threads": 1) is timed against the reference on one
     # thread: a red-team stage 02 split its pair loop over two std::threads and was timed at 0.55
     # of the reference's time, every correctness point kept
-    "one_thread": (re.compile(
-        r"(\w*pthread_create\w*|thrd_create|(__)?clone3?|GOMP_\w+)$"
-        # the C library's calls that start a thread of their own to run a function or a request
-        # (SIGEV_THREAD timers and notifications, asynchronous I/O and name lookups)
-        r"|(timer_create|mq_notify|aio_\w+|lio_listio\w*|getaddrinfo_a)$"
-        r"|.*St6thread15_M_start_thread.*|_ZN(6oneapi)?3tbb\w*"),
+    "one_thread": (re.compile(THREAD_STARTS),
         "calls {name}: this stage runs on the one thread it is given (its time is compared with "
         "the reference's on one thread); threads are stage 03's idea"),
 }
