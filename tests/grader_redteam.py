@@ -50,7 +50,9 @@ and, measured by the grader outside the student's code (each must score nothing)
                   elsewhere (its random-1000 and random-2000 must earn nothing); and
                   03 as one parallel region with dynamic and guided loops and 08's solution,
                   which keep their points
-  ties            02 whose heap orders events by time only loses the hidden-ties scene
+  ties            02 whose heap orders events by time only loses the hidden-ties scene; 07
+                  whose queue compares times only loses hidden-converging and the public
+                  simultaneous-hits (a disk hit by two at one instant: the order decides)
   shortcuts       the one-step answers (next-state), a stage 02 that skips the work on the timed
                   scene (no performance points), the untouched starting point of 03 (no race points)
   gpu-ideas       (on a GPU) 04 stepping on the host between whole-state copies, 05 on one
@@ -86,7 +88,7 @@ import time
 plab, kit, scratch = sys.argv[1], pathlib.Path(sys.argv[2]).resolve(), pathlib.Path(sys.argv[3])
 only = set(sys.argv[4:])
 SEED = 424242
-FOLDERS = {"01": "01-naive", "02": "02-heap", "03": "03-openmp", "08": "08-mpi"}
+FOLDERS = {"01": "01-naive", "02": "02-heap", "03": "03-openmp", "07": "07-event-driven", "08": "08-mpi"}
 TOKEN = f"plabredteam{os.getpid()}"
 failures = []
 
@@ -1435,19 +1437,34 @@ def largest_08():
 def case_ties():
     """Stage 02 whose heap orders its events by time only (not model.md's whole key): the hidden
     tie scenes must cost it points (hidden-ties: every draw holds a wall-and-pair tie whose pair
-    has the lower index, which only the key's kind decides)."""
+    has the lower index, which only the key's kind decides). Stage 07 whose queue compares times
+    only (a heap still, so its idea test passes): the disks hit by two at one instant
+    (hidden-converging, and the public simultaneous-hits) must cost it those points."""
     name = "redteam-ties"
     shutil.rmtree(scratch / name, ignore_errors=True)
     root = patched(name, "02", "solutions/02-heap", [(
         "return model::key_less(b, a); }", "return b.t < a.t; }")],
         "stage 02's solution no longer orders its heap with model::key_less")
-    if root is None:
+    # and stage 07 whose event queue compares times only (no particle index at equal times)
+    root07 = patched(name, "07", "solutions/07-event-driven", [(
+        "return a.t < b.t || (a.t == b.t && a.i < b.i);", "return a.t < b.t;")],
+        "stage 07's solution no longer orders its queue by time, then particle")
+    if root is None or root07 is None:
         return
-    tests, doc, _ = grade(name, scratch / name, "02", "--no-races")
+    tests, doc, _ = grade(name, scratch / name, "02,07", "--no-races")
     ties = tests.get("02: hidden hidden-ties", {})
     check("ties", ties.get("score", 1) == 0,
           f"a time-only heap got {ties.get('score')} of {ties.get('max_score')} on hidden-ties: "
           f"{ties.get('output', '')[:200]!r}")
+    for test in ("07: hidden hidden-converging", "07: public simultaneous-hits"):
+        got = tests.get(test, {})
+        # (and its output holds no stepped-model oracle's account: stage 07 is another model)
+        check("ties", got.get("score", 1) == 0 and "the reference has" not in got.get("output", ""),
+              f"stage 07 with a time-only queue got {got.get('score')} of {got.get('max_score')} "
+              f"on {test}: {got.get('output', '')[:200]!r}")
+    idea = next((t for n, t in tests.items() if n.startswith("07: idea")), {})
+    check("ties", idea.get("status") == "passed",  # a heap still: only the order is wrong
+          f"stage 07 with a time-only queue: its idea test {idea.get('output', 'none')[:200]!r}")
 
 
 def case_leaderboard():

@@ -296,8 +296,8 @@ FAMILIES = {
     "hidden-coincident": fam_coincident,
     "hidden-cradle": fam_cradle,
 }
-# 2D families (not lanes): exact corner hits, dense lattices
-TWO_D = ("hidden-corners", "hidden-lattice")
+# 2D families (not lanes): exact corner hits, dense lattices, disks hit from two sides at once
+TWO_D = ("hidden-corners", "hidden-lattice", "hidden-converging")
 
 
 def corners(rng):
@@ -323,6 +323,51 @@ def corners(rng):
             checks += [(m, i, "free", None, None), (m + 1, i, "wall", None, Fraction(0))]
         else:
             checks.append((m, i, "wall", None, t))
+    return L, r, parts, checks
+
+
+# The directions of a 3-4-5 triangle (and the axes), times 5: integer vectors of length 5.
+FIVE = [(3, 4), (4, 3), (-3, 4), (-4, 3), (3, -4), (4, -3), (-3, -4), (-4, -3),
+        (5, 0), (0, 5), (-5, 0), (0, -5)]
+
+
+def converging(rng):
+    """Disks at rest each hit at exactly the same dyadic t by two or three disks coming head-on
+    along lines of centres at angles between 61 and 164 degrees (never 90 or 180). In continuous
+    time the hits happen one after the other at that instant, and their order changes the result
+    (exchanges along two lines of centres that are neither parallel nor perpendicular do not
+    commute): the queue's key, time and then the particle's index, decides it. In the stepped
+    model the pair with the lower (lo, hi) wins the tie. A hitter with direction u (|u| = 5) and
+    speed 5q starts at B - u m, m = 2r/5 + q t (r = 5/2 or 5/4: 2r/5 is dyadic), so
+      c = (5m)^2 - 4r^2 = 5qt (4r + 5qt), b = -25 m q, a = 25 q^2, b^2 - ac = 100 q^2 r^2,
+    sqrt = 10 q r, and t1 = (25 m q - 10 q r) / (25 q^2) = t: every term a small dyadic number.
+    Two hitters' lines at least 61 degrees apart keep them 2r apart all the way in."""
+    r = rng.choice([Fraction(5, 2), Fraction(5, 4)])
+    pitch = 2 * (2 * r + 2 * 5 * 2 + 2 * 5) + 2 * r  # a group's reach, a step back included
+    cols = rng.choice((3, 4))
+    L = pitch * cols + rng.randint(0, 4)
+    parts, checks = [], []
+    for gx, gy in rng.sample([(x, y) for x in range(cols) for y in range(cols)], rng.randint(5, 9)):
+        cx, cy = pitch * gx + pitch / 2, pitch * gy + pitch / 2
+        m, t = rng.randint(0, 1), rng.choice(T_INSIDE)
+        hitters = []
+        for u in rng.sample(FIVE, len(FIVE)):
+            dots = [u[0] * h[0] + u[1] * h[1] for h in hitters]
+            if all(d <= 12 and d not in (0, -25) for d in dots):
+                hitters.append(u)
+            if len(hitters) == rng.choice((2, 3)):
+                break
+        if len(hitters) < 2:
+            raise ValueError("fewer than two directions apart")
+        b = len(parts)
+        parts.append([cx, cy, Fraction(0), Fraction(0)])
+        pairs = []
+        for ux, uy in hitters:
+            q = speed(rng, 1, 2)
+            d = 2 * r / 5 + q * t + m * q  # m steps back
+            parts.append([cx - ux * d, cy - uy * d, ux * q, uy * q])
+            pairs.append((len(parts) - 1, b))
+        checks.append((m, None, "tie", pairs, t))
     return L, r, parts, checks
 
 
@@ -402,6 +447,8 @@ def draw(rng, family):
         L, r, parts, checks = corners(rng)
     elif family == "hidden-lattice":
         L, r, parts, checks = dense(rng)
+    elif family == "hidden-converging":
+        L, r, parts, checks = converging(rng)
     else:
         L, r, parts, checks = lanes_scene(rng, family)
         if rng.random() < 0.5:  # lanes along y instead of x

@@ -172,7 +172,10 @@ class Run:
         lines = [diff["text"]]
         first = diff["first"] or {}
         reference = self.solution(st.reference)
-        if isinstance(first.get("step"), int) and isinstance(first.get("particle"), int):
+        # The reference's --explain is the stepped model's oracle (one event a particle a step):
+        # a stage of another model (07, continuous time) is not explained by it
+        if (not st.exact and isinstance(first.get("step"), int)
+                and isinstance(first.get("particle"), int)):
             k, i = first["step"], first["particle"]
             before = velocities(self.kit_programs, work / "expected.out", k - 1, i) if k >= 1 else None
             after = velocities(self.kit_programs, work / "actual.out", k, i) if before else None
