@@ -1314,7 +1314,6 @@ def rounds_03():
 
 def rounds_07():
     """Stage 07's grading of case rounds-07: the linear scan for the next event."""
-    FOLDERS.update({"07": "07-event-driven"})
     name = "redteam-rounds-linear-07"
     shutil.rmtree(scratch / name, ignore_errors=True)
     step = stage_folder(scratch / name, "07", "solutions/07-event-driven")

@@ -11,7 +11,9 @@
 3. the release builds on its own; its kit tests pass; the tests of stages 01-03 fail on the
    untouched starting points with "stage NN: EXERCISE n (...) is not done yet", stage 01's
    stage-against-stage tests too; with a solution's step.cpp copied into stages/01-naive, those
-   tests run against the reference program (not skipped) and pass;
+   tests run against the reference program (not skipped) and pass; stage 03's Rounds test (the
+   compiled plab-rounds and OpenMP counter the release ships) passes a solution and fails the
+   same without its OpenMP pragmas;
 4. the student README's quick start (its ```sh block under "Student quick start"), run line by
    line as written in the release with ./plab, as tests/readme_check.py runs README.md's: the
    test before `$EDITOR` fails with "EXERCISE 1 (...) is not done yet", every other line exits 0;
@@ -237,6 +239,21 @@ def release_tests(out, kit):
           f"stage 01's stage-against-stage tests skip:\n{r.stdout[-3000:]}")
     print(f"stage 01 finished: its {passed.group(1)} stage-against-stage tests run against "
           "kit/reference/bin/plab-reference and pass, none skipped")
+    # Stage 03's rounds, counted as the grade counts them, with the compiled instruments the
+    # release ships (kit/reference/bin): a solution passes, the same made serial fails.
+    rounds = r"^stage03\.student\.Rounds$"
+    solution = (kit / "solutions" / "03-openmp" / "step.cpp").read_text()
+    for text, want in ((solution, 0), (solution.replace("#pragma omp", "// #pragma omp"), 1)):
+        (out / "stages" / "03-openmp" / "step.cpp").write_text(text)
+        run("cmake", "--build", build, "-j", "2")
+        r = run("ctest", "--test-dir", build, "-R", rounds, "--output-on-failure", ok=False)
+        check("stage03.student.Rounds" in r.stdout and (r.returncode == 0) == (want == 0)
+              and (want == 0 or "were expected" in r.stdout),
+              f"stage 03's Rounds test on {'a solution' if want == 0 else 'a serial stage'}:\n"
+              f"{r.stdout[-2000:]}")
+    shutil.copyfile(kit / "stages" / "03-openmp" / "step.cpp", out / "stages" / "03-openmp" / "step.cpp")
+    print("stage 03's Rounds test runs with the release's kit/reference/bin: a solution passes, "
+          "the same without its OpenMP pragmas fails")
 
 
 def student_quick_start(out, clone, kit, scratch):

@@ -19,19 +19,24 @@ void say_what_is_graded_too(const std::string& stage) {
   if (!rubric.is_object() || !rubric.contains("stages")) return;
   // The stage's idea: its own entry's, or that of an entry graded from its folder (08's runs on
   // several ranks, "folder": "08")
-  std::string what;
+  std::string what, local;
   bool races = false;
   for (const auto& [key, conf] : rubric["stages"].items()) {
     if (key != id && conf.value("folder", "") != id) continue;
     races |= conf.value("races", false);
     const nlohmann::json idea = conf.value("idea", nlohmann::json::object());
-    if (what.empty() && idea.contains("what") && idea.value("kind", "") != "gpu")
+    if (what.empty() && idea.contains("what") && idea.value("kind", "") != "gpu") {
       what = idea["what"].get<std::string>();
+      local = idea.value("local_test", "");  // a part of it that a test here checks too
+    }
   }
   if (what.empty() && !races) return;
   std::printf("stage %s prints the reference's output. Graded too, outside your code (not by "
               "these tests):", id.c_str());
   if (!what.empty()) std::printf(" its idea (%s)", what.c_str());
+  if (!local.empty())
+    std::printf(", of which the test stage%s.student.%s counts a part as the grade does", id.c_str(),
+                local.c_str());
   // A race may change no printed bit in the runs above, and the grader looks for it
   if (races)
     std::printf("%s its data races (ThreadSanitizer: ./plab test --impl student --stage %s --races)",

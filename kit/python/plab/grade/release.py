@@ -66,6 +66,13 @@ kit/reference/bin/plab-reference datasets/scenes/course-1.in --out reference.out
 
 It was built for the machine the release was made on (Debian, x86-64, g++ with OpenMP).
 """
+ROUNDS_TOOLS = [("plab-rounds", "plab-rounds"), ("plab-ompcount", "libplab-ompcount.so")]
+ROUNDS_NOTE = """
+`bin/plab-rounds SCENE` prints how many mutual-earliest rounds each step of a scene needs, and
+`bin/libplab-ompcount.so` counts the OpenMP synchronisations of a program it is preloaded into:
+the test `stage03.student.Rounds` (`python3 -m plab.rounds_check`) runs your stage 03 with both,
+as the grade does, to tell whether its events are selected in rounds of parallel loops.
+"""
 NOT_DONE = r"stage {id}: EXERCISE [0-9]+ \([^)]+\) is not done yet"
 
 
@@ -303,14 +310,21 @@ def build_release(kit, head, work, say, through=None):
     say(f"building the reference program (stage {stage}'s solution at HEAD)", flush=True)
     build_ref = work / "build-reference"
     configure(full, build_ref)
-    run(["cmake", "--build", build_ref, "--target", f"plab-run-{stage}-solution"],
-        f"building stage {stage}'s solution", text=True)
+    # and, where the week has stage 03, the instruments of its local rounds check
+    # (plab.rounds_check: stage03.student.Rounds), compiled too
+    rounds = (ROUNDS_TOOLS
+              if (release / "stages" / "03-openmp" / "stage.json").exists() else [])
+    run(["cmake", "--build", build_ref, "--target", f"plab-run-{stage}-solution",
+         *[target for target, _ in rounds]], f"building stage {stage}'s solution", text=True)
     reference = release / REFERENCE
     reference.parent.mkdir(parents=True, exist_ok=True)
     shutil.copy2(build_ref / "bin" / f"plab-run-{stage}-solution", reference)
+    for _, name in rounds:
+        shutil.copy2(build_ref / "bin" / name, reference.parent / name)
     (reference.parent.parent / "README.md").write_text(
-        REFERENCE_NOTE.format(stage=stage, commit=head))
-    say(f"reference program: {REFERENCE} (stage {stage}'s solution, compiled; no source)")
+        REFERENCE_NOTE.format(stage=stage, commit=head) + (ROUNDS_NOTE if rounds else ""))
+    say(f"reference program: {REFERENCE} (stage {stage}'s solution, compiled; no source)"
+        + (f"; {', '.join(n for _, n in rounds)} beside it" if rounds else ""))
 
     say("building the student docs from the release itself (Doxygen)", flush=True)
     run(["cmake", "--build", build, "--target", "docs"], "building the docs", text=True)

@@ -21,7 +21,9 @@ INSIDE = "/plab/ompcount.so"  # where the sandbox (bubblewrap) shows the library
 
 
 class RoundsCount:
-    """The synchronisations of one watched run of stage 03 against the rounds its scene needs."""
+    """The synchronisations of one watched run of stage 03 against the rounds its scene needs.
+    With a sandbox (the grader), the library is copied where the sandbox's uid reads it; without
+    one (a student's own check, plab.rounds_check), the run preloads it where it is."""
 
     def __init__(self, kit_bin, sandbox, scene):
         lib, tool = kit_bin / LIBRARY, kit_bin / "plab-rounds"  # the grading's copies
@@ -29,9 +31,12 @@ class RoundsCount:
             raise RuntimeError(f"the kit's {lib.name} or {tool.name} is not built: run ./plab once "
                                "in the kit")
         self.sandbox = sandbox
-        self.lib = sandbox.shared_dir("bin") / LIBRARY  # readable by the sandbox's uid
-        shutil.copyfile(lib, self.lib)
-        os.chmod(self.lib, 0o755)
+        if sandbox is None:
+            self.lib = lib
+        else:
+            self.lib = sandbox.shared_dir("bin") / LIBRARY  # readable by the sandbox's uid
+            shutil.copyfile(lib, self.lib)
+            os.chmod(self.lib, 0o755)
         self.secret = secrets.token_hex(16)
         r = subprocess.run([tool, scene], capture_output=True, text=True)
         if r.returncode != 0:
@@ -44,7 +49,7 @@ class RoundsCount:
     def env(self, program):
         """The run's environment: the library preloaded, the secret it signs its counts with,
         and the program it counts (its path as the program sees it)."""
-        bwrap = self.sandbox.mode == "bwrap"
+        bwrap = self.sandbox is not None and self.sandbox.mode == "bwrap"
         return {"LD_PRELOAD": INSIDE if bwrap else str(self.lib), "PLAB_OMP_COUNT": self.secret,
                 "PLAB_OMP_COUNT_PROGRAM": "/plab/stage" if bwrap else str(program)}
 
@@ -80,7 +85,7 @@ class RoundsCount:
                     f"{idea['hint'][:1].upper()}{idea['hint'][1:]}"), text
         return None, text
 
-    def follows(self, idea, calm, calm_run, text):
+    def follows(self, idea, calm, calm_run, text, scene="the hidden scene"):
         """(problem or None, text): the synchronisations grow with the rounds. `calm` counted a
         run of the same stage on a calmer scene (the same N, box and steps, slow speeds: fewer
         rounds); a stage whose rounds are parallel loops passes at least min_syncs_per_round more
@@ -95,8 +100,8 @@ class RoundsCount:
         text += (f"; on a calmer scene (slow speeds) of {calm.rounds['total']} rounds: {seen} "
                  f"synchronisations ({self.seen - seen} fewer for {extra_rounds} fewer rounds)")
         if extra_rounds > 0 and self.seen - seen < need:
-            return (f"its OpenMP synchronisations do not follow the rounds: {self.seen} on the "
-                    f"hidden scene of {self.rounds['total']} rounds, {seen} on a calmer one (the "
+            return (f"its OpenMP synchronisations do not follow the rounds: {self.seen} on "
+                    f"{scene} of {self.rounds['total']} rounds, {seen} on a calmer one (the "
                     f"same N, box and steps, slow speeds) of {calm.rounds['total']} rounds; a "
                     f"stage whose rounds are parallel loops passes at least {idea['min_syncs_per_round']:g} "
                     f"more for each extra round, so at least {need:g} more were expected. "
