@@ -6,11 +6,14 @@ go on running; the gradebook so far is written, the others not-graded), started 
 must grade only those left (a second batch into the same folder meanwhile is refused); then the
 gradebook has one row per student with the right totals, each student has results.json, and the
 summary page shows the histogram; the leaderboard page is written and each student has an
-anonymous name there. Run by CTest (label grader).
+anonymous name there. Then, in-process with the graders faked: a failed correctness scene is
+flagged `wrong`, and a kit that changes while the class is graded stops the batch (no student kept
+as graded), and the next batch grades everyone again. Run by CTest (label grader).
 
   grader_class.py PLAB_PROGRAM KIT_SOURCE SCRATCH_DIR
 """
 import csv
+import json
 import os
 import pathlib
 import shutil
@@ -105,6 +108,12 @@ for name, what in expected.items():
 assert "build" in rows["cat"]["flags"], rows["cat"]
 page = (out / "summary.html").read_text()
 assert "data:image/png;base64," in page and "stage 01" in page, "the summary has no histogram"
+# The copies: every pair of the stage compared, the page linked from the summary; the three
+# uploads of the kit's solution (ann, dan, eve) flagged as a pair and as close to the solution
+assert (out / "similar-01.html").is_file() and 'href="similar-01.html"' in page, page[-2000:]
+same = json.loads((out / "similar-01.json").read_text())
+flagged = {tuple(sorted((q["a"], q["b"]))) for q in same["pairs"] if q["flagged"]}
+assert ("ann", "dan") in flagged and "kit's own solution" in page, (flagged, page[-1500:])
 board = (out / "leaderboard.html").read_text()
 assert board.startswith("<!DOCTYPE html>") and "http" not in board, "no offline leaderboard page"
 anonymous = {r["leaderboard name"] for r in rows.values()}
@@ -113,3 +122,52 @@ assert not any(f">{name}<" in board for name in expected), "a student's name on 
 shutil.rmtree(scratch)
 print(f"plab grade --class: killed after {len(graded)} of 5, resumed with the other "
       f"{5 - len(graded)}; gradebook of 5 rows")
+
+# In-process, with the graders faked: the flags of a wrong output, and a kit that changes while
+# the class is graded (a `git pull` mid-batch): the batch stops, keeps no student as graded, and
+# the same command grades everyone again.
+sys.path.insert(0, str(kit / "kit" / "python"))
+from plab.grade import classroom  # noqa: E402
+
+wrong = {"tests": [{"name": "02: public course-2", "status": "failed", "score": 0, "max_score": 1,
+                    "output": "first difference at line 3: step 1, particle 0, field x"},
+                   {"name": "02: hidden hidden-ties", "status": "failed", "score": 0,
+                    "max_score": 2, "output": "not run: an earlier test ran out of its time"},
+                   {"name": "01: public course-1", "status": "failed", "score": 0, "max_score": 1,
+                    "output": "stage 01 does not compile: step.cpp:3: error: expected ';'"}]}
+assert classroom.flags(wrong) == ["build", "wrong"], classroom.flags(wrong)
+fake_kit = scratch / "fake-kit"
+(fake_kit / "kit").mkdir(parents=True)
+(fake_kit / "kit" / "file.txt").write_text("before")
+fake_cls, fake_out = scratch / "fake-class", scratch / "fake-grades"
+for name in ("ann", "ben", "cat"):
+    (fake_cls / name / "stages" / "01-naive").mkdir(parents=True)
+    (fake_cls / name / "stages" / "01-naive" / "step.cpp").write_text(solution)
+started = []
+
+
+def fake_grade_one(name, entry, out, grader_args, stages, jobs_cpu, key, graders):
+    started.append(name)
+    mine = out / "students" / name
+    mine.mkdir(parents=True, exist_ok=True)
+    data = {"tests": [{"name": "01: public course-1", "status": "passed", "score": 1,
+                       "max_score": 1, "output": ""}]}
+    (mine / "results.json").write_text(classroom.json.dumps(data))
+    (mine / "upload.sha256").write_text(key + "\n")
+    if len(started) == 1:
+        (fake_kit / "kit" / "file.txt").write_text("after")  # the kit moves under the batch
+    return name, data, 0.1
+
+
+classroom.KIT, classroom.grade_one = fake_kit, fake_grade_one
+rubric = kit / "kit" / "grade" / "rubric.json"
+status = classroom.run(fake_cls, fake_out, 1, "01", False, [], rubric)
+assert status == 1 and started == ["ann"], (status, started)
+rows = {r["student"]: r for r in csv.DictReader(open(fake_out / "gradebook.csv", newline=""))}
+assert all("not-graded" in r["flags"] for r in rows.values()), rows
+started.clear()
+status = classroom.run(fake_cls, fake_out, 1, "01", False, [], rubric)
+assert status == 0 and sorted(started) == ["ann", "ben", "cat"], (status, started)
+shutil.rmtree(scratch)
+print("a wrong output is flagged `wrong`; a kit changed mid-batch stops it, and the next batch "
+      "grades every student again")

@@ -31,7 +31,7 @@ KIT_SOLUTION = "(the kit's solution)"  #: the instructor copy's own solution, co
 def stage_folder(kit, stage):
     found = sorted((kit / "stages").glob(f"{stage}-*"))
     if not found:
-        sys.exit(f"plab similar: the kit has no stage {stage} (stages/{stage}-*)")
+        raise ValueError(f"the kit has no stage {stage} (stages/{stage}-*)")
     return found[0]
 
 
@@ -127,7 +127,7 @@ read both, not a verdict.</p>{skipped}
 {details}</body></html>"""
 
 
-def write_page(path, stage, files, pairs, threshold, skipped, top):
+def write_page(path, stage, files, pairs, threshold, skipped, top, leaked=(), folder=""):
     rows, details = [], []
     for k, p in enumerate(pairs, 1):
         flag = ' class="flag"' if p["score"] >= threshold else ""
@@ -143,6 +143,11 @@ def write_page(path, stage, files, pairs, threshold, skipped, top):
                 f'<pre><b>{html.escape(p["b"])}</b> ({percent(p["right"][1])} of it shared)\n{p["right"][0]}</pre>'
                 f'</div>')
     note = ("<p>Not compared: " + html.escape("; ".join(skipped)) + "</p>") if skipped else ""
+    if leaked:  # close to the kit's own solution: a leaked answer, whoever else shares it
+        note += (f'<p class="flag">At or above {threshold:.0%} of the kit\'s own solution '
+                 f"(solutions/{html.escape(folder)}): "
+                 + ", ".join(f"{html.escape(k['student'])} {percent(k['similarity'])}"
+                             for k in leaked) + "</p>")
     path.write_text(PAGE.format(stage=stage, count=len(files), npairs=len(files) * (len(files) - 1) // 2,
                                 threshold=threshold, nflag=sum(p["score"] >= threshold for p in pairs),
                                 skipped=note, rows="".join(rows), details="".join(details)))
@@ -162,24 +167,51 @@ def main():
     ap.add_argument("--kit", type=pathlib.Path, default=KIT,
                     help=argparse.SUPPRESS)
     a = ap.parse_args()
-    stage = a.stage.zfill(2)
     if not a.submissions.is_dir():
         sys.exit(f"plab similar: {a.submissions} is not a folder")
-    folder = stage_folder(a.kit, stage)
+    stage = a.stage.zfill(2)
     out = a.out or pathlib.Path(f"similar-{stage}.html")
+    try:
+        doc = compare(a.submissions, stage, a.kit, out, a.threshold, a.show, say=print)
+    except ValueError as e:
+        sys.exit(f"plab similar: {e}")
+    if a.json:
+        a.json.write_text(json.dumps(doc, indent=1))
+    print(f"{'rank':>4}  {'similarity':>10}  pair")
+    for k, p in enumerate(doc["pairs"][:10], 1):
+        mark = "  FLAGGED" if p["flagged"] else ""
+        print(f"{k:>4}  {percent(p['similarity']):>10}  {p['a']} / {p['b']}{mark}")
+    close = [p for p in doc["kit_solution"] if p["flagged"]]
+    if close:
+        print(f"plab similar: {len(close)} submission(s) at or above {a.threshold:.0%} of the "
+              f"kit's own solution (solutions/{doc['folder']}): "
+              + ", ".join(f"{p['student']} {percent(p['similarity'])}" for p in close))
+    for s in doc["not_compared"]:
+        print(f"not compared: {s}")
+    print(f"plab similar: {sum(p['flagged'] for p in doc['pairs'])} pair(s) at or above "
+          f"{a.threshold:.0%}; side by side: {out}")
+
+
+def compare(submissions, stage, kit, out, threshold=0.75, show=20, say=None):
+    """Compares every submission of `stage` in the class folder `submissions`, writes the side by
+    side page `out`, and returns the ranking as the JSON document `--json` writes (pairs,
+    similarity, flagged; `kit_solution`: each student against the kit's own solution, in the
+    instructor's copy). Raises ValueError when fewer than two submissions have the stage."""
+    folder = stage_folder(kit, stage)
     with tempfile.TemporaryDirectory(prefix="plab-similar-") as tmp:
         scratch = pathlib.Path(tmp)
-        files, skipped = gather(a.submissions, folder.name, scratch)
+        files, skipped = gather(submissions, folder.name, scratch)
         if len(files) < 2:
-            sys.exit(f"plab similar: {len(files)} submission(s) with stage {stage} in "
-                     f"{a.submissions}: nothing to compare" +
-                     (f" (not compared: {'; '.join(skipped)})" if skipped else ""))
-        print(f"plab similar: comparing {len(files)} submissions of stage {stage} "
-              f"({len(files) * (len(files) - 1) // 2} pairs)", flush=True)
+            raise ValueError(f"{len(files)} submission(s) with stage {stage} in {submissions}: "
+                             "nothing to compare" +
+                             (f" (not compared: {'; '.join(skipped)})" if skipped else ""))
+        if say:
+            say(f"plab similar: comparing {len(files)} submissions of stage {stage} "
+                f"({len(files) * (len(files) - 1) // 2} pairs)", flush=True)
         # In the instructor's copy the kit's own solution takes part, as one more "student": a
         # submission close to it is a leaked answer, which pairs among students would only show
         # as everyone alike.
-        solution = sorted((a.kit / "solutions").glob(f"{stage}-*"))
+        solution = sorted((kit / "solutions").glob(f"{stage}-*"))
         if solution:
             files[KIT_SOLUTION] = scratch / "students" / "__kit_solution__.cpp"
             files[KIT_SOLUTION].write_text(concatenated(
@@ -188,31 +220,16 @@ def main():
         leaked = [p for p in pairs if KIT_SOLUTION in (p["a"], p["b"])]
         pairs = [p for p in pairs if KIT_SOLUTION not in (p["a"], p["b"])]
         files.pop(KIT_SOLUTION, None)
-        write_page(out, stage, files, pairs, a.threshold, skipped, a.show)
-    if a.json:
-        a.json.write_text(json.dumps({
-            "stage": stage, "threshold": a.threshold, "submissions": sorted(files),
-            "not_compared": skipped,
-            "kit_solution": [{"student": p["b"] if p["a"] == KIT_SOLUTION else p["a"],
-                              "similarity": p["score"], "flagged": p["score"] >= a.threshold}
-                             for p in leaked],
+        kit_solution = [{"student": p["b"] if p["a"] == KIT_SOLUTION else p["a"],
+                         "similarity": p["score"], "flagged": p["score"] >= threshold}
+                        for p in leaked]
+        write_page(out, stage, files, pairs, threshold, skipped, show,
+                   [k for k in kit_solution if k["flagged"]], folder.name)
+    return {"stage": stage, "folder": folder.name, "threshold": threshold,
+            "submissions": sorted(files), "not_compared": skipped, "kit_solution": kit_solution,
             "pairs": [{"a": p["a"], "b": p["b"], "similarity": p["score"],
-                       "shared_tokens": p["overlap"], "flagged": p["score"] >= a.threshold}
-                      for p in pairs]}, indent=1))
-    print(f"{'rank':>4}  {'similarity':>10}  pair")
-    for k, p in enumerate(pairs[:10], 1):
-        mark = "  FLAGGED" if p["score"] >= a.threshold else ""
-        print(f"{k:>4}  {percent(p['score']):>10}  {p['a']} / {p['b']}{mark}")
-    close = [(p["b"] if p["a"] == KIT_SOLUTION else p["a"], p["score"]) for p in leaked
-             if p["score"] >= a.threshold]
-    if close:
-        print(f"plab similar: {len(close)} submission(s) at or above {a.threshold:.0%} of the "
-              f"kit's own solution (solutions/{folder.name}): "
-              + ", ".join(f"{name} {percent(score)}" for name, score in close))
-    for s in skipped:
-        print(f"not compared: {s}")
-    print(f"plab similar: {sum(p['score'] >= a.threshold for p in pairs)} pair(s) at or above "
-          f"{a.threshold:.0%}; side by side: {out}")
+                       "shared_tokens": p["overlap"], "flagged": p["score"] >= threshold}
+                      for p in pairs]}
 
 
 if __name__ == "__main__":

@@ -157,6 +157,22 @@ class Graders:
                 proc.wait()
 
 
+class KitChanged(Exception):
+    """The grading kit's files changed while a class was graded (kit_hash() differs)."""
+
+    def __init__(self, student):
+        super().__init__(f"the kit changed (noticed after {student})")
+        self.student = student
+
+
+def grade_unless_changed(version, name, *args):
+    """grade_one(name, *args), unless the kit is no longer `version` (kit_hash()): then no grader
+    starts, and the batch stops on this student's result (None)."""
+    if kit_hash(KIT) != version:
+        return name, None, 0.0
+    return grade_one(name, *args)
+
+
 def grade_one(name, entry, out, grader_args, stages, jobs_cpu, key, graders):
     """Runs one grader on one upload (`key`: its grading_key(), stored with the results);
     returns (name, results dict or None, seconds)."""
@@ -239,6 +255,9 @@ def flags(data):
             words.add("refused")
         if "idea" in n.lower():  # a wrong output on the idea's scene is not a missed idea
             words.add("wrong" if "differs from the reference" in o else "idea")
+        elif ((": public " in n or ": hidden " in n or "one step at a time" in n) and
+              not any(x in o for x in ("compile", " limit", "goes around what the kit measures"))):
+            words.add("wrong")  # a correctness scene's output differs, or the stage crashed
         if "race" in n.lower():
             words.add("race")
         if "time limit" in o or "memory limit" in o or "output limit" in o:
@@ -262,14 +281,47 @@ def histogram_png(values, most, title):
     return base64.b64encode(buf.getvalue()).decode()
 
 
-def write_outputs(out, rows, keys):
+def row_flags(row):
+    """A gradebook row's flags as written (the page's table and the CSV's column): its results'
+    words, then missing:NN for each stage it had no folder for."""
+    return " ".join([*row["flags"], *(f"missing:{k}" for k in sorted(row.get("missing", ())))])
+
+
+def copies_section(found):
+    """The summary page's part on copies: per stage, its flagged pairs and the students close to
+    the kit's own solution, with a link to the side by side page."""
+    parts = ["<h2>Copies</h2><p>Pairs of students whose stage shares most of its code "
+             "(plab similar: copydetect, names normalised, the starting point ignored). A flag is "
+             "a reason to read both, not a verdict.</p><ul>"]
+    for stage, doc in found:
+        if isinstance(doc, str):
+            parts.append(f"<li>stage {html.escape(stage)}: not compared ({html.escape(doc)})</li>")
+            continue
+        flagged = [p for p in doc["pairs"] if p["flagged"]]
+        leaked = [k for k in doc["kit_solution"] if k["flagged"]]
+        text = (f'<li><a href="similar-{stage}.html">stage {html.escape(stage)}</a>: '
+                f"{len(doc['submissions'])} compared, {len(flagged)} pair(s) at or above "
+                f"{doc['threshold']:.0%}")
+        if flagged:
+            text += ": " + ", ".join(f"{html.escape(p['a'])} / {html.escape(p['b'])} "
+                                     f"{int(p['similarity'] * 100)}%" for p in flagged[:10])
+            text += " ..." if len(flagged) > 10 else ""
+        if leaked:
+            text += (f"; <b>at or above {doc['threshold']:.0%} of the kit's own solution</b>: "
+                     + ", ".join(f"{html.escape(k['student'])} {int(k['similarity'] * 100)}%"
+                                 for k in leaked))
+        parts.append(text + "</li>")
+    return "".join(parts) + "</ul>"
+
+
+def write_outputs(out, rows, keys, found=()):
     with open(out / "gradebook.csv", "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["student", *keys, "total", "max", "flags", "leaderboard name"])
         for r in rows:
             w.writerow([r["name"], *[f"{r['per'].get(k, (0, 0))[0]:g}" for k in keys],
                         f"{r['total']:g}", f"{r['max']:g}",
-                        " ".join([*r["flags"], *(f"missing:{k}" for k in sorted(r.get("missing", ())))]),
+                        row_flags(r),
                         r["anonymous"]])
     parts = [f"<h1>Class summary: {len(rows)} students</h1>",
              "<p>Score histograms per stage (points), from each student's results.json. "
@@ -284,15 +336,19 @@ def write_outputs(out, rows, keys):
         handed = sum(1 for r in rows if k in r["per"] and k not in r.get("missing", ()))
         parts.append(f'<figure style="display:inline-block;margin:0.5em">'
                      f'<img src="data:image/png;base64,{img}" alt="stage {html.escape(k)}">'
-                     f"<figcaption>stage {html.escape(k)}: handed in by {handed} of {len(vals)}, "
-                     f"mean {mean:.1f} / {most:g} over all {len(vals)}</figcaption></figure>")
+                     f"<figcaption>stage {html.escape(k)}: handed in by {handed} of {len(rows)} "
+                     f"students, mean {mean:.1f} / {most:g} over the {len(vals)} graded"
+                     f"</figcaption></figure>")
     parts.append("</div><h2>Flags</h2><table border=1 cellpadding=3><tr><th>student</th>"
                  "<th>total</th><th>flags</th></tr>")
     for r in rows:
-        if r["flags"]:
+        words = row_flags(r)
+        if words:
             parts.append(f"<tr><td>{html.escape(r['name'])}</td><td>{r['total']:g}/{r['max']:g}</td>"
-                         f"<td>{html.escape(' '.join(r['flags']))}</td></tr>")
+                         f"<td>{html.escape(words)}</td></tr>")
     parts.append("</table>")
+    if found:
+        parts.append(copies_section(found))
     (out / "summary.html").write_text("<!DOCTYPE html><html><head><meta charset='utf-8'>"
                                       "<title>plab grade --class</title></head><body "
                                       "style='font-family:sans-serif'>" + "".join(parts) +
@@ -370,12 +426,14 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
     graders = Graders()
     pool = concurrent.futures.ThreadPoolExecutor(max_workers=jobs)
     try:
-        futures = [pool.submit(grade_one, n, e, out,
+        futures = [pool.submit(grade_unless_changed, version, n, e, out,
                                [*grader_args, "--leaderboard-name", anonymous[n]], stages, per_job,
                                keys[n], graders)
                    for n, e in todo]
         for fut in concurrent.futures.as_completed(futures):
             name, data, seconds = fut.result()
+            if kit_hash(KIT) != version:  # a `git pull` or an edit mid-batch: no mixed grades
+                raise KitChanged(name)
             if data is None:
                 failures.append(name)
                 progress.tick(name, f"NO RESULTS (see students/{name}/grader.log)")
@@ -386,9 +444,21 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
                                      "results.summary.txt)") if "not-graded" in flags(data) else
                               f"{sum(s for s, _ in per.values()):g}/"
                               f"{sum(m for _, m in per.values()):g} in {seconds:.0f} s")
-    except BaseException:  # stopped (SIGTERM, Ctrl-C): no student starts, the running ones end
-        graders.stop()
+    except BaseException as stop:  # stopped (SIGTERM, Ctrl-C, the kit changed): no student
+        graders.stop()               # starts, the running ones end
         pool.shutdown(wait=True, cancel_futures=True)
+        if isinstance(stop, KitChanged):
+            # Those graded with the kit as it was when the batch started keep their results
+            # (their stored key names that kit): the same command grades everyone again with the
+            # kit as it is now, resuming none of them
+            completed = set()
+            print(f"plab grade --class: STOPPED: the grading kit changed while the class was "
+                  f"graded (a `git pull`, or an edit of its kit/, cmake/, stages/, datasets/ or "
+                  f"CMake files), noticed when {stop.student} was done: one class is graded by one "
+                  "version of the kit. Run the same command again once the kit stays as it is: "
+                  "every student is graded again with it.", flush=True)
+            write_class(out, everyone, anonymous, rubric, failures, completed, stopped=True)
+            return 1
         # The gradebook of those graded so far (the others not-graded): a resume completes it
         try:
             write_class(out, everyone, anonymous, rubric, failures, completed, stopped=True)
@@ -396,13 +466,34 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
             print(f"plab grade --class: no gradebook written on stopping ({e})", flush=True)
         raise
     pool.shutdown(wait=True)
-    return write_class(out, everyone, anonymous, rubric, failures, completed)
+    return write_class(out, everyone, anonymous, rubric, failures, completed, klass=klass)
 
 
-def write_class(out, everyone, anonymous, rubric, failures, completed, stopped=False):
+def copies(klass, out, stages):
+    """Each stage's pairs of students by shared code (plab.similar, copydetect), in
+    OUT/similar-NN.html and OUT/similar-NN.json; [(stage, its JSON document or the reason there
+    is none)] for the summary page."""
+    from plab import similar  # copydetect: loaded only when a class is compared
+    found = []
+    for stage in stages:
+        page = out / f"similar-{stage}.html"
+        print(f"plab grade --class: comparing the class's stage {stage} for copies", flush=True)
+        try:
+            doc = similar.compare(klass, stage, KIT, page)
+        except ValueError as e:
+            found.append((stage, str(e)))
+            continue
+        (out / f"similar-{stage}.json").write_text(json.dumps(doc, indent=1))
+        found.append((stage, doc))
+    return found
+
+
+def write_class(out, everyone, anonymous, rubric, failures, completed, stopped=False,
+                klass=None):
     """The class's gradebook, summary page and leaderboard from the results in OUT/students of
     the students in `completed` (a grading stopped part-way leaves a results.json of the tests
-    run so far: not a grade); returns the exit status (1 if a grading left no results.json)."""
+    run so far: not a grade); with `klass` (a batch that ended), each stage's copies too (see
+    copies()). Returns the exit status (1 if a grading left no results.json)."""
     graded = {}
     for name, _ in everyone:
         if name not in completed:
@@ -432,12 +523,16 @@ def write_class(out, everyone, anonymous, rubric, failures, completed, stopped=F
     most = {k: max(r["per"][k][1] for r in rows if k in r["per"]) for k in keys}
     for r in rows:
         r["max"] = sum(most.values())
-    write_outputs(out, rows, keys)
+    found = copies(klass, out, sorted({k[:2] for k in keys})) if klass and not stopped else []
+    write_outputs(out, rows, keys, found)
     leaderboard.write_page(out / "leaderboard.html", {anonymous[n]: d for n, d in graded.items()},
                            rubric["performance"])
     print(f"plab grade --class: {'stopped; so far: ' if stopped else ''}gradebook "
-          f"{out / 'gradebook.csv'}, summary {out / 'summary.html'}, leaderboard "
-          f"{out / 'leaderboard.html'}"
+          f"{out / 'gradebook.csv'}, summary {out / 'summary.html'}"
+          + ("" if stopped else " (copies: " + (", ".join(
+              f"similar-{st}.html" for st, d in found if not isinstance(d, str)) or "none compared")
+             + ")")
+          + f", leaderboard {out / 'leaderboard.html'}"
           + (f"; {len(failures)} without results: {', '.join(failures)}" if failures else "")
           + ("; the same command resumes" if stopped else ""), flush=True)
     return 1 if failures else 0
