@@ -33,10 +33,10 @@ void say_what_is_graded_too(const std::string& stage) {
   if (what.empty() && !races) return;
   std::printf("stage %s prints the reference's output. Graded too, outside your code (not by "
               "these tests):", id.c_str());
-  if (!what.empty()) std::printf(" its idea (%s)", what.c_str());
-  if (!local.empty())
-    std::printf(", of which the test stage%s.student.%s counts a part as the grade does", id.c_str(),
-                local.c_str());
+  if (!what.empty() && local.empty()) std::printf(" its idea (%s)", what.c_str());
+  if (!what.empty() && !local.empty())  // a part of the idea that a test here checks too
+    std::printf(" its idea (%s; the test stage%s.student.%s above checks a part of it as the grade "
+                "does)", what.c_str(), id.c_str(), local.c_str());
   // A race may change no printed bit in the runs above, and the grader looks for it
   if (races)
     std::printf("%s its data races (ThreadSanitizer: ./plab test --impl student --stage %s --races)",
