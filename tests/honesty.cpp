@@ -352,7 +352,7 @@ int run_watched_steps(const std::string& command_line, const std::string& what, 
       set_child(0);
       return -1;
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));  // (a short run ends sooner)
   }
   set_child(0);
   return exit_status(status);

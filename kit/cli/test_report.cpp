@@ -642,7 +642,10 @@ void print_crash(const TestResult& t, const std::vector<Case>& cases, const Mani
   if (which[2].str() != "engine" &&
       stage_declares(which[1].str(), which[2].str(), "needs_openmp") == true)
     std::printf("  a crash that comes and goes from run to run, or goes away with --threads 1, is "
-                "often a data race: ./plab test --impl %s --stage %s --races\n",
+                "often a data race: ./plab test --impl %s --stage %s --races; one that comes "
+                "every run, on one thread too, is more often a write past an array's end (a "
+                "count, an offset, a prefix sum off by one), whose line the AddressSanitizer "
+                "build of handouts/working.md names\n",
                 which[2].str().c_str(), which[1].str().c_str());
 }
 

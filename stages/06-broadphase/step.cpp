@@ -101,9 +101,8 @@ void BroadPhase::search([[maybe_unused]] const Box& box, [[maybe_unused]] const 
 /// model.md's selection over the pairs found and the walls: plan_.
 void BroadPhase::select([[maybe_unused]] int n) {
   // EXERCISE 3: the sparse selection. Gather every thread's pairs, sort them by model.md's key,
-  // and accept each pair whose particles are both still free. Every pair found comes before both
-  // its particles' walls, so no wall can take a particle first: once the pairs are done, each
-  // particle left free takes its wall when its wall time is in the step.
+  // and accept each pair whose particles are both still free; then each particle left free takes
+  // its wall when its wall time is in the step (handout 06 asks why the walls may come last).
   PLAB_EXERCISE(3, "select the events in key order over the pairs found");
 }
 

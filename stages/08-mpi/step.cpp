@@ -30,9 +30,8 @@ namespace {
 
 /// 1a. The fastest speed of any particle, on any rank (every rank gets it).
 double fastest_anywhere(const Ranks& r, const Local& s) {
-  // EXERCISE 1 (a): every rank needs the same reach, so the fastest speed of the whole scene:
-  // combine fastest_here(s) of every rank with one MPI_Allreduce. Which datatype and which
-  // reduction operation give every rank that speed?
+  // EXERCISE 1 (a): every rank needs the same reach, so the fastest speed of the whole scene,
+  // from every rank's fastest_here(s), on every rank, in one collective (handout 08, exercise 1).
   (void)r, (void)s;
   PLAB_EXERCISE(1, "the halo: the fastest speed over every rank, with MPI_Allreduce");
 }
@@ -42,11 +41,10 @@ double fastest_anywhere(const Ranks& r, const Local& s) {
 /// rank - d (modulo R), first how many records, then the records.
 std::vector<std::vector<Record>> exchange_halo(const Ranks& r,
                                                const std::vector<std::vector<Record>>& out) {
-  // EXERCISE 1 (b): for d = 1 .. R - 1, send out[(rank + d) % R] and receive into
-  // in[(rank - d + R) % R]: first the count (one MPI_Sendrecv of an int: a rank cannot know
-  // beforehand how many ghosts come), then the records (a second MPI_Sendrecv, MPI_BYTE, count *
-  // sizeof(Record) bytes; use another tag). Every rank takes part at every d, even with nothing
-  // to send: why would a rank that skips an empty message make the others wait for ever?
+  // EXERCISE 1 (b): any rank may need ghosts from any other, and no rank knows beforehand how
+  // many will come to it. Every send must meet its receive whatever R is, so that no rank waits
+  // for ever (handout 08, exercise 1: the order of the exchanges, and how a receiver learns how
+  // many records come).
   (void)r, (void)out;
   PLAB_EXERCISE(1, "the halo exchange, rank by rank, with MPI_Sendrecv");
 }
@@ -56,20 +54,18 @@ std::vector<std::vector<Record>> exchange_halo(const Ranks& r,
 /// Both sides know the counts from the halo.
 template <class T>
 void to_ghosts(const Ranks& r, const Local& s, std::vector<T>& value) {
-  // EXERCISE 2 (a): for every other rank q, pack value[k] of each k in s.sent_to[q] into a buffer
-  // of its own, MPI_Isend it to q (MPI_BYTE, size * sizeof(T)), and MPI_Irecv q's values
-  // straight into value[s.ghosts_from[q]] (s.ghosts_from[q + 1] - s.ghosts_from[q] of them); post
-  // nothing for an empty list (both sides know it is empty), then MPI_Waitall on every request.
-  // Why must the buffers live until MPI_Waitall returns?
+  // EXERCISE 2 (a): rank q needs value[k] of each k in s.sent_to[q], in that order, and q's
+  // values for this rank's ghosts land in value[s.ghosts_from[q]] .. value[s.ghosts_from[q + 1]
+  // - 1]; both sides know every count from the halo (handout 08, exercise 2: messages that no
+  // order of the ranks can deadlock, and what an empty list needs on each side).
   (void)r, (void)s, (void)value;
   PLAB_EXERCISE(2, "the rounds across ranks: the ghosts' values, with MPI_Isend and MPI_Irecv");
 }
 
 /// 2b. Whether `left` is true on any rank (every rank gets the answer).
 bool any_rank_left(const Ranks& r, bool left) {
-  // EXERCISE 2 (b): the rounds end when no rank has an open particle: one MPI_Allreduce of an
-  // int; which operation tells every rank whether any rank is left? What happens if one rank
-  // leaves the loop while another goes on?
+  // EXERCISE 2 (b): the rounds end when no rank has an open particle, and every rank must get the
+  // same answer. What happens if one rank leaves the loop while another goes on?
   (void)r, (void)left;
   PLAB_EXERCISE(2, "the rounds across ranks: any rank still open, with MPI_Allreduce");
 }
@@ -77,10 +73,9 @@ bool any_rank_left(const Ranks& r, bool left) {
 /// 3. Migration: sends out[q] to rank q (any rank, however far), appends what arrives to the
 /// owned particles of `s` and counts them all as owned.
 void migrate(const Ranks& r, const std::vector<std::vector<Record>>& out, Local& s) {
-  // EXERCISE 3: a particle may jump any number of slabs, so every rank may send to every rank.
-  // Concatenate out[0], out[1], ... into one buffer with each part's offset and size in bytes;
-  // MPI_Alltoall the sizes (one int to each rank); from what comes back, the receive offsets;
-  // MPI_Alltoallv the records (MPI_BYTE); then s.push() each record received and set s.owned.
+  // EXERCISE 3: a particle may jump any number of slabs, so every rank may send to every rank,
+  // and no rank knows how much will arrive (handout 08, exercise 3). Then s.push() each record
+  // received and count every particle as owned (s.owned).
   (void)r, (void)out, (void)s;
   PLAB_EXERCISE(3, "migration: particles to their new owners, with MPI_Alltoall and MPI_Alltoallv");
 }
