@@ -8,13 +8,12 @@
 //  GOAL   One step of model.md on R ranks, each holding only its slab's particles. You write
 //         the messages; local.hpp gives what a rank does on its own, and the kit's driver
 //         (kit/mpi/stage_entry.cpp) calls step() below on every rank, every step.
-//         1. the halo: the fastest speed over every rank (MPI_Allreduce), then copies of the
-//            particles within reach of each other rank's slab (MPI_Sendrecv, rank by rank);
-//         2. the rounds across ranks: each round, the ghosts' values from their owners
-//            (MPI_Isend / MPI_Irecv / MPI_Waitall), and whether any rank still has an open
-//            particle (MPI_Allreduce);
-//         3. migration: particles now in another rank's slab go there (MPI_Alltoall of the
-//            counts, then MPI_Alltoallv of the particles).
+//         1. the halo: the fastest speed over every rank, then copies of the particles within
+//            reach of each other rank's slab;
+//         2. the rounds across ranks: each round, the ghosts' values from their owners, and
+//            whether any rank still has an open particle;
+//         3. migration: particles now in another rank's slab go there.
+//         The handout names the MPI calls of each; how to use them is yours to design.
 //  READ   handouts/08-mpi.md             TEST   ./plab test --impl student --stage 08
 // =================================================================================================
 #include <mpi.h>
@@ -37,8 +36,7 @@ double fastest_anywhere(const Ranks& r, const Local& s) {
 }
 
 /// 1b. The halo exchange: sends out[q] to every other rank q and returns in[q], what rank q sent
-/// here (in[r.rank] stays empty). Rank by rank: at distance d = 1 .. R - 1, to rank + d and from
-/// rank - d (modulo R), first how many records, then the records.
+/// here (in[r.rank] stays empty).
 std::vector<std::vector<Record>> exchange_halo(const Ranks& r,
                                                const std::vector<std::vector<Record>>& out) {
   // EXERCISE 1 (b): any rank may need ghosts from any other, and no rank knows beforehand how
