@@ -168,6 +168,14 @@ assert all("not-graded" in r["flags"] for r in rows.values()), rows
 started.clear()
 status = classroom.run(fake_cls, fake_out, 1, "01", False, [], rubric)
 assert status == 0 and sorted(started) == ["ann", "ben", "cat"], (status, started)
+# --regrade WHO: the students named, or those whose timing was too noisy, and no one else
+started.clear()
+assert classroom.run(fake_cls, fake_out, 1, "01", "ben", [], rubric) == 0 and started == ["ben"], started
+noisy = fake_out / "students" / "cat" / "results.json"
+noisy.write_text(json.dumps({"tests": [{"name": "01: performance", "status": "passed", "score": 1,
+                                        "max_score": 1, "output": "TOO NOISY: rerun"}]}))
+started.clear()
+assert classroom.run(fake_cls, fake_out, 1, "01", "noisy", [], rubric) == 0 and started == ["cat"], started
 shutil.rmtree(scratch)
 print("a wrong output is flagged `wrong`; a kit changed mid-batch stops it, and the next batch "
       "grades every student again")

@@ -61,9 +61,10 @@ def parser():
                            "OUT/students/NAME/results.json (resumable)")
     ap.add_argument("--jobs", type=int, metavar="J", default=max(1, (os.cpu_count() or 2) // 2),
                     help="with --class: submissions graded at a time (default: one per two cores)")
-    ap.add_argument("--regrade", action="store_true",
+    ap.add_argument("--regrade", nargs="?", const="all", default=None, metavar="WHO",
                     help="with --class: grade again the submissions already graded (default: "
-                         "resume)")
+                         "resume): all of them, or WHO: students' names, comma-separated, or "
+                         "'noisy' (those whose timing was too noisy)")
     ap.add_argument("--stages", default="", metavar="LIST", type=stage_list,
                     help="stages to grade, e.g. 01,06 (default: every stage the submission has; "
                          "06 means 06 on the CPU and, with a GPU, 06-gpu; 08 every entry of 08; "

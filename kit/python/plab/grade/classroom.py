@@ -1,7 +1,7 @@
 """plab grade --class: grades every submission of a class folder (one folder or zip per student),
 each by its own grader process in its own sandbox, J at a time, and writes the gradebook.
 
-  python3 -m plab.grade --class DIR --out OUT --jobs J [--stages 01,02] [--regrade] [GRADER OPTIONS]
+  python3 -m plab.grade --class DIR --out OUT --jobs J [--stages 01,02] [--regrade [WHO]] [GRADER OPTIONS]
 
 OUT/students/NAME/ holds each student's results.json (Gradescope's format), JUnit XML and the
 summary a student is shown. A batch that was stopped starts again where it stopped: a student
@@ -375,6 +375,23 @@ def anonymous_names(out, everyone):
     return names
 
 
+def again(regrade, name, mine):
+    """Whether --regrade asks for this student's stored results to be graded again: every
+    student ("all"), those named (comma-separated), or those whose stored results hold a timing
+    too noisy to trust ("noisy")."""
+    if not regrade:
+        return False
+    wanted = regrade.split(",")
+    if "all" in wanted or name in wanted:
+        return True
+    if "noisy" in wanted:
+        try:
+            return "noisy" in flags(json.loads((mine / "results.json").read_text()))
+        except (OSError, ValueError):
+            return False
+    return False
+
+
 def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
     """Grades the class folder into out; returns the exit status (1 if a grading left no
     results.json)."""
@@ -411,12 +428,17 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
             if (mine / "results.json").is_file() and (mine / "upload.sha256").is_file() else []
         same = stored == keys[name].split()
         changed += bool(stored) and not same
-        (done if same and not regrade else todo).append((name, entry))
+        (done if same and not again(regrade, name, mine) else todo).append((name, entry))
     cores = os.cpu_count() or 2
     per_job = max(1, cores // max(1, jobs))
     print(f"plab grade --class: {len(everyone)} submissions, {len(done)} graded already, "
           f"{len(todo)} to grade, {jobs} at a time ({per_job} core{'s' * (per_job > 1)} each)", flush=True)
-    if changed and not regrade:
+    unknown = sorted(set(regrade.split(",")) - {n for n, _ in everyone} - {"all", "noisy"}) \
+        if regrade else []
+    if unknown:
+        print(f"plab grade --class: --regrade names no submission of the class: "
+              f"{', '.join(unknown)}", flush=True)
+    if changed and regrade != "all":
         print(f"plab grade --class: {changed} graded before with another upload, other --stages, "
               "other options, another rubric or another version of the kit: graded again",
               flush=True)
