@@ -121,6 +121,12 @@ def main():
                 report_file.write_text(run.stderr)
                 say(f"the run on {name} exited {run.returncode} without a race report:\n"
                     f"{run.stderr[-2000:]}")
+                if run.returncode < 0 or run.returncode >= 128 or "Assertion failure" in run.stderr:
+                    # a crash, or LLVM OpenMP's own assertion on a damaged heap: not a race seen
+                    say("it crashed without a race report: most often a write past an array's end "
+                        "(a count, an offset, a prefix sum off by one), which damages the memory "
+                        "that the OpenMP runtime or the C library then trips on. The "
+                        "AddressSanitizer build of handouts/working.md names its line.")
                 return 2
             say(f"no race on {name} (schedule {schedule})")
     say(f"no data race seen ({len(scenes)} scenes x schedules {', '.join(races.SCHEDULES)}, "
