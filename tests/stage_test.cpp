@@ -24,6 +24,7 @@
 #include "plab/driver.hpp"
 #include "plab/generate.hpp"
 #include "plab/io.hpp"
+#include "plab/mpi/where.hpp"
 #include "plab/runtime.hpp"
 #include "plab/stage.hpp"
 #include "honesty.hpp"
@@ -497,7 +498,12 @@ std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::t
   // point's "not done yet")
   const std::string err = stderr_file.empty() ? dir.file("ranks-" + std::to_string(ranks) + ".err")
                                               : stderr_file;
-  const std::string command = "env TMPDIR=" + dir.file("mpi") + " timeout --kill-after=5 " +
+  // Each rank says which MPI call it is in (plab/mpi/where.hpp), read below if the run stalls
+  const std::string where_dir = dir.file("where");
+  std::filesystem::create_directories(where_dir);
+  const std::string command = "env TMPDIR=" + dir.file("mpi") + " " +
+                              plab::dist::kWhereVariable + "=" + where_dir +
+                              " timeout --kill-after=5 " +
                               std::to_string(kRanksSeconds) + " mpirun --oversubscribe -np " +
                               std::to_string(ranks) + " " + plab::test::kThisProgram + " " +
                               options + " --quiet --status " + status_file + " --out " + out +
@@ -526,9 +532,13 @@ std::string run_on_ranks(const std::string& scene_file, int ranks, const plab::t
     from = end + 1;
   }
   if (status == -1)
+  {
+    const std::string ranks_at = plab::dist::where_ranks_are(where_dir, ranks);
     ADD_FAILURE() << where << ": no step finished in " << kRanksStallSeconds << " s after step "
                   << done << " (ranks waiting for each other for ever: a send without its "
-                  << "receive, a collective some rank skips?); its processes were ended";
+                  << "receive, a collective some rank skips?); its processes were ended"
+                  << (ranks_at.empty() ? "" : ". Where the ranks were: " + ranks_at);
+  }
   else if (status == 124)
     ADD_FAILURE() << where << ": not done in " << kRanksSeconds
                   << " s (an endless loop, or a rank waiting for ever?)";

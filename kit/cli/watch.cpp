@@ -12,8 +12,11 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <thread>
+
+#include "plab/mpi/where.hpp"
 
 namespace plab::cli {
 namespace {
@@ -66,13 +69,29 @@ constexpr double kStallHint = 30;
 
 /// What a run on several ranks that has finished no step for `quiet` seconds is most likely
 /// doing; with `advice`, how to end it.
+/// The folder where the ranks say which MPI call each is in (plab/mpi/where.hpp), for a run on
+/// several ranks; empty otherwise.
+std::string g_where_dir;
+int g_where_ranks = 0;
+
 std::string stall_hint(double quiet, bool advice) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.0f s", quiet);
+  const std::string where = g_where_dir.empty()
+                                ? std::string()
+                                : dist::where_ranks_are(g_where_dir, g_where_ranks);
   return std::string(" (no step finished in the last ") + buf +
          ": ranks waiting for each other for ever? a send without its receive, or a collective "
-         "some rank skips" +
+         "some rank skips" + (where.empty() ? "" : "; " + where) +
          (advice ? "; Ctrl-C ends every rank, --timeout does it for you)" : ")");
+}
+
+/// Removes the ranks' folder of where.hpp (and its files) at the end of a run.
+void remove_where_dir() {
+  if (g_where_dir.empty()) return;
+  std::error_code ignored;
+  std::filesystem::remove_all(g_where_dir, ignored);
+  g_where_dir.clear();
 }
 
 /// Shows where a long run is: a line kept in place on a terminal after 1 s, otherwise one line
@@ -157,6 +176,17 @@ int end_group(pid_t pid) {
 int run_stage_watched(const std::vector<std::string>& args, const RunWatch& w) {
   for (int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, on_stop_signal);
   if (!w.status_path.empty()) std::remove(w.status_path.c_str());
+  if (w.ranks > 1) {  // each rank says where it is (plab/mpi/where.hpp), read on a stall
+    std::string dir = (std::filesystem::temp_directory_path() / "plab-where-XXXXXX").string();
+    if (mkdtemp(dir.data()) != nullptr) {
+      g_where_dir = dir;
+      g_where_ranks = w.ranks;
+      setenv(dist::kWhereVariable, dir.c_str(), 1);
+    }
+  }
+  struct Cleanup {
+    ~Cleanup() { remove_where_dir(); }
+  } cleanup;
   const pid_t pid = start(args);
   if (pid < 0) return 127;
   const auto t0 = Clock::now();
@@ -192,13 +222,16 @@ int run_stage_watched(const std::vector<std::string>& args, const RunWatch& w) {
                      stalled ? stall_hint(quiet, false).c_str() : "");
         return 128 + g_stop_signal;
       }
+      const std::string ranks_at =
+          g_where_dir.empty() ? std::string() : dist::where_ranks_are(g_where_dir, w.ranks);
       std::fprintf(stderr,
                    "plab run: %s: stopped at the --timeout of %g s, %s (no step finished in the "
-                   "last %.0f s): %san endless loop?\n",
+                   "last %.0f s): %san endless loop?%s%s\n",
                    w.label.c_str(), w.timeout, where(steps).c_str(), quiet,
                    w.ranks > 1 ? "ranks waiting for each other for ever (a send without its "
                                  "receive, a collective some rank skips?), or "
-                               : "");
+                               : "",
+                   ranks_at.empty() ? "" : " Where the ranks were: ", ranks_at.c_str());
       return 124;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(50));

@@ -6,8 +6,10 @@
 /// gather, stop), and they serve those commands from plab::dist::serve(), never reading a file or
 /// printing anything.
 #include "plab/mpi/ranks.hpp"
+#include "plab/mpi/where.hpp"
 #include "plab/runtime.hpp"
 
+#include <fcntl.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -171,6 +173,32 @@ void start_sampling() {
   sampled.last_ns = cpu_ns();
 }
 
+/// This rank's line for a watcher of a stalled run (plab/mpi/where.hpp): a shared mapping of
+/// $PLAB_MPI_WHERE/rank-K, written with no system call; null when no watcher asked for it.
+char* where_page = nullptr;
+long long where_steps = 0;  //!< the steps this rank has begun
+
+/// Maps this rank's file when PLAB_MPI_WHERE names a folder (once, as MPI starts).
+void where_open(int rank) {
+  const char* dir = std::getenv(kWhereVariable);
+  if (dir == nullptr || *dir == '\0' || where_page != nullptr) return;
+  const int fd = open(where_file(dir, rank).c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) return;
+  if (ftruncate(fd, kWhereBytes) == 0) {
+    void* page = mmap(nullptr, kWhereBytes, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+    if (page != MAP_FAILED) where_page = static_cast<char*>(page);
+  }
+  close(fd);
+}
+
+/// Writes "`what``call` (step N)" as this rank's line.
+void where_say(const char* what, const char* call) {
+  if (where_page == nullptr) return;
+  char line[kWhereBytes] = {};
+  std::snprintf(line, sizeof line, "%s%s (step %lld)", what, call, where_steps);
+  std::memcpy(where_page, line, sizeof line);
+}
+
 /// Marks the time from its making to its end as the stage's time in an MPI call (the CPU clock
 /// read around it: account()).
 class InMpi {
@@ -180,11 +208,12 @@ class InMpi {
   // The page's two mprotect calls count as time in MPI, not as work (a loop of MPI_Test calls
   // must not look busy): the clock is read before the page is made writable (entered_), and the
   // call that protects it again after is charged ahead at its measured cost.
-  InMpi() {  // (entered_, then writable_: the page stays writable until the call's end)
+  /// `call`: the MPI function's name, for a watcher of a stalled run (where.hpp).
+  explicit InMpi(const char* call) {  // (entered_, then writable_: writable until the call's end)
     if (sampled.in_step.load(std::memory_order_relaxed) &&
         sampled.in_mpi.load(std::memory_order_relaxed) == 0)
       account_until(entered_);  // the work until the call
-    sampled.in_mpi.fetch_add(1, std::memory_order_relaxed);
+    if (sampled.in_mpi.fetch_add(1, std::memory_order_relaxed) == 0) where_say("in ", call);
   }
   ~InMpi() {
     if (sampled.in_step.load(std::memory_order_relaxed) &&
@@ -193,7 +222,9 @@ class InMpi {
       sampled.waiting_ns.fetch_add(counts.protect_ns, std::memory_order_relaxed);
       sampled.last_ns.fetch_add(counts.protect_ns, std::memory_order_relaxed);
     }
-    sampled.in_mpi.fetch_sub(1, std::memory_order_relaxed);
+    if (sampled.in_mpi.fetch_sub(1, std::memory_order_relaxed) == 1)
+      where_say(sampled.in_step.load(std::memory_order_relaxed)
+                    ? "in its step, between the stage's MPI calls" : "between steps", "");
   }
   InMpi(const InMpi&) = delete;
   InMpi& operator=(const InMpi&) = delete;
@@ -206,7 +237,7 @@ class InMpi {
 /// Counts the time from its making to its end as time in messages (and in MPI, sampled).
 class InMessages {
  public:
-  InMessages() : t0_(PMPI_Wtime()) {}
+  explicit InMessages(const char* call) : in_mpi_(call), t0_(PMPI_Wtime()) {}
   ~InMessages() { traffic_here.comm_seconds += PMPI_Wtime() - t0_; }
   InMessages(const InMessages&) = delete;
   InMessages& operator=(const InMessages&) = delete;
@@ -279,6 +310,8 @@ const Ranks& start_mpi() {
     MPI_Comm_rank(MPI_COMM_WORLD, &the_ranks.rank);
     MPI_Comm_size(MPI_COMM_WORLD, &the_ranks.ranks);
     if (the_ranks.rank == 0) std::atexit(finish);
+    where_open(the_ranks.rank);
+    where_say("between steps", "");
   }
   return the_ranks;
 }
@@ -436,7 +469,10 @@ void act(int command, const Ranks& r, Run& run, Particles* all) {
         account();  // the time before the step: neither
         sampled.in_step = 1;
       }
+      ++where_steps;
+      where_say("in its step, between the stage's MPI calls", "");
       the_step(run.box, r, run.s);
+      where_say("between steps", "");
       {
         const Writable writable;
         account();  // the step's last stretch
@@ -643,14 +679,14 @@ void count_alltoall(const void* sendbuf, const int* sendcounts, int sendcount,
 extern "C" {
 
 int MPI_Send(const void* buf, int count, MPI_Datatype type, int dest, int tag, MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_sent(count, type, dest, comm);
   return PMPI_Send(buf, count, type, dest, tag, comm);
 }
 
 int MPI_Isend(const void* buf, int count, MPI_Datatype type, int dest, int tag, MPI_Comm comm,
               MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   count_sent(count, type, dest, comm);
   return PMPI_Isend(buf, count, type, dest, tag, comm, request);
 }
@@ -658,7 +694,7 @@ int MPI_Isend(const void* buf, int count, MPI_Datatype type, int dest, int tag, 
 int MPI_Sendrecv(const void* sendbuf, int sendcount, MPI_Datatype sendtype, int dest, int sendtag,
                  void* recvbuf, int recvcount, MPI_Datatype recvtype, int source, int recvtag,
                  MPI_Comm comm, MPI_Status* status) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_sent(sendcount, sendtype, dest, comm);
   return PMPI_Sendrecv(sendbuf, sendcount, sendtype, dest, sendtag, recvbuf, recvcount, recvtype,
                        source, recvtag, comm, status);
@@ -666,23 +702,23 @@ int MPI_Sendrecv(const void* sendbuf, int sendcount, MPI_Datatype sendtype, int 
 
 int MPI_Recv(void* buf, int count, MPI_Datatype type, int source, int tag, MPI_Comm comm,
              MPI_Status* status) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   return PMPI_Recv(buf, count, type, source, tag, comm, status);
 }
 
 int MPI_Wait(MPI_Request* request, MPI_Status* status) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   return PMPI_Wait(request, status);
 }
 
 int MPI_Waitall(int count, MPI_Request requests[], MPI_Status statuses[]) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   return PMPI_Waitall(count, requests, statuses);
 }
 
 int MPI_Alltoall(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void* recvbuf,
                  int recvcount, MPI_Datatype recvtype, MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_alltoall(sendbuf, nullptr, sendcount, nullptr, sendtype, nullptr, recvcount, nullptr,
                  recvtype, comm);
   return PMPI_Alltoall(sendbuf, sendcount, sendtype, recvbuf, recvcount, recvtype, comm);
@@ -691,7 +727,7 @@ int MPI_Alltoall(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void
 int MPI_Alltoallv(const void* sendbuf, const int sendcounts[], const int sdispls[],
                   MPI_Datatype sendtype, void* recvbuf, const int recvcounts[],
                   const int rdispls[], MPI_Datatype recvtype, MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_alltoall(sendbuf, sendcounts, 0, nullptr, sendtype, recvcounts, 0, nullptr, recvtype,
                  comm);
   return PMPI_Alltoallv(sendbuf, sendcounts, sdispls, sendtype, recvbuf, recvcounts, rdispls,
@@ -700,7 +736,7 @@ int MPI_Alltoallv(const void* sendbuf, const int sendcounts[], const int sdispls
 
 int MPI_Allreduce(const void* sendbuf, void* recvbuf, int count, MPI_Datatype type, MPI_Op op,
                   MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   int size = 0, bytes = 0;
   PMPI_Comm_size(comm, &size);
   PMPI_Type_size(type, &bytes);
@@ -710,7 +746,7 @@ int MPI_Allreduce(const void* sendbuf, void* recvbuf, int count, MPI_Datatype ty
 
 int MPI_Allgather(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void* recvbuf,
                   int recvcount, MPI_Datatype recvtype, MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_allgather(sendbuf, sendcount, sendtype, nullptr, recvcount, recvtype, comm);
   return PMPI_Allgather(sendbuf, sendcount, sendtype, recvbuf, recvcount, recvtype, comm);
 }
@@ -718,7 +754,7 @@ int MPI_Allgather(const void* sendbuf, int sendcount, MPI_Datatype sendtype, voi
 int MPI_Allgatherv(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void* recvbuf,
                    const int recvcounts[], const int displs[], MPI_Datatype recvtype,
                    MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_allgather(sendbuf, sendcount, sendtype, recvcounts, 0, recvtype, comm);
   return PMPI_Allgatherv(sendbuf, sendcount, sendtype, recvbuf, recvcounts, displs, recvtype,
                          comm);
@@ -727,21 +763,21 @@ int MPI_Allgatherv(const void* sendbuf, int sendcount, MPI_Datatype sendtype, vo
 // Rooted collectives: the root sends to the others (broadcast, scatter), the others to the root
 // (gather, reduce).
 int MPI_Bcast(void* buf, int count, MPI_Datatype type, int root, MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   if (rank_size(comm).first == root) count_to_all(count, type, comm);
   return PMPI_Bcast(buf, count, type, root, comm);
 }
 
 int MPI_Ibcast(void* buf, int count, MPI_Datatype type, int root, MPI_Comm comm,
                MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   if (rank_size(comm).first == root) count_to_all(count, type, comm);
   return PMPI_Ibcast(buf, count, type, root, comm, request);
 }
 
 int MPI_Scatter(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void* recvbuf,
                 int recvcount, MPI_Datatype recvtype, int root, MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_scatter(nullptr, sendcount, sendtype, root, comm);
   return PMPI_Scatter(sendbuf, sendcount, sendtype, recvbuf, recvcount, recvtype, root, comm);
 }
@@ -749,7 +785,7 @@ int MPI_Scatter(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void*
 int MPI_Iscatter(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void* recvbuf,
                  int recvcount, MPI_Datatype recvtype, int root, MPI_Comm comm,
                  MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   count_scatter(nullptr, sendcount, sendtype, root, comm);
   return PMPI_Iscatter(sendbuf, sendcount, sendtype, recvbuf, recvcount, recvtype, root, comm,
                        request);
@@ -758,7 +794,7 @@ int MPI_Iscatter(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void
 int MPI_Scatterv(const void* sendbuf, const int sendcounts[], const int displs[],
                  MPI_Datatype sendtype, void* recvbuf, int recvcount, MPI_Datatype recvtype,
                  int root, MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_scatter(sendcounts, 0, sendtype, root, comm);
   return PMPI_Scatterv(sendbuf, sendcounts, displs, sendtype, recvbuf, recvcount, recvtype, root,
                        comm);
@@ -767,7 +803,7 @@ int MPI_Scatterv(const void* sendbuf, const int sendcounts[], const int displs[]
 int MPI_Iscatterv(const void* sendbuf, const int sendcounts[], const int displs[],
                   MPI_Datatype sendtype, void* recvbuf, int recvcount, MPI_Datatype recvtype,
                   int root, MPI_Comm comm, MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   count_scatter(sendcounts, 0, sendtype, root, comm);
   return PMPI_Iscatterv(sendbuf, sendcounts, displs, sendtype, recvbuf, recvcount, recvtype, root,
                         comm, request);
@@ -775,7 +811,7 @@ int MPI_Iscatterv(const void* sendbuf, const int sendcounts[], const int displs[
 
 int MPI_Gather(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void* recvbuf,
                int recvcount, MPI_Datatype recvtype, int root, MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_sent(sendcount, sendtype, root, comm);
   return PMPI_Gather(sendbuf, sendcount, sendtype, recvbuf, recvcount, recvtype, root, comm);
 }
@@ -783,7 +819,7 @@ int MPI_Gather(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void* 
 int MPI_Igather(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void* recvbuf,
                 int recvcount, MPI_Datatype recvtype, int root, MPI_Comm comm,
                 MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   count_sent(sendcount, sendtype, root, comm);
   return PMPI_Igather(sendbuf, sendcount, sendtype, recvbuf, recvcount, recvtype, root, comm,
                       request);
@@ -792,7 +828,7 @@ int MPI_Igather(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void*
 int MPI_Gatherv(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void* recvbuf,
                 const int recvcounts[], const int displs[], MPI_Datatype recvtype, int root,
                 MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_sent(sendcount, sendtype, root, comm);
   return PMPI_Gatherv(sendbuf, sendcount, sendtype, recvbuf, recvcounts, displs, recvtype, root,
                       comm);
@@ -801,7 +837,7 @@ int MPI_Gatherv(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void*
 int MPI_Igatherv(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void* recvbuf,
                  const int recvcounts[], const int displs[], MPI_Datatype recvtype, int root,
                  MPI_Comm comm, MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   count_sent(sendcount, sendtype, root, comm);
   return PMPI_Igatherv(sendbuf, sendcount, sendtype, recvbuf, recvcounts, displs, recvtype, root,
                        comm, request);
@@ -809,14 +845,14 @@ int MPI_Igatherv(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void
 
 int MPI_Reduce(const void* sendbuf, void* recvbuf, int count, MPI_Datatype type, MPI_Op op,
                int root, MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_sent(count, type, root, comm);
   return PMPI_Reduce(sendbuf, recvbuf, count, type, op, root, comm);
 }
 
 int MPI_Ireduce(const void* sendbuf, void* recvbuf, int count, MPI_Datatype type, MPI_Op op,
                 int root, MPI_Comm comm, MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   count_sent(count, type, root, comm);
   return PMPI_Ireduce(sendbuf, recvbuf, count, type, op, root, comm, request);
 }
@@ -824,21 +860,21 @@ int MPI_Ireduce(const void* sendbuf, void* recvbuf, int count, MPI_Datatype type
 // Everyone to everyone, the forms not counted above.
 int MPI_Iallreduce(const void* sendbuf, void* recvbuf, int count, MPI_Datatype type, MPI_Op op,
                    MPI_Comm comm, MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   count_to_all(count, type, comm);
   return PMPI_Iallreduce(sendbuf, recvbuf, count, type, op, comm, request);
 }
 
 int MPI_Reduce_scatter_block(const void* sendbuf, void* recvbuf, int recvcount, MPI_Datatype type,
                              MPI_Op op, MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_to_all(recvcount, type, comm);
   return PMPI_Reduce_scatter_block(sendbuf, recvbuf, recvcount, type, op, comm);
 }
 
 int MPI_Reduce_scatter(const void* sendbuf, void* recvbuf, const int recvcounts[],
                        MPI_Datatype type, MPI_Op op, MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   const auto [me, size] = rank_size(comm);
   for (int q = 0; q < size; ++q) count_sent(recvcounts[q], type, q, comm);
   return PMPI_Reduce_scatter(sendbuf, recvbuf, recvcounts, type, op, comm);
@@ -846,21 +882,21 @@ int MPI_Reduce_scatter(const void* sendbuf, void* recvbuf, const int recvcounts[
 
 int MPI_Scan(const void* sendbuf, void* recvbuf, int count, MPI_Datatype type, MPI_Op op,
              MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_to_all(count, type, comm);
   return PMPI_Scan(sendbuf, recvbuf, count, type, op, comm);
 }
 
 int MPI_Exscan(const void* sendbuf, void* recvbuf, int count, MPI_Datatype type, MPI_Op op,
                MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_to_all(count, type, comm);
   return PMPI_Exscan(sendbuf, recvbuf, count, type, op, comm);
 }
 
 int MPI_Ialltoall(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void* recvbuf,
                   int recvcount, MPI_Datatype recvtype, MPI_Comm comm, MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   count_alltoall(sendbuf, nullptr, sendcount, nullptr, sendtype, nullptr, recvcount, nullptr,
                  recvtype, comm);
   return PMPI_Ialltoall(sendbuf, sendcount, sendtype, recvbuf, recvcount, recvtype, comm, request);
@@ -870,7 +906,7 @@ int MPI_Ialltoallv(const void* sendbuf, const int sendcounts[], const int sdispl
                    MPI_Datatype sendtype, void* recvbuf, const int recvcounts[],
                    const int rdispls[], MPI_Datatype recvtype, MPI_Comm comm,
                    MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   count_alltoall(sendbuf, sendcounts, 0, nullptr, sendtype, recvcounts, 0, nullptr, recvtype,
                  comm);
   return PMPI_Ialltoallv(sendbuf, sendcounts, sdispls, sendtype, recvbuf, recvcounts, rdispls,
@@ -879,7 +915,7 @@ int MPI_Ialltoallv(const void* sendbuf, const int sendcounts[], const int sdispl
 
 int MPI_Iallgather(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void* recvbuf,
                    int recvcount, MPI_Datatype recvtype, MPI_Comm comm, MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   count_allgather(sendbuf, sendcount, sendtype, nullptr, recvcount, recvtype, comm);
   return PMPI_Iallgather(sendbuf, sendcount, sendtype, recvbuf, recvcount, recvtype, comm,
                          request);
@@ -888,7 +924,7 @@ int MPI_Iallgather(const void* sendbuf, int sendcount, MPI_Datatype sendtype, vo
 int MPI_Iallgatherv(const void* sendbuf, int sendcount, MPI_Datatype sendtype, void* recvbuf,
                     const int recvcounts[], const int displs[], MPI_Datatype recvtype,
                     MPI_Comm comm, MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   count_allgather(sendbuf, sendcount, sendtype, recvcounts, 0, recvtype, comm);
   return PMPI_Iallgatherv(sendbuf, sendcount, sendtype, recvbuf, recvcounts, displs, recvtype,
                           comm, request);
@@ -897,7 +933,7 @@ int MPI_Iallgatherv(const void* sendbuf, int sendcount, MPI_Datatype sendtype, v
 int MPI_Alltoallw(const void* sendbuf, const int sendcounts[], const int sdispls[],
                   const MPI_Datatype sendtypes[], void* recvbuf, const int recvcounts[],
                   const int rdispls[], const MPI_Datatype recvtypes[], MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_alltoall(sendbuf, sendcounts, 0, sendtypes, MPI_DATATYPE_NULL, recvcounts, 0, recvtypes,
                  MPI_DATATYPE_NULL, comm);
   return PMPI_Alltoallw(sendbuf, sendcounts, sdispls, sendtypes, recvbuf, recvcounts, rdispls,
@@ -906,47 +942,47 @@ int MPI_Alltoallw(const void* sendbuf, const int sendcounts[], const int sdispls
 
 // The other send modes (synchronous, buffered, ready), blocking or not.
 int MPI_Ssend(const void* buf, int count, MPI_Datatype type, int dest, int tag, MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_sent(count, type, dest, comm);
   return PMPI_Ssend(buf, count, type, dest, tag, comm);
 }
 
 int MPI_Bsend(const void* buf, int count, MPI_Datatype type, int dest, int tag, MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_sent(count, type, dest, comm);
   return PMPI_Bsend(buf, count, type, dest, tag, comm);
 }
 
 int MPI_Rsend(const void* buf, int count, MPI_Datatype type, int dest, int tag, MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_sent(count, type, dest, comm);
   return PMPI_Rsend(buf, count, type, dest, tag, comm);
 }
 
 int MPI_Issend(const void* buf, int count, MPI_Datatype type, int dest, int tag, MPI_Comm comm,
                MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   count_sent(count, type, dest, comm);
   return PMPI_Issend(buf, count, type, dest, tag, comm, request);
 }
 
 int MPI_Ibsend(const void* buf, int count, MPI_Datatype type, int dest, int tag, MPI_Comm comm,
                MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   count_sent(count, type, dest, comm);
   return PMPI_Ibsend(buf, count, type, dest, tag, comm, request);
 }
 
 int MPI_Irsend(const void* buf, int count, MPI_Datatype type, int dest, int tag, MPI_Comm comm,
                MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   count_sent(count, type, dest, comm);
   return PMPI_Irsend(buf, count, type, dest, tag, comm, request);
 }
 
 int MPI_Sendrecv_replace(void* buf, int count, MPI_Datatype type, int dest, int sendtag,
                          int source, int recvtag, MPI_Comm comm, MPI_Status* status) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   count_sent(count, type, dest, comm);
   return PMPI_Sendrecv_replace(buf, count, type, dest, sendtag, source, recvtag, comm, status);
 }
@@ -989,68 +1025,68 @@ int MPI_File_open(MPI_Comm, const char*, int, MPI_Info, MPI_File*) { refuse("MPI
 // bytes, only marked as time in MPI (InMpi), so that a rank that waits, spinning, for another
 // rank's work does not look as if it worked (the sampled work of each rank).
 int MPI_Barrier(MPI_Comm comm) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   return PMPI_Barrier(comm);
 }
 int MPI_Ibarrier(MPI_Comm comm, MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   return PMPI_Ibarrier(comm, request);
 }
 int MPI_Irecv(void* buf, int count, MPI_Datatype type, int source, int tag, MPI_Comm comm,
               MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   return PMPI_Irecv(buf, count, type, source, tag, comm, request);
 }
 int MPI_Probe(int source, int tag, MPI_Comm comm, MPI_Status* status) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   return PMPI_Probe(source, tag, comm, status);
 }
 int MPI_Iprobe(int source, int tag, MPI_Comm comm, int* flag, MPI_Status* status) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   return PMPI_Iprobe(source, tag, comm, flag, status);
 }
 int MPI_Mprobe(int source, int tag, MPI_Comm comm, MPI_Message* message, MPI_Status* status) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   return PMPI_Mprobe(source, tag, comm, message, status);
 }
 int MPI_Improbe(int source, int tag, MPI_Comm comm, int* flag, MPI_Message* message,
                 MPI_Status* status) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   return PMPI_Improbe(source, tag, comm, flag, message, status);
 }
 int MPI_Mrecv(void* buf, int count, MPI_Datatype type, MPI_Message* message, MPI_Status* status) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   return PMPI_Mrecv(buf, count, type, message, status);
 }
 int MPI_Imrecv(void* buf, int count, MPI_Datatype type, MPI_Message* message,
                MPI_Request* request) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   return PMPI_Imrecv(buf, count, type, message, request);
 }
 int MPI_Waitany(int count, MPI_Request requests[], int* index, MPI_Status* status) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   return PMPI_Waitany(count, requests, index, status);
 }
 int MPI_Waitsome(int incount, MPI_Request requests[], int* outcount, int indices[],
                  MPI_Status statuses[]) {
-  const InMessages timed;
+  const InMessages timed(__func__);
   return PMPI_Waitsome(incount, requests, outcount, indices, statuses);
 }
 int MPI_Test(MPI_Request* request, int* flag, MPI_Status* status) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   return PMPI_Test(request, flag, status);
 }
 int MPI_Testall(int count, MPI_Request requests[], int* flag, MPI_Status statuses[]) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   return PMPI_Testall(count, requests, flag, statuses);
 }
 int MPI_Testany(int count, MPI_Request requests[], int* index, int* flag, MPI_Status* status) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   return PMPI_Testany(count, requests, index, flag, status);
 }
 int MPI_Testsome(int incount, MPI_Request requests[], int* outcount, int indices[],
                  MPI_Status statuses[]) {
-  const InMpi in_mpi;
+  const InMpi in_mpi(__func__);
   return PMPI_Testsome(incount, requests, outcount, indices, statuses);
 }
 
