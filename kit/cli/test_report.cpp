@@ -195,8 +195,15 @@ void print_cases(const std::vector<Case>& cases, const Manifest& m) {
   const bool same = ran > 1 && reasons.size() == 1 && !reasons.begin()->empty();
   if (same)
     std::printf("    all %d scenes failed: %s\n", ran, reasons.begin()->c_str());
+  // At most kShown scenes a line (the first failure's page follows); the rest counted
+  constexpr int kShown = 12;
+  int shown = 0, more_failed = 0, more_passed = 0;
   for (const Case& c : cases) {
     if (same && c.status != "skipped") continue;
+    if (c.status != "skipped" && shown == kShown) {
+      (c.status == "passed" ? more_passed : more_failed) += 1;
+      continue;
+    }
     const auto d = scene_of(m, c.name);
     const std::string name = d ? d->name : c.name;
     if (c.status == "skipped") {
@@ -215,7 +222,11 @@ void print_cases(const std::vector<Case>& cases, const Manifest& m) {
     else if (c.status == "failed")
       what = "failed: " + failure_line(c.message);
     std::printf("    %-22s %s\n", name.c_str(), what.c_str());
+    ++shown;
   }
+  if (more_failed + more_passed > 0)
+    std::printf("    ... %d more: %d failed, %d passed (each in the whole log)\n",
+                more_failed + more_passed, more_failed, more_passed);
   for (const auto& [key, skip] : skipped)
     std::printf("    %d skipped%s: %s\n", skip.first, skip.first > 1 ? ", e.g." : "",
                 skip.second.c_str());
