@@ -2,6 +2,8 @@
 /// \brief plab/mpi/where.hpp: the line a watcher prints for the ranks of a stalled run.
 #include <gtest/gtest.h>
 
+#include <stdlib.h>
+
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -19,11 +21,10 @@ void write_rank(const std::string& dir, int rank, const std::string& line) {
 
 class Where : public testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = (std::filesystem::temp_directory_path() /
-            ("plab-where-test-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed())))
-               .string();
-    std::filesystem::create_directories(dir_);
+  void SetUp() override {  // a folder of its own: CTest runs these tests side by side
+    std::string templ = (std::filesystem::temp_directory_path() / "plab-where-test-XXXXXX").string();
+    ASSERT_NE(mkdtemp(templ.data()), nullptr);
+    dir_ = templ;
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
   std::string dir_;
