@@ -290,6 +290,7 @@ def row_flags(row):
 def copies_section(found):
     """The summary page's part on copies: per stage, its flagged pairs and the students close to
     the kit's own solution, with a link to the side by side page."""
+    from plab.similar import percent  # the pages' own rounding (down, as a flag's threshold)
     parts = ["<h2>Copies</h2><p>Pairs of students whose stage shares most of its code "
              "(plab similar: copydetect, names normalised, the starting point ignored). A flag is "
              "a reason to read both, not a verdict.</p><ul>"]
@@ -304,11 +305,11 @@ def copies_section(found):
                 f"{doc['threshold']:.0%}")
         if flagged:
             text += ": " + ", ".join(f"{html.escape(p['a'])} / {html.escape(p['b'])} "
-                                     f"{int(p['similarity'] * 100)}%" for p in flagged[:10])
+                                     f"{percent(p['similarity'])}" for p in flagged[:10])
             text += " ..." if len(flagged) > 10 else ""
         if leaked:
             text += (f"; <b>at or above {doc['threshold']:.0%} of the kit's own solution</b>: "
-                     + ", ".join(f"{html.escape(k['student'])} {int(k['similarity'] * 100)}%"
+                     + ", ".join(f"{html.escape(k['student'])} {percent(k['similarity'])}"
                                  for k in leaked))
         parts.append(text + "</li>")
     return "".join(parts) + "</ul>"
