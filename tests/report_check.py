@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Checks `plab report`: on the reference stage 03 with two sizes and two thread counts it writes
 report.md with this machine's description, one table row per configuration (the timings' own CSV),
-the three figures as PNG images of a real size, and the handout's questions. Run by CTest (label
-report).
+the three figures as PNG images of a real size, and the handout's questions; on stage 08, the bytes
+its ranks sent a step, by MPI function too. Run by CTest (label report).
 
   report_check.py PLAB_PROGRAM SCRATCH_DIR
 """
@@ -38,6 +38,17 @@ for fig in ("time-vs-n.png", "speedup.png", "efficiency.png"):
     assert f"]({fig})" in md, f"report.md does not show {fig}"
     with Image.open(out / fig) as im:
         assert im.format == "PNG" and im.size[0] > 300 and im.size[1] > 200, (fig, im.size)
+# On ranks (stage 08): the bytes a step, in all and by MPI function (handout 08's question 2).
+out8 = scratch / "report-08"
+done = subprocess.run([plab, "report", "--stage", "08", "--impl", "solution", "--n", "400",
+                       "--ranks", "1,2", "--steps", "3", "--runs", "1", "--out", str(out8)],
+                      capture_output=True, text=True)
+if done.returncode != 0:
+    sys.exit(f"plab report --stage 08 exited {done.returncode}:\n{done.stdout}\n{done.stderr}")
+md8 = (out8 / "report.md").read_text()
+assert "| bytes a step | by call, a step |" in md8, f"no bytes columns:\n{md8}"
+two = [line for line in md8.splitlines() if line.startswith("| 400 | 2 |")]
+assert len(two) == 1 and "MPI_" in two[0], f"the 2-rank row names no MPI call: {two}"
 bad = subprocess.run([plab, "report", "--stage", "42"], capture_output=True, text=True)
 assert bad.returncode != 0 and "42" in bad.stderr, f"stage 42 accepted:\n{bad.stderr}"
 shutil.rmtree(scratch)

@@ -652,6 +652,15 @@ TEST(RanksTraffic, ReportedWithAStatusFile) {
   const nlohmann::json j = nlohmann::json::parse(plab::read_file(report));
   EXPECT_EQ(j.at("ranks").get<int>(), 2) << j.dump();
   EXPECT_GT(j.at("bytes_sent").get<double>(), 0) << j.dump();
+  // The same bytes split by the MPI function that sent them (handout 08's question 2): each an
+  // MPI_ call of the stage's, adding up to the total.
+  double by_call = 0;
+  for (const auto& [call, bytes] : j.at("bytes_by_call").items()) {
+    EXPECT_EQ(call.rfind("MPI_", 0), 0u) << call << " in " << j.dump();
+    EXPECT_GT(bytes.get<double>(), 0) << call << " in " << j.dump();
+    by_call += bytes.get<double>();
+  }
+  EXPECT_DOUBLE_EQ(by_call, j.at("bytes_sent").get<double>()) << j.dump();
   // Each rank's measured CPU seconds in its steps, outside and inside MPI calls (plab grade's
   // idea test of stage 08 reads them)
   for (const char* key : {"rank_work_seconds", "rank_mpi_seconds"}) {

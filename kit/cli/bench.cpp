@@ -1,5 +1,6 @@
 /// \file cli/bench.cpp
 /// \brief `plab bench`: timings, medians, speedups, CSV.
+#include <algorithm>
 #include <cstring>
 #include <functional>
 #include <memory>
@@ -143,7 +144,7 @@ void add_bench(CLI::App& app) {
     if (by_ranks) {
       a->threads = a->ranks;  // the loop below runs over rank counts, one thread each
       csv.pop_back();
-      csv += ",ranks,bytes_per_step,comm_share\n";
+      csv += ",ranks,bytes_per_step,comm_share,bytes_by_call\n";
     }
     csv.pop_back();
     csv += ",ceiling,ceiling_slowest\n";
@@ -321,6 +322,26 @@ void add_bench(CLI::App& app) {
                             bytes / steps, last_steps > 0 ? 100 * comm / last_steps : 0.0,
                             step_median > 0 ? one_thread_steps / step_median : 0.0,
                             a->threads.front());
+              // Which calls sent them (handout 08's question 2: which exercise sends most); the
+              // CSV's bytes_by_call: "MPI_Sendrecv 1.12e+05; MPI_Isend 1e+05" a step, most first.
+              std::string by_call_csv;
+              if (by_ranks && bytes > 0 && last.contains("bytes_by_call")) {
+                std::vector<std::pair<double, std::string>> most;  // the most first
+                for (const auto& [call, sent] : last["bytes_by_call"].items())
+                  most.emplace_back(sent.get<double>(), call);
+                std::sort(most.rbegin(), most.rend());
+                std::string calls;
+                for (const auto& [sent, call] : most) {
+                  char part[96];
+                  std::snprintf(part, sizeof part, "%s%s %.3g (%.0f%%)", calls.empty() ? "" : ", ",
+                                call.c_str(), sent / steps, 100 * sent / bytes);
+                  calls += part;
+                  std::snprintf(part, sizeof part, "%s%s %.3g", by_call_csv.empty() ? "" : "; ",
+                                call.c_str(), sent / steps);
+                  by_call_csv += part;
+                }
+                std::printf("      by call, per step: %s\n", calls.c_str());
+              }
               // This machine's ceiling for the row: copies of the first count's run at once.
               double ceiling = 0, ceiling_slowest = 0;
               const int first = a->threads.front();
@@ -379,7 +400,8 @@ void add_bench(CLI::App& app) {
               csv.pop_back();
               if (by_ranks)
                 csv += "," + std::to_string(threads) + "," + std::to_string(bytes / steps) + "," +
-                       std::to_string(step_median > 0 ? comm / step_median : 0.0);
+                       std::to_string(step_median > 0 ? comm / step_median : 0.0) + ",\"" +
+                       by_call_csv + "\"";
               const auto or_empty = [](double v) { return v > 0 ? std::to_string(v) : ""; };
               csv += "," + or_empty(ceiling) + "," + or_empty(ceiling_slowest) + "\n";
               if (gpu && !by_ranks) break;  // threads, schedules: CPU settings (ranks are not)

@@ -31,11 +31,24 @@ namespace {
 /// What rank 0 asks of the others.
 enum Command : int { kStart, kStep, kRead, kTraffic, kStop, kExit };
 
+/// The bytes sent by one MPI function of the stage's (handout 08's question 2: which exercise
+/// sends most; the handout's "Calls:" lines say which calls each exercise makes).
+struct CallBytes {
+  char name[24];  //!< the function, "MPI_Sendrecv" ("" while the slot is free)
+  double bytes;   //!< what it sent to other ranks, envelopes included
+};
+
+/// Slots of Traffic::by_call: the calls a stage 08 makes are a handful; a ninth and later share
+/// the last slot, named "other calls".
+constexpr int kCallSlots = 8;
+
 /// This process's messages so far: bytes it sent, seconds in exchanges and reductions (counted
 /// by the MPI_ functions at the end of this file).
 struct Traffic {
   double bytes_sent = 0;    //!< bytes this rank sent to the others, envelopes included
   double comm_seconds = 0;  //!< seconds in exchanges and reductions (waits included)
+  CallBytes by_call[kCallSlots] = {};  //!< bytes_sent split by the stage's MPI function
+  const char* call = nullptr;  //!< the stage's MPI function under way (the outermost), or null
 };
 
 /// Where this rank's CPU time goes in the stage's steps: the process's CPU time is read at every
@@ -213,7 +226,10 @@ class InMpi {
     if (sampled.in_step.load(std::memory_order_relaxed) &&
         sampled.in_mpi.load(std::memory_order_relaxed) == 0)
       account_until(entered_);  // the work until the call
-    if (sampled.in_mpi.fetch_add(1, std::memory_order_relaxed) == 0) where_say("in ", call);
+    if (sampled.in_mpi.fetch_add(1, std::memory_order_relaxed) == 0) {
+      where_say("in ", call);
+      counts.traffic.call = call;
+    }
   }
   ~InMpi() {
     if (sampled.in_step.load(std::memory_order_relaxed) &&
@@ -222,9 +238,11 @@ class InMpi {
       sampled.waiting_ns.fetch_add(counts.protect_ns, std::memory_order_relaxed);
       sampled.last_ns.fetch_add(counts.protect_ns, std::memory_order_relaxed);
     }
-    if (sampled.in_mpi.fetch_sub(1, std::memory_order_relaxed) == 1)
+    if (sampled.in_mpi.fetch_sub(1, std::memory_order_relaxed) == 1) {
+      counts.traffic.call = nullptr;
       where_say(sampled.in_step.load(std::memory_order_relaxed)
                     ? "in its step, between the stage's MPI calls" : "between steps", "");
+    }
   }
   InMpi(const InMpi&) = delete;
   InMpi& operator=(const InMpi&) = delete;
@@ -252,15 +270,33 @@ class InMessages {
 /// two million empty messages whose tags held the data, counted as nothing.
 constexpr double kEnvelopeBytes = 16;
 
+/// Adds `bytes` to this rank's sum and to the slot of the stage's MPI function under way
+/// (Traffic::call; "other calls" once the slots are full).
+void add_sent(double bytes) {
+  const Writable writable;
+  traffic_here.bytes_sent += bytes;
+  const char* call = traffic_here.call != nullptr ? traffic_here.call : "other calls";
+  CallBytes* slot = &traffic_here.by_call[kCallSlots - 1];
+  for (CallBytes& c : traffic_here.by_call) {
+    if (c.name[0] == '\0') std::snprintf(c.name, sizeof c.name, "%s", call);
+    if (std::strncmp(c.name, call, sizeof c.name - 1) == 0) {
+      slot = &c;
+      break;
+    }
+  }
+  if (slot == &traffic_here.by_call[kCallSlots - 1] &&
+      std::strncmp(slot->name, call, sizeof slot->name - 1) != 0)
+    std::snprintf(slot->name, sizeof slot->name, "%s", "other calls");
+  slot->bytes += bytes;
+}
+
 /// Counts `count` items of `type` sent to rank `to` of `comm`, and the message's envelope
 /// (nothing to this rank itself).
 void count_sent(int count, MPI_Datatype type, int to, MPI_Comm comm) {
   int me = 0, size = 0;
   PMPI_Comm_rank(comm, &me);
   PMPI_Type_size(type, &size);
-  const Writable writable;
-  if (to != me && to != MPI_PROC_NULL)
-    traffic_here.bytes_sent += 1.0 * count * size + kEnvelopeBytes;
+  if (to != me && to != MPI_PROC_NULL) add_sent(1.0 * count * size + kEnvelopeBytes);
 }
 
 /// The ranks of this process (set by start_mpi()).
@@ -488,7 +524,20 @@ void act(int command, const Ranks& r, Run& run, Particles* all) {
       double bytes = 0, seconds = 0;
       PMPI_Reduce(&traffic_here.bytes_sent, &bytes, 1, MPI_DOUBLE, MPI_SUM, 0, r.comm);
       PMPI_Reduce(&traffic_here.comm_seconds, &seconds, 1, MPI_DOUBLE, MPI_MAX, 0, r.comm);
-      run.traffic = {bytes, seconds, r.ranks, {}, {}};
+      run.traffic = {bytes, seconds, r.ranks, {}, {}, {}};
+      std::vector<CallBytes> calls(r.rank == 0 ? kCallSlots * r.ranks : 0);
+      PMPI_Gather(traffic_here.by_call, sizeof traffic_here.by_call, MPI_BYTE, calls.data(),
+                  sizeof traffic_here.by_call, MPI_BYTE, 0, r.comm);
+      for (const CallBytes& c : calls) {  // rank 0: every rank's slots, summed by name
+        if (c.name[0] == '\0') continue;
+        const std::string name(c.name, strnlen(c.name, sizeof c.name));
+        auto& by = run.traffic.bytes_by_call;
+        auto it = std::find_if(by.begin(), by.end(), [&](const auto& b) { return b.first == name; });
+        if (it == by.end()) by.emplace_back(name, c.bytes);
+        else it->second += c.bytes;
+      }
+      std::sort(run.traffic.bytes_by_call.begin(), run.traffic.bytes_by_call.end(),
+                [](const auto& a, const auto& b) { return a.second > b.second; });
       const double mine[2] = {1e-9 * sampled.work_ns, 1e-9 * sampled.waiting_ns};
       std::vector<double> all(r.rank == 0 ? 2 * r.ranks : 0);
       PMPI_Gather(mine, 2, MPI_DOUBLE, all.data(), 2, MPI_DOUBLE, 0, r.comm);
@@ -740,7 +789,7 @@ int MPI_Allreduce(const void* sendbuf, void* recvbuf, int count, MPI_Datatype ty
   int size = 0, bytes = 0;
   PMPI_Comm_size(comm, &size);
   PMPI_Type_size(type, &bytes);
-  if (size > 1) traffic_here.bytes_sent += 1.0 * count * bytes + kEnvelopeBytes;
+  if (size > 1) plab::dist::add_sent(1.0 * count * bytes + kEnvelopeBytes);
   return PMPI_Allreduce(sendbuf, recvbuf, count, type, op, comm);
 }
 

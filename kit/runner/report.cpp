@@ -19,6 +19,13 @@ std::string format_fixed(double v, int digits) {
   return text;
 }
 
+/// `v` as "%.3g" (bytes: 1.23e+06).
+std::string format_bytes(double v) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.3g", v);
+  return text;
+}
+
 }  // namespace
 
 void report(const Options& o, const RunStats& stats) {
@@ -26,6 +33,8 @@ void report(const Options& o, const RunStats& stats) {
   const int threads = info.openmp ? get_threads() : 1;  // a sequential stage runs on one
   if (!o.report_path.empty()) {
     OutputFile file(o.report_path);
+    nlohmann::json by_call = nlohmann::json::object();
+    for (const auto& [call, bytes] : stats.traffic.bytes_by_call) by_call[call] = bytes;
     const nlohmann::json j = {
         {"stage", info.id},               {"impl", info.impl},
         {"n", stats.particles},           {"steps", stats.steps},
@@ -37,7 +46,7 @@ void report(const Options& o, const RunStats& stats) {
         {"pair_events", stats.pair_events}, {"wall_events", stats.wall_events},
         {"substeps", o.substeps},         {"real", o.real},
         {"ranks", stats.traffic.ranks},   {"bytes_sent", stats.traffic.bytes_sent},
-        {"comm_seconds", stats.traffic.comm_seconds},
+        {"bytes_by_call", by_call},       {"comm_seconds", stats.traffic.comm_seconds},
         {"rank_work_seconds", stats.traffic.work_seconds},
         {"rank_mpi_seconds", stats.traffic.mpi_seconds}};
     const std::string text = j.dump(2) + "\n";
@@ -53,10 +62,14 @@ void report(const Options& o, const RunStats& stats) {
                stats.step_seconds,
                stats.steps ? 1e3 * stats.step_seconds / stats.steps : 0.0, stats.timer.c_str(),
                stats.total_seconds, stats.pair_events, stats.wall_events);
-  if (stats.traffic.ranks > 1)
+  if (stats.traffic.ranks > 1) {
+    std::string calls;
+    for (const auto& [call, bytes] : stats.traffic.bytes_by_call)
+      calls += (calls.empty() ? "; by call: " : ", ") + call + " " + format_bytes(bytes);
     std::fprintf(stderr, "stage %s (%s) on %d ranks: %.3g bytes sent, %.3f s in exchanges (the "
-                 "busiest rank)\n", info.id.c_str(), info.impl.c_str(), stats.traffic.ranks,
-                 stats.traffic.bytes_sent, stats.traffic.comm_seconds);
+                 "busiest rank)%s\n", info.id.c_str(), info.impl.c_str(), stats.traffic.ranks,
+                 stats.traffic.bytes_sent, stats.traffic.comm_seconds, calls.c_str());
+  }
   if (!stats.traffic.work_seconds.empty()) {
     std::string work;
     for (std::size_t q = 0; q < stats.traffic.work_seconds.size(); ++q)

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "plab/scene.hpp"
@@ -45,6 +46,8 @@ class Stepper {
     std::vector<double> work_seconds;
     /// Per rank: CPU seconds of its steps inside the stage's MPI calls (waits that spin).
     std::vector<double> mpi_seconds;
+    /// bytes_sent split by the MPI function that sent them ("MPI_Sendrecv", ...), most first.
+    std::vector<std::pair<std::string, double>> bytes_by_call;
   };
   /// This run's Traffic (a stage on several processes asks every rank: call it after the steps).
   virtual Traffic traffic() { return {}; }

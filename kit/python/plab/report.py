@@ -121,14 +121,22 @@ def figure(rows, counts, out):
 
 
 def table(rows, counts):
+    """The timings as a Markdown table; on ranks (stage 08) also the bytes sent a step, in all and
+    by MPI function (bench's bytes_per_step and bytes_by_call)."""
+    ranks = any(r.get("bytes_per_step") for r in rows)
     head = f"| N | {counts} | median s (whole run) | s in steps | ms a step | speedup | device |"
-    lines = [head, "|" + "---|" * 7]
+    if ranks:
+        head += " bytes a step | by call, a step |"
+    lines = [head, "|" + "---|" * (9 if ranks else 7)]
     for r in sorted(rows, key=lambda r: (int(r["n"]), int(r.get(counts) or r["threads"]))):
         steps = int(r["steps"]) or 1
-        lines.append(f"| {r['n']} | {r.get(counts) or r['threads']} | {float(r['median_s']):.3f} "
-                     f"| {float(r['step_median_s']):.4f} "
-                     f"| {1e3 * float(r['step_median_s']) / steps:.3f} | {r['speedup']} "
-                     f"| {r['device']} |")
+        line = (f"| {r['n']} | {r.get(counts) or r['threads']} | {float(r['median_s']):.3f} "
+                f"| {float(r['step_median_s']):.4f} "
+                f"| {1e3 * float(r['step_median_s']) / steps:.3f} | {r['speedup']} "
+                f"| {r['device']} |")
+        if ranks:
+            line += f" {float(r.get('bytes_per_step') or 0):.3g} | {r.get('bytes_by_call') or '-'} |"
+        lines.append(line)
     return "\n".join(lines)
 
 

@@ -7,12 +7,16 @@
 /// CPU stage hands its step to plab::cpu_stage().
 ///
 /// The kit counts a step's messages without the stage's help, through MPI's profiling interface:
-/// ranks.cpp defines MPI_Send, MPI_Isend, MPI_Sendrecv, MPI_Alltoall, MPI_Alltoallv,
-/// MPI_Allreduce, MPI_Allgather(v) (the bytes this rank sends to other ranks; an all-reduce counts
-/// its buffer once) and the calls that wait (MPI_Recv, MPI_Wait, MPI_Waitall: time), each calling
-/// the library's PMPI_ version. The runner's summary (mpirun -np N build/bin/plab-run-08-IMPL
-/// SCENE), its `--report` JSON and `plab bench --stage 08 --ranks ...` give the sum of the bytes
-/// and the most seconds any rank spent in them.
+/// ranks.cpp defines the sends in every mode (blocking or not), MPI_Sendrecv(_replace), the
+/// collectives, rooted or not, blocking or not (MPI_Alltoall(v/w), MPI_Allreduce, MPI_Allgather(v),
+/// MPI_Bcast, MPI_Gather(v), MPI_Scatter(v), MPI_Reduce, MPI_Reduce_scatter(_block), MPI_Scan,
+/// MPI_Exscan: the bytes this rank sends to other ranks, 16 more a message for its envelope; an
+/// all-reduce counts its buffer once) and the calls that wait or poll (receives, probes, waits,
+/// tests, barriers: time), each calling the library's PMPI_ version; what could move data past
+/// the count (one-sided windows, persistent requests, neighbourhood collectives, MPI I/O) ends the
+/// run with a message. The runner's summary (mpirun -np N build/bin/plab-run-08-IMPL SCENE), its
+/// `--report` JSON and `plab bench --stage 08 --ranks ...` give the sum of the bytes, the same
+/// split by the MPI function that sent them, and the most seconds any rank spent in them.
 #pragma once
 
 #include <mpi.h>
