@@ -114,6 +114,9 @@ assert (out / "similar-01.html").is_file() and 'href="similar-01.html"' in page,
 same = json.loads((out / "similar-01.json").read_text())
 flagged = {tuple(sorted((q["a"], q["b"]))) for q in same["pairs"] if q["flagged"]}
 assert ("ann", "dan") in flagged and "kit's own solution" in page, (flagged, page[-1500:])
+# (cat's upload is the same solution with a compile error: one group of four, said once)
+assert ["ann", "cat", "dan", "eve"] in same["groups"] and "4 students (ann, cat, dan, eve)" in page, \
+    (same["groups"], page[-1500:])
 board = (out / "leaderboard.html").read_text()
 assert board.startswith("<!DOCTYPE html>") and "http" not in board, "no offline leaderboard page"
 anonymous = {r["leaderboard name"] for r in rows.values()}

@@ -62,6 +62,16 @@ text = page.read_text()
 assert "bo and dee" in text and "highlight-red" in text, "the page does not show the pair"
 assert "http://" not in text and "https://" not in text, "the page loads from the network"
 assert "1         " in done.stdout or "FLAGGED" in done.stdout, done.stdout
+assert r["groups"] == [["bo", "dee"]], r["groups"]
+# A class copied from one source: its flagged pairs join into one group, listed once; equal
+# similarities rank by the code they share, then by name (the same order every run).
+sys.path.insert(0, str(kit / "kit" / "python"))
+from plab.similar import groups  # noqa: E402
+same = [{"a": a, "b": b, "score": 1.0} for a, b in (("k", "m"), ("m", "n"), ("k", "n"), ("p", "q"))]
+same += [{"a": "k", "b": "p", "score": 0.3}, {"a": "x", "b": "y", "score": 0.8}]
+assert groups(same, 0.75) == [["k", "m", "n"], ["p", "q"], ["x", "y"]], groups(same, 0.75)
+assert groups(same, 0.9) == [["k", "m", "n"], ["p", "q"]], groups(same, 0.9)
+assert groups(same, 0.2) == [["k", "m", "n", "p", "q"], ["x", "y"]], groups(same, 0.2)
 shutil.rmtree(scratch)
 print(f"plab similar: the copy first at {pairs[0]['similarity']:.0%}, the closest independent "
       f"pair {honest[0]['similarity']:.0%} (threshold {r['threshold']:.0%})")

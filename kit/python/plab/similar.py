@@ -108,7 +108,30 @@ def rank(files, boiler):
             right = (code_b, sim_b) if key[0] == a else (code_a, sim_a)
             pairs[key] = {"a": key[0], "b": key[1], "score": float(score), "overlap": int(overlap),
                           "left": left, "right": right}
-    return sorted(pairs.values(), key=lambda p: -p["score"])
+    # The most similar first; among equals (a class copied from one source: many pairs at 100%),
+    # the pair sharing more code first, then by name, so that the order is the same every run.
+    return sorted(pairs.values(), key=lambda p: (-p["score"], -p["overlap"], p["a"], p["b"]))
+
+
+def groups(pairs, threshold):
+    """The submissions that flagged pairs join, directly or through others (the connected parts
+    of the flagged pairs), the largest first: five students who copied one source make ten
+    flagged pairs and one group of five."""
+    parent = {}
+
+    def root(x):
+        while parent.setdefault(x, x) != x:
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        return x
+
+    for p in pairs:
+        if p["score"] >= threshold:
+            parent[root(p["a"])] = root(p["b"])
+    parts = {}
+    for x in parent:
+        parts.setdefault(root(x), []).append(x)
+    return sorted((sorted(g) for g in parts.values()), key=lambda g: (-len(g), g))
 
 
 PAGE = """<!DOCTYPE html><html><head><meta charset="utf-8"><title>plab similar: stage {stage}</title>
@@ -122,7 +145,7 @@ background: #f8f8f8; padding: 0.5em; font-size: 0.8em; }}
 <h1>Stage {stage}: pairs of submissions by shared code</h1>
 <p>{count} submissions, {npairs} pairs compared with copydetect (names normalised), the starting
 point ignored as boilerplate. Flagged (at or above {threshold:.0%}): {nflag}. A flag is a reason to
-read both, not a verdict.</p>{skipped}
+read both, not a verdict.</p>{groups}{skipped}
 <table><tr><th>#</th><th>pair</th><th>similarity</th><th>shared tokens</th></tr>{rows}</table>
 {details}</body></html>"""
 
@@ -148,9 +171,14 @@ def write_page(path, stage, files, pairs, threshold, skipped, top, leaked=(), fo
                  f"(solutions/{html.escape(folder)}): "
                  + ", ".join(f"{html.escape(k['student'])} {percent(k['similarity'])}"
                              for k in leaked) + "</p>")
+    joined = groups(pairs, threshold)
+    grouped = ("<p>Joined by flagged pairs (each group shares code, directly or through its "
+               "others): " + "; ".join(f"{len(g)}: " + ", ".join(html.escape(x) for x in g)
+                                       for g in joined) + "</p>") if joined else ""
     path.write_text(PAGE.format(stage=stage, count=len(files), npairs=len(files) * (len(files) - 1) // 2,
                                 threshold=threshold, nflag=sum(p["score"] >= threshold for p in pairs),
-                                skipped=note, rows="".join(rows), details="".join(details)))
+                                groups=grouped, skipped=note, rows="".join(rows),
+                                details="".join(details)))
 
 
 def main():
@@ -186,6 +214,9 @@ def main():
         print(f"plab similar: {len(close)} submission(s) at or above {a.threshold:.0%} of the "
               f"kit's own solution (solutions/{doc['folder']}): "
               + ", ".join(f"{p['student']} {percent(p['similarity'])}" for p in close))
+    for g in doc["groups"]:
+        if len(g) > 2:  # a pair is in the list above
+            print(f"plab similar: {len(g)} submissions joined by flagged pairs: {', '.join(g)}")
     for s in doc["not_compared"]:
         print(f"not compared: {s}")
     print(f"plab similar: {sum(p['flagged'] for p in doc['pairs'])} pair(s) at or above "
@@ -227,6 +258,7 @@ def compare(submissions, stage, kit, out, threshold=0.75, show=20, say=None):
                    [k for k in kit_solution if k["flagged"]], folder.name)
     return {"stage": stage, "folder": folder.name, "threshold": threshold,
             "submissions": sorted(files), "not_compared": skipped, "kit_solution": kit_solution,
+            "groups": groups(pairs, threshold),
             "pairs": [{"a": p["a"], "b": p["b"], "similarity": p["score"],
                        "shared_tokens": p["overlap"], "flagged": p["score"] >= threshold}
                       for p in pairs]}

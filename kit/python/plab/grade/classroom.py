@@ -307,6 +307,10 @@ def copies_section(found):
             text += ": " + ", ".join(f"{html.escape(p['a'])} / {html.escape(p['b'])} "
                                      f"{percent(p['similarity'])}" for p in flagged[:10])
             text += " ..." if len(flagged) > 10 else ""
+        big = [g for g in doc.get("groups", []) if len(g) > 2]
+        if big:  # many students from one source: a group says it once where its pairs are many
+            text += "; joined by them: " + "; ".join(
+                f"{len(g)} students ({', '.join(html.escape(x) for x in g)})" for g in big)
         if leaked:
             text += (f"; <b>at or above {doc['threshold']:.0%} of the kit's own solution</b>: "
                      + ", ".join(f"{html.escape(k['student'])} {percent(k['similarity'])}"
@@ -448,6 +452,7 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
     completed = {name for name, _ in done}  # graded whole: resumed, or in this batch
     graders = Graders()
     pool = concurrent.futures.ThreadPoolExecutor(max_workers=jobs)
+    futures = []
     try:
         futures = [pool.submit(grade_unless_changed, version, n, e, out,
                                [*grader_args, "--leaderboard-name", anonymous[n]], stages, per_job,
@@ -482,6 +487,13 @@ def run(klass, out, jobs, stages, regrade, grader_args, rubric_path):
                   "every student is graded again with it.", flush=True)
             write_class(out, everyone, anonymous, rubric, failures, completed, stopped=True)
             return 1
+        # A student whose grader ended with results as the batch stopped, before this loop
+        # read them, is graded too (its upload.sha256 is written: a resume keeps it), so the
+        # gradebook so far says so
+        for fut in futures:
+            if fut.done() and not fut.cancelled() and fut.exception() is None \
+                    and fut.result()[1] is not None:
+                completed.add(fut.result()[0])
         # The gradebook of those graded so far (the others not-graded): a resume completes it
         try:
             write_class(out, everyone, anonymous, rubric, failures, completed, stopped=True)
