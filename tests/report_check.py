@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """Checks `plab report`: on the reference stage 03 with two sizes and two thread counts it writes
 report.md with this machine's description, one table row per configuration (the timings' own CSV),
-the three figures as PNG images of a real size, and the handout's questions; on stage 08, the bytes
-its ranks sent a step, by MPI function too. Run by CTest (label report).
+the three figures as PNG images of a real size, and the handout's questions; run again, it rewrites
+only its marked parts and keeps the student's text (or, marks gone, leaves the report alone and
+writes report.new.md); on stage 08, the bytes its ranks sent a step, by MPI function too. Run by
+CTest (label report).
 
   report_check.py PLAB_PROGRAM SCRATCH_DIR
 """
@@ -38,6 +40,26 @@ for fig in ("time-vs-n.png", "speedup.png", "efficiency.png"):
     assert f"]({fig})" in md, f"report.md does not show {fig}"
     with Image.open(out / fig) as im:
         assert im.format == "PNG" and im.size[0] > 300 and im.size[1] > 200, (fig, im.size)
+# Run again: the student's text stays, only the marked parts (machine, measurements) are new
+mine = md.replace("*your name, the date*", "Ada Student, 7 December").replace(
+    "*In a paragraph: the stage's idea", "I wrote rounds. *In a paragraph: the stage's idea")
+(out / "report.md").write_text(mine)
+again = subprocess.run([plab, "report", "--stage", "03", "--impl", "solution", "--n", "150",
+                        "--threads", "1", "--steps", "5", "--runs", "1", "--out", str(out)],
+                       capture_output=True, text=True)
+assert again.returncode == 0 and "the rest kept as you wrote it" in again.stdout, again.stdout
+md2 = (out / "report.md").read_text()
+assert "Ada Student, 7 December" in md2 and "I wrote rounds." in md2, "the student's text is lost"
+assert "| 150 | 1 |" in md2 and "| 100 | 1 |" not in md2, "the measurements were not rewritten"
+assert md2.count("## Measurements") == 1 and md2.count("| cores the OS sees |") == 1, md2
+# Marks removed by the student: their report is left as it was, the new skeleton beside it
+(out / "report.md").write_text("my own report, no marks\n")
+third = subprocess.run([plab, "report", "--stage", "03", "--impl", "solution", "--n", "150",
+                        "--threads", "1", "--steps", "5", "--runs", "1", "--out", str(out)],
+                       capture_output=True, text=True)
+assert third.returncode == 0 and "report.new.md" in third.stdout, third.stdout
+assert (out / "report.md").read_text() == "my own report, no marks\n", "the report was overwritten"
+assert "| 150 | 1 |" in (out / "report.new.md").read_text()
 # On ranks (stage 08): the bytes a step, in all and by MPI function (handout 08's question 2).
 out8 = scratch / "report-08"
 done = subprocess.run([plab, "report", "--stage", "08", "--impl", "solution", "--n", "400",

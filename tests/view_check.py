@@ -69,6 +69,38 @@ compare = scratch / "compare.html"
 said = run("view", mutant, "--scene", scene, "--compare", expected, "--out", compare)
 assert "step 9, particle 7, field x" in said, said
 
+# Bad pairings are refused, saying why, where the page would show another run's data: an output
+# with another scene, an events file of another run (indices past N; another run of the same
+# scene: velocities that collisions leave unchanged), --events beside a scene.
+def refused(*args):
+    done = subprocess.run([plab, *map(str, args)], capture_output=True, text=True)
+    assert done.returncode != 0, f"plab {' '.join(map(str, args))} was accepted"
+    return done.stderr
+
+
+said = refused("view", datasets / "golden" / "course-2.out", "--scene", scene, "--out",
+               scratch / "x.html")
+assert "give the scene it was run on" in said, said
+far = scratch / "far.events"  # a particle dense-box does not have
+far.write_text("2 0 pair\n2 1 pair\n3 512 wall\n")
+said = refused("view", expected, "--scene", scene, "--events", far, "--out", scratch / "x.html")
+assert "far.events:3: particle 512, but the run has 40 particles" in said, said
+strangers = scratch / "strangers.events"  # dense-box's particles in steps they move freely
+strangers.write_text("0 2 wall\n0 12 wall\n1 0 wall\n1 2 wall\n")
+said = refused("view", expected, "--scene", scene, "--events", strangers, "--out", scratch / "x.html")
+assert "velocity as it was" in said, said
+said = refused("view", scene, "--events", events, "--out", scratch / "x.html")
+assert "--events is for an output" in said, said
+# A run cut short: alone, its header says so; against the whole run, the first difference past
+# its end is marked at the last step both print
+short = scratch / "dense-box.out"  # named as its scene: found without --scene
+short.write_text("".join(line for line in expected.read_text().splitlines(True)
+                         if int(line.split()[0]) < 50))
+alone, cut = scratch / "short.html", scratch / "cut.html"
+run("view", short, "--scene", scene, "--out", alone)
+run("view", short, "--scene", scene, "--compare", expected, "--out", cut)
+print("plab view: another scene, another run's events and --events beside a scene refused")
+
 options = webdriver.ChromeOptions()
 options.binary_location = browser
 for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
@@ -126,7 +158,7 @@ def click_disk(i):
 
 b = browser_session
 try:
-    for page in (head_on, compare):
+    for page in (head_on, compare, alone, cut):
         errors, requests = load(page)
         assert not errors, f"{page.name}: console errors: {errors}"
         assert not requests, f"{page.name}: network requests: {requests}"
@@ -178,7 +210,19 @@ try:
     assert "disk 7 at step 9" in text and "differs at this step" in text, text
     print("compare: step 9 marked on the slider, particle 7 and x named, disk 7 ringed at step 9 "
           "and not at step 8, its values shown for both runs")
+
+    load(alone)
+    header = b.find_element(By.ID, "title").text
+    assert "this output ends at step 49, its scene has 100 steps" in header, header
+    load(cut)
+    header = b.find_element(By.ID, "title").text
+    assert "first difference: step 50 (past step 49, the last both runs print" in header, header
+    assert b.find_element(By.ID, "first-mark").is_displayed(), "no mark for a run that ends early"
+    b.find_element(By.ID, "goto-first").click()
+    last = b.execute_script("return window.plab.frameOfStep(49)")
+    assert b.execute_script("return window.plab.frame()") == last, "not at the last shared step"
+    print("a run cut short: its header says so; compared, its end marked at step 49")
 finally:
     b.quit()
 shutil.rmtree(scratch, ignore_errors=True)
-print("view check: 4 of 4")
+print("view check: 6 of 6")

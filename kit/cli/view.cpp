@@ -165,6 +165,44 @@ Json pack_run(std::string& blob, const std::vector<const OutputBlock*>& kept, st
   return {{"label", label}, {"vscale", scale}, {"pos", pack(blob, pos)}, {"vel", pack(blob, vel)}};
 }
 
+/// Checks that `events` (the file `path`) are this run's: every particle an index of its `n`, every
+/// step one it printed the start of, and a collision changes the particle's velocity between the
+/// step's start and end where both are printed (a grazing pair may not: more than half of them
+/// unchanged, and at least 3, are the events of another run).
+/// \throws std::runtime_error saying the line and what does not match
+void check_events(const std::vector<EventRecord>& events, const std::string& path,
+                  const std::map<long long, const OutputBlock*>& by_step, std::size_t n) {
+  std::size_t unchanged = 0, compared = 0;
+  const EventRecord* example = nullptr;
+  for (std::size_t e = 0; e < events.size(); ++e) {
+    const EventRecord& v = events[e];
+    const std::string where = path + ":" + std::to_string(e + 1) + ": ";
+    if (v.particle < 0 || static_cast<std::size_t>(v.particle) >= n)
+      throw std::runtime_error(where + "particle " + std::to_string(v.particle) + ", but the run "
+                               "has " + std::to_string(n) + " particles: the events of another "
+                               "run? (`plab run SCENE --events FILE` writes this run's)");
+    if (!by_step.empty() && (v.step < by_step.begin()->first || v.step >= by_step.rbegin()->first))
+      throw std::runtime_error(where + "step " + std::to_string(v.step) + ", but the run prints "
+                               "steps " + std::to_string(by_step.begin()->first) + " to " +
+                               std::to_string(by_step.rbegin()->first) + ": the events of "
+                               "another run?");
+    const auto now = by_step.find(v.step), next = by_step.find(v.step + 1);
+    if (now == by_step.end() || next == by_step.end()) continue;
+    const auto i = static_cast<std::size_t>(v.particle);
+    const Particles &p = now->second->particles, &q = next->second->particles;
+    ++compared;
+    if (p.vx[i] == q.vx[i] && p.vy[i] == q.vy[i] && !example) example = &v;
+    if (p.vx[i] == q.vx[i] && p.vy[i] == q.vy[i]) ++unchanged;
+  }
+  if (unchanged >= 3 && 2 * unchanged > compared)
+    throw std::runtime_error(path + ": " + std::to_string(unchanged) + " of " +
+                             std::to_string(compared) + " collisions leave the particle's "
+                             "velocity as it was (step " + std::to_string(example->step) +
+                             ", particle " + std::to_string(example->particle) + "): the events "
+                             "of another run of this scene? (`plab run SCENE --events FILE` "
+                             "writes this run's)");
+}
+
 struct Run {
   std::string label;
   std::vector<OutputBlock> blocks;
@@ -223,12 +261,19 @@ void add_view(CLI::App& app) {
     }
     const Scene scene = load_scene(scene_path, kDefaultSeed);
     std::string events_path = a->events;
+    if (scene_path == a->input && !a->events.empty())
+      throw std::runtime_error("--events is for an output: " + a->input + " is a scene, whose "
+                               "run records its own events");
     if (scene_path == a->input) {  // run the stage on the scene, in print mode, with its events
       const std::string impl = a->impl.empty() ? default_impl() : a->impl;
       check_impl(impl);
       const std::string output = temp_path("view.out");
       events_path = temp_path("view.events");
       const long long steps = a->steps >= 0 ? a->steps : scene.steps;
+      std::printf("running stage %s (%s) on %s: N = %zu, %lld steps, every state printed ...\n",
+                  two_digits(a->stage).c_str(), impl.c_str(), a->input.c_str(),
+                  scene.particles.size(), steps);
+      std::fflush(stdout);
       const int rc = run_program({require_stage(two_digits(a->stage), impl), a->input, "--quiet",
                                   "--mode", "print", "--steps", std::to_string(steps), "--out",
                                   output, "--events", events_path});
@@ -242,12 +287,17 @@ void add_view(CLI::App& app) {
       run.blocks = parse_output(text, a->input);
       run.label = a->input;
     }
+    run.index();
+    const std::size_t n = run.blocks.front().particles.size();
+    if (n != scene.particles.size())
+      throw std::runtime_error(a->input + " has " + std::to_string(n) + " particles, its scene " +
+                               scene_path + " " + std::to_string(scene.particles.size()) +
+                               ": give the scene it was run on with --scene");
     if (!events_path.empty()) {
       events = parse_events(read_file(events_path), events_path);
       if (events_path != a->events) fs::remove(events_path);
+      else check_events(events, events_path, run.by_step, n);
     }
-    run.index();
-    const std::size_t n = run.blocks.front().particles.size();
 
     Run other;
     Json compare = nullptr;
@@ -286,6 +336,11 @@ void add_view(CLI::App& app) {
     for (long long s : kept) mine.push_back(run.by_step[s]);
     Json meta{{"L", scene.box.L}, {"r", scene.box.r}, {"n", n}, {"steps", kept}, {"every", k},
               {"printed", steps.size()}, {"max_mb", a->max_mb}};
+    // An output that stops before its scene's last step (cut short, or run with --steps): said
+    if (scene_path != a->input && run.blocks.back().step < scene.steps)
+      meta["scene_steps"] = scene.steps;
+    // The last printed step of the first run (no step follows it: no collision to show)
+    meta["last_step"] = run.blocks.back().step;
     meta["runs"] = Json::array({pack_run(blob, mine, n, run.label)});
 
     // Events of the kept steps, with partners and times (in 65534ths of the step; 65535: not

@@ -50,6 +50,7 @@
   const esc = (s) => String(s).replace(/[&<>"]/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;",
                                                           '"': "&quot;" }[c]));
   const key = (c, what) => `<span class="key" style="background:${c}"></span>${what}`;
+  const count = (n, one, many) => `${n} ${n === 1 ? one : many}`;
   let title = `<b>${esc(runs[0].label)}</b>` +
       (runs.length > 1 ? ` compared with <b>${esc(runs[1].label)}</b>` : "") +
       ` &middot; N = ${N}, L = ${L}, r = ${R}, ${F} steps shown` +
@@ -59,24 +60,33 @@
       key(COLOUR.pair, "pair") +
       (runs.length > 1 ? key(COLOUR.differs, "differs") + key(COLOUR.other, "the compared run")
                        : "") +
-      (meta.events.given ? "" : " &middot; no events file");
+      (meta.events.given ? "" : " &middot; no events file") +
+      (meta.scene_steps !== undefined
+          ? `<br><b>this output ends at step ${meta.last_step}, its scene has ` +
+            `${meta.scene_steps} steps</b>: cut short (a crash, a time limit) or run with --steps`
+          : "");
+  // A first difference at a step the two runs do not both print (one ends before it) is shown
+  // at the last step they share.
+  const beyond = cmp && cmp.first && firstFrame < 0;
   if (cmp) {
     title += cmp.first
-        ? `<br>first difference: <a class="jump" id="first-link">step ${cmp.first.step}</a>, ` +
-          `particle ${esc(cmp.first.particle)}, ${esc(cmp.first.field)}: ` +
+        ? `<br>first difference: <a class="jump" id="first-link">step ${cmp.first.step}</a>` +
+          (beyond ? ` (past step ${meta.steps[F - 1]}, the last both runs print: one of them ` +
+                    "ends early)" : "") +
+          `, particle ${esc(cmp.first.particle)}, ${esc(cmp.first.field)}: ` +
           `${esc(cmp.first.a)} in the first run, ${esc(cmp.first.b)} expected ` +
-          "(the compared run); " +
-          `${cmp.first.lines} lines differ`
+          "(the compared run); " + count(cmp.first.lines, "line differs", "lines differ")
         : "<br>the two runs are equal";
   }
   $("title").innerHTML = title;
   slider.max = String(F - 1);
   if (!cmp) $("layout-box").style.display = "none";
-  if (firstFrame < 0) $("goto-first").style.display = "none";
+  const sliderMark = beyond ? F - 1 : firstFrame;  // where the slider marks it
+  if (sliderMark < 0) $("goto-first").style.display = "none";
   else {
     const mark = $("first-mark");
     mark.style.display = "block";
-    mark.style.left = `calc(8px + (100% - 16px) * ${F > 1 ? firstFrame / (F - 1) : 0} - 1px)`;
+    mark.style.left = `calc(8px + (100% - 16px) * ${F > 1 ? sliderMark / (F - 1) : 0} - 1px)`;
   }
 
   function setFrame(f) {
@@ -84,7 +94,9 @@
     slider.value = String(state.frame);
     state.dirty = true;
   }
-  function gotoFirst() { setFrame(firstFrame > 0 ? firstFrame - 1 : firstFrame); }
+  function gotoFirst() {
+    setFrame(beyond ? F - 1 : firstFrame > 0 ? firstFrame - 1 : firstFrame);
+  }
   function togglePlay() {
     if (!state.playing && state.frame === F - 1) setFrame(0);
     state.playing = !state.playing;
@@ -247,7 +259,8 @@
     if (i < 0) {
       box.innerHTML = "<p>Click a disk: its index, position and velocity at this step, and its " +
                       "collisions.</p><p>Keys: space plays or pauses, the arrows step.</p>" +
-                      (cmp ? `<p>${cmp.counts[f]} particles differ at this step.</p>` : "");
+                      (cmp ? `<p>${count(cmp.counts[f], "particle differs", "particles differ")} ` +
+                             "at this step.</p>" : "");
       return;
     }
     let html = `<h3>disk ${i} at step ${meta.steps[f]}</h3><table>`;
@@ -264,7 +277,9 @@
     const here = [];
     for (let e = evStart[f]; e < evStart[f + 1]; e++) if (ev.particle[e] === i) here.push(e);
     html += `<p><b>this step:</b> ${here.length ? here.map(eventText).join("; ")
-                                                 : "no collision (moves freely)"}</p>`;
+        : meta.steps[f] >= meta.last_step ? "none (the run's last state: no step follows)"
+        : !meta.events.given ? "not known (no events file)"
+        : "no collision (moves freely)"}</p>`;
     const all = [];
     for (let e = 0; e < ev.particle.length && all.length < 40; e++)
       if (ev.particle[e] === i) all.push(e);

@@ -9,6 +9,7 @@ import os
 import pathlib
 import platform
 import re
+import shutil
 import subprocess
 import sys
 
@@ -66,6 +67,36 @@ def questions(kit, stage):
     return found[0].name, f"(handouts/{found[0].name} has no section named Questions)"
 
 
+MARK = "<!-- plab report: {} (rewritten by each plab report run; write outside these marks) -->"
+END = "<!-- plab report: end of {} -->"
+
+
+def marked(name, lines):
+    """`lines` between the marks that a later run finds and rewrites (write_report())."""
+    return [MARK.format(name), *lines, END.format(name)]
+
+
+def write_report(path, fresh, parts):
+    """Writes `fresh` to `path` unless the student's report is there already: then only what lies
+    between each part's marks is rewritten, everything else kept as they wrote it; a report whose
+    marks are gone is left untouched, the fresh skeleton written beside it. Returns what it did."""
+    if not path.exists():
+        path.write_text(fresh)
+        return f"wrote {path}"
+    text = path.read_text()
+    for name, lines in parts.items():
+        start, end = MARK.format(name), END.format(name)
+        a, b = text.find(start), text.find(end)
+        if a < 0 or b < a:
+            new = path.with_name("report.new.md")
+            new.write_text(fresh)
+            return (f"{path} is yours and its marks around the {name} are gone: left as it was; "
+                    f"the new skeleton, with the new measurements, is {new}")
+        text = text[:a] + "\n".join(marked(name, lines)) + text[b + len(end):]
+    path.write_text(text)
+    return f"updated the machine and the measurements in {path}, the rest kept as you wrote it"
+
+
 def read_rows(path):
     with open(path, newline="") as f:
         return list(csv.DictReader(f))
@@ -81,7 +112,7 @@ def figure(rows, counts, out):
     for c, rs in sorted(by_count.items()):
         rs = sorted(rs, key=lambda r: int(r["n"]))
         ax.loglog([int(r["n"]) for r in rs], [float(r["step_median_s"]) for r in rs], "o-",
-                  label=f"{c} {counts}")
+                  label=f"{c} {counts if c != 1 else counts[:-1]}")
     ax.set_xlabel("N (particles)")
     ax.set_ylabel("time in steps (s, median)")
     ax.set_title("time against N")
@@ -124,13 +155,17 @@ def table(rows, counts):
     """The timings as a Markdown table; on ranks (stage 08) also the bytes sent a step, in all and
     by MPI function (bench's bytes_per_step and bytes_by_call)."""
     ranks = any(r.get("bytes_per_step") for r in rows)
-    head = f"| N | {counts} | median s (whole run) | s in steps | ms a step | speedup | device |"
+    head = (f"| N | {counts} | median s (whole run) | spread | s in steps | ms a step | speedup "
+            "| device |")
     if ranks:
         head += " bytes a step | by call, a step |"
-    lines = [head, "|" + "---|" * (9 if ranks else 7)]
+    lines = [head, "|" + "---|" * (10 if ranks else 8)]
     for r in sorted(rows, key=lambda r: (int(r["n"]), int(r.get(counts) or r["threads"]))):
         steps = int(r["steps"]) or 1
-        line = (f"| {r['n']} | {r.get(counts) or r['threads']} | {float(r['median_s']):.3f} "
+        median = float(r["median_s"])
+        spread = (float(r["max_s"]) - float(r["min_s"])) / median if median > 0 else 0
+        line = (f"| {r['n']} | {r.get(counts) or r['threads']} | {median:.3f} "
+                f"| {100 * spread:.0f}%{' (noisy)' if spread > 0.3 else ''} "
                 f"| {float(r['step_median_s']):.4f} "
                 f"| {1e3 * float(r['step_median_s']) / steps:.3f} | {r['speedup']} "
                 f"| {r['device']} |")
@@ -224,38 +259,61 @@ def main():
     mpi = stage["needs_mpi"]
     a.counts = "ranks" if mpi else "threads"
     a.out = a.out or f"report-{a.stage}"
+    parallel = stage["needs_openmp"] or mpi
+    if a.threads and not parallel and a.threads != [1]:
+        print(f"plab report: stage {a.stage} runs on one thread (no OpenMP loop): --threads "
+              f"{','.join(map(str, a.threads))} is left aside, it is timed on 1", flush=True)
+        a.threads = [1]
+    made = not os.path.isdir(a.out)
     os.makedirs(a.out, exist_ok=True)
-    counts = a.threads or (up_to_cores() if stage["needs_openmp"] or mpi else [1])
+    counts = a.threads or (up_to_cores() if parallel else [1])
     a.csv = os.path.join(a.out, "bench.csv")
-    bench(plab, a.stage, a.impl, a.n or default_sizes(a.stage), counts, mpi, a.steps, a.runs, a.csv)
+    partial = a.csv + ".partial"  # the last run's timings stay until these are whole
+    try:
+        bench(plab, a.stage, a.impl, a.n or default_sizes(a.stage), counts, mpi, a.steps, a.runs,
+              partial)
+        rows = read_rows(partial)
+        if not rows:
+            sys.exit(f"plab report: {partial} holds no timing")
+        os.replace(partial, a.csv)
+    except (SystemExit, KeyboardInterrupt):
+        if made:  # a folder this run made, holding nothing of the student's
+            shutil.rmtree(a.out, ignore_errors=True)
+        elif os.path.exists(partial):
+            os.remove(partial)
+        raise
     out = pathlib.Path(a.out)
-    rows = read_rows(a.csv)
-    if not rows:
-        sys.exit(f"plab report: {a.csv} holds no timing")
     figs = figure(rows, a.counts, out)
     handout, qs = questions(a.kit, a.stage)
     steps = rows[0]["steps"]
+    machine_part = ["| | |", "|---|---|"] + [f"| {k} | {v} |" for k, v in machine()]
+    measured = [f"Stage {a.stage} ({a.impl}), {steps} steps a scene, scenes like the 2019 "
+                "report's (L = 20000, r = 1, perf mode); each figure is the median of the runs "
+                f"({rows[0]['runs']} each; spread: (slowest - fastest) / median, noisy past 30%: "
+                "run again on a quieter machine, or with more --runs). `s in steps` is the "
+                "stage's own time in its steps; `median s` the whole process.", "",
+                table(rows, a.counts), ""]
+    measured += [f"![{f[:-4]}]({f})\n" for f in figs]
     md = [f"# Stage {a.stage}: report", "",
           "*Written by `plab report`: the tables and figures are your stage's own runs on the "
-          "machine below; fill in every part in italics.*", "",
+          "machine below; fill in every part in italics. Running `plab report` again rewrites "
+          "only the parts between its marks (the machine, the measurements) and keeps your "
+          "text.*", "",
           "## Name, date", "", "*your name, the date*", "",
-          "## The machine", "", "| | |", "|---|---|"]
-    md += [f"| {k} | {v} |" for k, v in machine()]
-    md += ["", "## What I built", "",
-           "*In a paragraph: the stage's idea as you wrote it, and the choices you made.*", "",
-           "## Measurements", "",
-           f"Stage {a.stage} ({a.impl}), {steps} steps a scene, scenes like the 2019 report's "
-           "(L = 20000, r = 1, perf mode); each figure is the median of the runs "
-           f"({rows[0]['runs']} each). `s in steps` is the stage's own time in its steps; "
-           "`median s` the whole process.", "", table(rows, a.counts), ""]
-    md += [f"![{f[:-4]}]({f})\n" for f in figs]
-    md += ["## Analysis", "",
-           "*What the figures show: the slope of time against N (the complexity), where speedup "
-           "stops growing and why, what you would change next.*", "",
-           "## Questions from the handout" + (f" (handouts/{handout})" if handout else ""), "",
-           qs, ""]
-    (out / "report.md").write_text("\n".join(md))
-    print(f"plab report: wrote {out / 'report.md'} and {', '.join(figs)} in {out}/")
+          "## The machine", "", *marked("machine", machine_part), "",
+          "## What I built", "",
+          "*In a paragraph: the stage's idea as you wrote it, and the choices you made.*", "",
+          "## Measurements", "", *marked("measurements", measured), "",
+          "## Analysis", "",
+          ("*What the figures show: the slope of time against N (the complexity), where speedup "
+           "stops growing and why, what you would change next.*" if len(counts) > 1 else
+           "*What the figures show: the slope of time against N (the complexity) against what "
+           "the stage's idea predicts, and what you would change next.*"), "",
+          "## Questions from the handout" + (f" (handouts/{handout})" if handout else ""), "",
+          qs, ""]
+    written = write_report(out / "report.md", "\n".join(md), {"machine": machine_part,
+                                                            "measurements": measured})
+    print(f"plab report: {written}; figures {', '.join(figs)} in {out}/")
 
 
 if __name__ == "__main__":

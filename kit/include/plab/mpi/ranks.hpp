@@ -7,10 +7,11 @@
 /// CPU stage hands its step to plab::cpu_stage().
 ///
 /// The kit counts a step's messages without the stage's help, through MPI's profiling interface:
-/// ranks.cpp defines the sends in every mode (blocking or not), MPI_Sendrecv(_replace), the
-/// collectives, rooted or not, blocking or not (MPI_Alltoall(v/w), MPI_Allreduce, MPI_Allgather(v),
-/// MPI_Bcast, MPI_Gather(v), MPI_Scatter(v), MPI_Reduce, MPI_Reduce_scatter(_block), MPI_Scan,
-/// MPI_Exscan: the bytes this rank sends to other ranks, 16 more a message for its envelope; an
+/// ranks.cpp defines the sends in every mode (blocking or not), MPI_Sendrecv and
+/// MPI_Sendrecv_replace, the collectives, rooted or not, blocking or not (MPI_Alltoall,
+/// MPI_Alltoallv, MPI_Alltoallw, MPI_Allreduce, MPI_Allgather, MPI_Allgatherv, MPI_Bcast,
+/// MPI_Gather, MPI_Gatherv, MPI_Scatter, MPI_Scatterv, MPI_Reduce, MPI_Reduce_scatter,
+/// MPI_Reduce_scatter_block, MPI_Scan, MPI_Exscan: the bytes this rank sends to other ranks, 16 more a message for its envelope; an
 /// all-reduce counts its buffer once) and the calls that wait or poll (receives, probes, waits,
 /// tests, barriers: time), each calling the library's PMPI_ version; what could move data past
 /// the count (one-sided windows, persistent requests, neighbourhood collectives, MPI I/O) ends the
