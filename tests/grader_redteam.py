@@ -1442,7 +1442,7 @@ def case_ties():
     name = "redteam-ties"
     shutil.rmtree(scratch / name, ignore_errors=True)
     root = patched(name, "02", "solutions/02-heap", [(
-        "return model::key_less(b, a); }", "return b.t < a.t; }")],
+        "return model::key_less(a, b); }", "return a.t < b.t; }")],
         "stage 02's solution no longer orders its heap with model::key_less")
     # and stage 07 whose event queue compares times only (no particle index at equal times)
     root07 = patched(name, "07", "solutions/07-event-driven", [(

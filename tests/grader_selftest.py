@@ -25,8 +25,9 @@ MUTANTS = json.loads((kit / "kit" / "instructor" / "mutants.json").read_text())[
 
 
 def mutants_of(group):
-    """The mutants of one group of tests/mutants.json, as (stage, old text, new text)."""
-    return [(m["stage"], m["old"], m["new"]) for m in MUTANTS if m["group"] == group]
+    """The mutants of one group of tests/mutants.json, as (stage, old text, new text, file)."""
+    return [(m["stage"], m["old"], m["new"], m.get("file", "step.cpp")) for m in MUTANTS
+            if m["group"] == group]
 
 
 def submission(name, tree="solutions", mutations=()):
@@ -36,8 +37,8 @@ def submission(name, tree="solutions", mutations=()):
     shutil.rmtree(root, ignore_errors=True)
     for folder in STAGES.values():
         shutil.copytree(kit / tree / folder, root / "stages" / folder)
-    for stage, old, new in mutations:
-        f = root / "stages" / STAGES[stage] / "step.cpp"
+    for stage, old, new, *file in mutations:
+        f = root / "stages" / STAGES[stage] / (file[0] if file else "step.cpp")
         text = f.read_text()
         assert text.count(old) == 1, f"mutation of stage {stage} does not match once: {old!r}"
         f.write_text(text.replace(old, new))
@@ -155,7 +156,7 @@ def case_mutants_b():
 def case_mutants_hidden():
     """Slips that the random hidden scenes alone never catch (they never put an event exactly at
     t = 1 or 0, never tie two events): the family scenes of plab.grade.hidden must."""
-    for name in ("mutants-c", "mutants-d"):
+    for name in ("mutants-c", "mutants-d", "mutants-e"):
         tests, _ = grade(name, submission(name, mutations=mutants_of(name)))
         check_hidden(name, tests, [m[0] for m in mutants_of(name)])
 

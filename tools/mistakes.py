@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The course guide's common mistakes, from real runs of the grader: each mutant of
 kit/instructor/mutants.json (a slip a student makes: one exact replacement in a solution's
-step.cpp) is graded alone, as a student's upload of that one stage, and what the student then
+step.cpp, or its "file") is graded alone, as a student's upload of that one stage, and what the student then
 reads is recorded in kit/instructor/mistakes.json: the points, how many tests failed, and the
 first failed test with its feedback as results.json gives it. plab.guide (kit/python/plab/guide.py) shows it.
 
@@ -29,7 +29,7 @@ def grade_one(plab, kit, mutant, work, seed):
     shutil.rmtree(root, ignore_errors=True)
     folder = root / "stages" / FOLDERS[stage]
     shutil.copytree(kit / "solutions" / FOLDERS[stage], folder)
-    step = folder / "step.cpp"
+    step = folder / mutant.get("file", "step.cpp")
     text = step.read_text()
     if text.count(mutant["old"]) != 1:
         sys.exit(f"mutant {mutant['name']}: its old text is not once in {step.name}")

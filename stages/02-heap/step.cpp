@@ -1,43 +1,50 @@
 /// \file stages/02-heap/step.cpp
-/// \brief Stage 02, heap (the 2019 report's V2): the candidate events in a binary heap, popped in
-/// key order and accepted while their particles are free. O(N^2 log N) time per step at worst.
+/// \brief Stage 02, heap (the 2019 report's V2): the candidate events in a binary heap (your
+/// heap.hpp), popped in key order and accepted while their particles are free. O(N^2 log N) time
+/// per step at worst.
 //
 // =================================================================================================
 //  GOAL   The same step as stage 01, bit for bit, without rescanning N^2 times per accepted event:
-//         1. push every candidate event (time < 1) into a min-heap ordered by model::key_less;
-//         2. pop events in order; accept one when none of its particles has an event yet;
-//         3. apply the chosen events.
+//         the candidates (given: stage 01's pair and wall events in this step) go into your
+//         MinHeap (heap.hpp, exercises 1 and 2), ordered by model::key_less;
+//         3. pop events in order; accept one when none of its particles has an event yet.
+//         The chosen events are applied as in stage 01 (given).
 //  READ   handouts/02-heap.md           TEST   ./plab test --impl student --stage 02
 // =================================================================================================
-#include <queue>
-#include <vector>
-
+#include "heap.hpp"
 #include "plab/stage.hpp"
 
 namespace plab {
 
 namespace {
-/// Orders the heap so that the earliest event (by model.md's key) is on top.
-struct Later {
-  bool operator()(const model::Event& a, const model::Event& b) const { return model::key_less(b, a); }
+/// The heap's order: model.md's key (time, kind, lower index, higher index), the earliest first.
+struct Earlier {
+  bool operator()(const model::Event& a, const model::Event& b) const { return model::key_less(a, b); }
 };
 }  // namespace
 
-void step([[maybe_unused]] const Box& box, Particles& p) {
+void step(const Box& box, Particles& p) {
   const int n = static_cast<int>(p.size());
-  std::priority_queue<model::Event, std::vector<model::Event>, Later> heap;
+  MinHeap<model::Event, Earlier> heap;
 
-  // EXERCISE 1: push every wall event and every pair event (i < j) that happens in this step
-  // (plab::wall_candidate(), plab::pair_candidate(), model::in_step()).
-  PLAB_EXERCISE(1, "push the candidate events into the heap");
+  // Every wall event and every pair event (i < j) that happens in this step (stage 01's).
+  for (int i = 0; i < n; ++i) {
+    const model::Event w = wall_candidate(box, p, i);
+    if (model::in_step(w.t)) heap.push(w);
+    for (int j = i + 1; j < n; ++j) {
+      const model::Event e = pair_candidate(box, p, i, j);
+      if (model::in_step(e.t)) heap.push(e);
+    }
+  }
 
-  // EXERCISE 2: pop events in key order; accept an event when all its particles are still free.
   Plan plan;
   plan.reset(n);
-  PLAB_EXERCISE(2, "pop events in order and accept those whose particles are free");
+  // EXERCISE 3: pop events in key order; accept an event when all its particles are still free
+  // (plab::Plan's taken() and accept()).
+  PLAB_EXERCISE(3, "pop events in order and accept those whose particles are free");
 
-  // EXERCISE 3: apply the chosen events: plab::apply_one() for every particle.
-  PLAB_EXERCISE(3, "apply the chosen events");
+  // The chosen events, applied (stage 01's).
+  for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);
 }
 
 /// Stage 02's entry point (stage.hpp): the kit runs step() on the CPU.

@@ -10,6 +10,7 @@ import subprocess
 import tempfile
 import time
 
+from plab.grade import heap_probe
 from plab.grade.rounds_count import RoundsCount
 from plab.grade.build import unbuilt
 from plab.grade.run import stderr_tail
@@ -79,6 +80,9 @@ class Ideas:
             problem, text = self.rounds_follow(st, program, folder, counter, limit, text)
         if problem is None and kind != "scale":
             problem, text = self.work_shared(idea, run, text)
+        if problem is None and "heap_probe" in idea:  # stage 02's own heap, driven alone
+            problem, measured = heap_probe.grade_probe(self, st, idea)
+            text += f"; {measured}" if measured else ""
         if problem:
             self.idea_failed[st.sid] = f"the idea test of stage {st.sid} failed: {problem}"
         if run.reason and "time limit" in run.reason:

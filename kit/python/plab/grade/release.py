@@ -47,7 +47,7 @@ INSTRUCTOR_ONLY = ("solutions/", ".ci/", "kit/release/", "kit/instructor/", "REA
                    "handouts/engine-08.md", "handouts/instructors.md", "tests/similar/",
                    "kit/guide/", "kit/python/plab/guide.py", "tools/engine-modes.sh",
                    "tests/tsan_runs_check.py", "tests/grader_redteam.py", "tests/greedy_test.cpp",
-                   "tests/sweep_test.cpp")
+                   "tests/sweep_test.cpp", "tests/heap_probe_check.py")
 # Files that belong to nobody's copy even when tracked by mistake: logs, build folders, scratch.
 SCRATCH = ("*.log", "*.partial", "*.orig", "*.rej", "*.swp", "*~", "*.pyc", "__pycache__/*",
            "build/*", "build-*/*", ".configure.log")

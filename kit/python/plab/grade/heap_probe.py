@@ -1,0 +1,255 @@
+"""Stage 02's heap (its exercises 1 and 2), measured outside the student's step.
+
+The golden files compare bits, and any priority queue, or a scan of the candidates for their
+least, gives the same bits as a heap: so the kit drives the student's own MinHeap (heap.hpp)
+with a probe of its own (kit/grade/probes/heap_probe.cpp, compiled beside heap.hpp), through the
+handout's example and a long random run of pushes and pops, and compares what it prints with
+what the same probe prints of the kit's own heap: the same items popped (each the least of what
+is in, checked here), the same arrays after every 2000 operations (the binary heap's moves, which
+handout 02 states: a sorted array, a linear scan or an unordered list leave other arrays), and
+as many comparisons, within twice the kit's and no fewer (libstdc++'s std::pop_heap, which sinks
+the hole to a leaf and moves the last item up, Floyd's way, leaves the same arrays on random keys
+with fewer comparisons: 152 821 against 213 158 on one run; a heap that compares too often is no
+longer O(log n) an operation).
+
+What is compared with is a summary (summary()): the example's arrays, digests of the arrays and
+of the pops, and the comparison count. The grader makes it on each grading's seed from the kit's
+solution (Grader.heap_probe, the student's probe run in its sandbox); the local test
+stage02.IMPL.Heap (`python3 -m plab.grade.heap_probe PROBE`) reads the summary of a fixed seed
+from kit/grade/probes/heap_probe.expected.json, which tests/heap_probe_check.py keeps equal to
+the kit's solution's. Neither holds a heap.
+"""
+import bisect
+import hashlib
+import json
+import pathlib
+import subprocess
+import sys
+
+#: The probe's source, in the kit.
+PROBE = "kit/grade/probes/heap_probe.cpp"
+#: The summary of the local test's run (seed, operations) of the kit's own heap.
+EXPECTED = "kit/grade/probes/heap_probe.expected.json"
+
+#: What the handout's example must leave: 5, 3, 8, 1 pushed; then one pop.
+EXAMPLE = {"example-push": [1, 3, 8, 5], "example-pop": [3, 5, 8]}
+
+MASK = 2**64 - 1
+
+RULE = ("push: the new item at the end, then swapped with its parent ((k - 1) / 2) while it is "
+        "less; pop: the last item in the root's place, then swapped with its lesser child while "
+        "that child is less")
+
+
+def digest(numbers):
+    return hashlib.sha256(" ".join(map(str, numbers)).encode()).hexdigest()[:16]
+
+
+def parse(text):
+    """The probe's output as {"example-push": [...], "example-pop": [...], "pops": [...],
+    "layouts": {ops: [...]}, "comparisons": n or None}; raises ValueError on a line that is not
+    the probe's."""
+    got = {"pops": [], "layouts": {}, "comparisons": None}
+    for line in text.splitlines():
+        words = line.split()
+        if not words:
+            continue
+        try:
+            if words[0] in EXAMPLE:
+                got[words[0]] = [int(w) for w in words[1:]]
+            elif words[0] == "pop" and len(words) == 2:
+                got["pops"].append(int(words[1]))
+            elif words[0] == "layout" and len(words) >= 2:
+                got["layouts"][int(words[1])] = [int(w) for w in words[2:]]
+            elif words[0] == "comparisons" and len(words) == 2:
+                got["comparisons"] = int(words[1])
+            else:
+                raise ValueError(line)
+        except ValueError:
+            raise ValueError(f"the heap probe printed {line[:80]!r}") from None
+    return got
+
+
+def summary(parsed, seed, ops):
+    """What a run is compared with: the example's arrays, each checkpoint's array digest, the
+    pops' digest and the comparisons (of the kit's own heap)."""
+    return {"seed": seed, "ops": ops, **{k: parsed.get(k) for k in EXAMPLE},
+            "layouts": {str(k): digest(v) for k, v in sorted(parsed["layouts"].items())},
+            "pops": digest(parsed["pops"]), "comparisons": parsed["comparisons"]}
+
+
+def pushes_and_pops(seed, ops):
+    """The run's operations, as the probe makes them: a key to push, or None for a pop."""
+    state, size, out = seed & MASK, 0, []
+    for op in range(ops):
+        state = (state * 6364136223846793005 + 1442695040888963407) & MASK
+        if size == 0 or (state >> 33) % 3 != 0:
+            out.append(((state >> 24) << 20) | op)
+            size += 1
+        else:
+            out.append(None)
+            size -= 1
+    return out
+
+
+def judge(text, want, hint=""):
+    """(problem or None, what was measured) for the probe's stdout `text`, against `want` (the
+    summary() of the kit's own heap on the same seed and operations)."""
+    try:
+        got = parse(text)
+    except ValueError as e:
+        return f"{e}, not the probe's lines", ""
+    for head, example in EXAMPLE.items():
+        if head not in got:
+            return f"the heap probe printed no {head} line (did it end early?)", ""
+        if got[head] != example:
+            what = "pushing 5, 3, 8, 1" if head == "example-push" else \
+                "pushing 5, 3, 8, 1 and popping once"
+            return (f"after {what}, items() is {got[head]}; a binary heap's array is {example} "
+                    f"({RULE}). {hint}").strip(), ""
+    seed, ops = want["seed"], want["ops"]
+    inside, pops = [], iter(got["pops"])  # each pop must take the least item in
+    for k, key in enumerate(pushes_and_pops(seed, ops)):
+        if key is not None:
+            bisect.insort(inside, key)
+            continue
+        mine = next(pops, None)
+        if mine is None:
+            return (f"the heap probe's run ended early (at operation {k + 1} of {ops}: no pop "
+                    "printed)"), ""
+        if mine != inside[0]:
+            return (f"in a run of {ops} random pushes and pops, operation {k + 1} popped {mine} "
+                    f"where the least item in was {inside[0]}: top() is not the least. "
+                    f"{hint}").strip(), ""
+        inside.pop(0)
+    if got["comparisons"] is None:
+        return "the heap probe's run ended early (no comparison count)", ""
+    for at, want_digest in want["layouts"].items():
+        mine = got["layouts"].get(int(at))
+        if mine is None:
+            return f"the heap probe printed no array after {at} operations", ""
+        if digest(mine) != want_digest:
+            return (f"in a run of {ops} random pushes and pops, the right items come out, but "
+                    f"after {at} operations items() is not the binary heap's array: not its "
+                    f"moves ({RULE}; a sorted array, a scan or a list leave other arrays). "
+                    f"{hint}").strip(), ""
+    comparisons, textbook = got["comparisons"], want["comparisons"]
+    text = (f"the heap: the example and {ops} random pushes and pops leave a binary heap's "
+            f"arrays, with {comparisons} comparisons (the kit's heap: {textbook})")
+    if comparisons < textbook:  # the same arrays with fewer: another algorithm's moves
+        return (f"{text}: fewer than the binary heap's moves make, so its pops are not those "
+                f"moves (the library's std::pop_heap sinks the hole to the bottom first: the "
+                f"heap is the exercise, not a library's). {hint}").strip(), text
+    if comparisons > 2 * textbook + 2 * ops:
+        return (f"{text}: more than twice as many: a push or a pop must cost O(log n) "
+                f"comparisons. {hint}").strip(), text
+    return None, text
+
+
+def run_probe(probe, seed, ops, timeout=60):
+    """(stdout, problem or None) of the probe program run here (the local test, and the grader's
+    run of the kit's own heap)."""
+    try:
+        done = subprocess.run([str(probe), str(seed), str(ops)], capture_output=True, text=True,
+                              timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return "", (f"the heap probe ({ops} pushes and pops) did not end in {timeout} s: a push "
+                    "or pop that never ends?")
+    if done.returncode != 0:
+        return done.stdout, (f"the heap probe stopped (exit {done.returncode}): "
+                             f"{done.stderr.strip()[-400:] or 'no message'}")
+    return done.stdout, None
+
+
+def compiler_command(cxx, include, stage_dir, out):
+    """The probe compiled beside the stage's heap.hpp in `stage_dir` (the stage build's own flags
+    and definitions, cmake/PlabStage.cmake: a header cannot tell the probe from the stage)."""
+    return [str(cxx), "-std=c++17", "-O2", "-DNDEBUG", '-DPLAB_STAGE_ID="02"',
+            "-DPLAB_STAGE_NUMBER=2", "-I", str(stage_dir), "-I", str(include),
+            f"{stage_dir}/heap_probe.cpp", "-o", str(out)]
+
+
+def grade_probe(g, st, idea):
+    """Stage 02's heap measured by the grader `g`: the probe compiled and run in its sandbox beside
+    the student's heap.hpp on the grading's seed, judged against the same probe of the kit's own
+    heap (solutions/02-heap/heap.hpp, compiled and run outside: the kit's code). Returns (problem
+    or None, what was measured)."""
+    import os
+    import re
+    import shutil
+    import tempfile
+    ops = int(idea["heap_probe"].get("ops", 20000))
+    seed = (g.seed * 31 + 2) % 2**32
+    src, build = g.built_in
+    folder = next((src / "stages").glob(f"{st.sid}-*"))
+    cache = (build / "CMakeCache.txt").read_text(errors="replace")
+    found = re.search(r"^CMAKE_CXX_COMPILER:\w+=(.+)$", cache, re.M)
+    if not found:
+        return "the kit's build names no C++ compiler to compile the heap probe with", ""
+    cxx = found.group(1).strip()
+    # The kit's own heap, here
+    with tempfile.TemporaryDirectory(prefix="plab-heap-") as tmp:
+        tmp = pathlib.Path(tmp)
+        shutil.copyfile(g.kit / "solutions" / folder.name / "heap.hpp", tmp / "heap.hpp")
+        shutil.copyfile(g.kit / PROBE, tmp / "heap_probe.cpp")
+        made = subprocess.run(compiler_command(cxx, g.kit / "kit" / "include", tmp, tmp / "probe"),
+                              capture_output=True, text=True)
+        if made.returncode != 0:
+            raise RuntimeError(f"the kit's heap probe did not compile: {made.stderr[-600:]}")
+        out, problem = run_probe(tmp / "probe", seed, ops)
+        if problem:
+            raise RuntimeError(f"the kit's own heap failed its probe: {problem}")
+        want = summary(parse(out), seed, ops)
+    # The student's, in the sandbox: compiled there (a header is the student's code) and run there
+    probe_dir = g.sandbox.writable_dir(g.sandbox.box, "heap-")
+    for f in folder.iterdir():
+        if f.is_file():
+            shutil.copyfile(f, probe_dir / f.name)
+    shutil.copyfile(g.kit / PROBE, probe_dir / "heap_probe.cpp")
+    for f in probe_dir.iterdir():
+        os.chmod(f, 0o666)
+    cmd = compiler_command(cxx, "/plab/src/kit/include", "/plab/probe", "/plab/probe/probe")
+    made = g.sandbox.run(cmd, {"/plab/src": src}, {"/plab/probe": probe_dir}, "/plab/probe", 300,
+                         2**28, memory=False)
+    program = probe_dir / "probe"
+    if made.rc != 0 or made.reason or not program.is_file() or program.is_symlink():
+        log = pathlib.Path(made.stdout).read_text(errors="replace") + made.stderr
+        return (f"the grader's probe of MinHeap (heap.hpp) did not compile: "
+                f"{(made.reason or log)[-600:]}"), ""
+    run = g.sandbox.run(["/plab/probe/probe", str(seed), str(ops)], {"/plab/probe": probe_dir}, {},
+                        "/plab/probe", 60, 2**26)
+    text = pathlib.Path(run.stdout).read_text(errors="replace")
+    if run.rc != 0 or run.reason:
+        return (f"the grader's probe of MinHeap (heap.hpp) stopped: "
+                f"{run.reason or ('exit ' + str(run.rc))}: {run.stderr.strip()[-300:]}"), ""
+    return judge(text, want, idea.get("hint", ""))
+
+
+def main():
+    """`python3 -m plab.grade.heap_probe PROBE`: the local test (stageNN.IMPL.Heap), against the
+    kit's summary of its own heap (EXPECTED); `--write-expected` writes that summary from PROBE
+    (the kit's solution's: tests/heap_probe_check.py)."""
+    args = [a for a in sys.argv[1:] if a != "--write-expected"]
+    if len(args) != 1:
+        sys.exit("usage: python3 -m plab.grade.heap_probe PROBE [--write-expected]")
+    kit = pathlib.Path(__file__).resolve().parents[4]
+    expected = kit / EXPECTED
+    if "--write-expected" in sys.argv:
+        out, problem = run_probe(args[0], 2019, 20000)
+        if problem:
+            sys.exit(f"FAILED: {problem}")
+        expected.write_text(json.dumps(summary(parse(out), 2019, 20000), indent=1) + "\n")
+        print(f"wrote {expected}")
+        return
+    want = json.loads(expected.read_text())
+    out, problem = run_probe(args[0], want["seed"], want["ops"])
+    if problem is None:
+        problem, text = judge(out, want, "(handout 02, exercises 1 and 2; the grader runs the "
+                                         "same probe on a seed of its own)")
+    if problem:
+        sys.exit(f"FAILED: {problem}")
+    print(f"passed: {text}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,84 @@
+#!/usr/bin/env python3
+"""Checks stage 02's heap probe (plab.grade.heap_probe): the local test's stored summary
+(kit/grade/probes/heap_probe.expected.json) is the kit's own heap's, and the shortcuts a student
+could take for the heap each fail it, with a message that names what is wrong: a library heap
+(std::push_heap / std::pop_heap: the same arrays with fewer comparisons), a sorted array, an
+unsorted array whose least is kept in front (a scan per pop), a pop that sinks towards the greater
+child, and a push that moves the new item up one level at most. Run by CTest (label kit; the
+instructor's copy: it reads solutions/).
+
+  heap_probe_check.py CXX KIT_SOURCE SOLUTION_PROBE SCRATCH_DIR
+"""
+import json
+import pathlib
+import shutil
+import subprocess
+import sys
+
+cxx, kit, solution_probe, scratch = sys.argv[1], pathlib.Path(sys.argv[2]), sys.argv[3], \
+    pathlib.Path(sys.argv[4])
+sys.path.insert(0, str(kit / "kit" / "python"))
+from plab.grade import heap_probe  # noqa: E402
+
+shutil.rmtree(scratch, ignore_errors=True)
+scratch.mkdir(parents=True)
+want = json.loads((kit / heap_probe.EXPECTED).read_text())
+out, problem = heap_probe.run_probe(solution_probe, want["seed"], want["ops"])
+assert problem is None, problem
+assert heap_probe.summary(heap_probe.parse(out), want["seed"], want["ops"]) == want, \
+    f"{heap_probe.EXPECTED} is not the kit's heap's summary: run python3 -m plab.grade.heap_probe " \
+    "build/bin/plab-heap-probe-02-solution --write-expected"
+assert heap_probe.judge(out, want)[0] is None, heap_probe.judge(out, want)
+
+solution = (kit / "solutions" / "02-heap" / "heap.hpp").read_text()
+push_at, end_at = solution.index("  void push(const T& x) {"), solution.index(" private:")
+SHORTCUTS = {
+    "library heap": ("""  void push(const T& x) {
+    items_.push_back(x);
+    std::push_heap(items_.begin(), items_.end(), [this](const T& a, const T& b) { return less_(b, a); });
+  }
+  void pop() {
+    std::pop_heap(items_.begin(), items_.end(), [this](const T& a, const T& b) { return less_(b, a); });
+    items_.pop_back();
+  }
+""", "fewer than the binary heap's moves make"),
+    "sorted array": ("""  void push(const T& x) { items_.insert(std::upper_bound(items_.begin(), items_.end(), x, less_), x); }
+  void pop() { items_.erase(items_.begin()); }
+""", "items() is [1, 3, 5, 8]"),
+    "least in front, a scan per pop": ("""  void push(const T& x) {
+    items_.push_back(x);
+    if (less_(items_.back(), items_.front())) std::swap(items_.back(), items_.front());
+  }
+  void pop() {
+    std::swap(items_.front(), items_.back());
+    items_.pop_back();
+    for (std::size_t k = 1; k < items_.size(); ++k)
+      if (less_(items_[k], items_.front())) std::swap(items_[k], items_.front());
+  }
+""", "items() is [1, 5, 8, 3]"),
+    "sinks towards the greater child": (
+        solution[push_at:end_at].replace("? right : left", "? left : right"),
+        "and popping once, items() is [5, 3, 8]"),
+    "push one level at most": (
+        solution[push_at:end_at].replace("      k = parent;\n", "      break;\n"),
+        "items() is [3, 1, 8, 5]"),
+}
+for name, (body, said) in SHORTCUTS.items():
+    folder = scratch / name.replace(" ", "-").replace(",", "")
+    folder.mkdir()
+    text = solution[:push_at] + body + "\n" + solution[end_at:]
+    (folder / "heap.hpp").write_text(text.replace("#include <vector>",
+                                                  "#include <vector>\n#include <algorithm>"))
+    shutil.copyfile(kit / heap_probe.PROBE, folder / "heap_probe.cpp")
+    made = subprocess.run(heap_probe.compiler_command(cxx, kit / "kit" / "include", folder,
+                                                      folder / "probe"),
+                          capture_output=True, text=True)
+    assert made.returncode == 0, f"{name}: did not compile:\n{made.stderr[-2000:]}"
+    out, problem = heap_probe.run_probe(folder / "probe", want["seed"], want["ops"])
+    if problem is None:
+        problem, _ = heap_probe.judge(out, want)
+    assert problem and said in problem, f"{name}: {problem!r} (expected it to say {said!r})"
+    print(f"{name}: fails: {problem[:110]}...")
+shutil.rmtree(scratch)
+print(f"heap probe: the kit's heap passes ({want['comparisons']} comparisons), "
+      f"{len(SHORTCUTS)} shortcuts fail")
