@@ -254,6 +254,29 @@ def release_tests(out, kit):
     shutil.copyfile(kit / "stages" / "03-openmp" / "step.cpp", out / "stages" / "03-openmp" / "step.cpp")
     print("stage 03's Rounds test runs with the release's kit/reference/bin: a solution passes, "
           "the same without its OpenMP pragmas fails")
+    # Stage 02's heap, driven alone by the kit's probe as the grade drives it (the stored summary
+    # the release ships): a solution's heap passes, one whose pop sinks towards the greater child
+    # fails, naming the handout's example
+    heap = r"^stage02\.student\.Heap$"
+    solved = (kit / "solutions" / "02-heap" / "heap.hpp").read_text()
+    for text, want in ((solved, 0), (solved.replace("? right : left", "? left : right"), 1)):
+        (out / "stages" / "02-heap" / "heap.hpp").write_text(text)
+        run("cmake", "--build", build, "-j", "2")
+        r = run("ctest", "--test-dir", build, "-R", heap, "--output-on-failure", ok=False)
+        check("stage02.student.Heap" in r.stdout and (r.returncode == 0) == (want == 0)
+              and (want == 0 or "and popping once, items() is [5, 3, 8]" in r.stdout),
+              f"stage 02's Heap test on {'a solution' if want == 0 else 'a wrong pop'}:\n"
+              f"{r.stdout[-2000:]}")
+    # A warning in the student's own code is said by ./plab as the build that compiled it ends
+    (out / "stages" / "02-heap" / "heap.hpp").write_text(solved.replace(
+        "    items_.push_back(x);\n", "    items_.push_back(x);\n    int plab_unused_here = 0;\n"))
+    r = run(out / "plab", "built", "--stage", "02", ok=False)
+    check("plab: the compiler warns about your code (1;" in r.stderr and
+          "stages/02-heap/heap.hpp:" in r.stderr and "plab_unused_here" in r.stderr,
+          f"./plab did not say the compiler's warning about the student's heap.hpp:\n{r.stderr}")
+    shutil.copyfile(kit / "stages" / "02-heap" / "heap.hpp", out / "stages" / "02-heap" / "heap.hpp")
+    print("stage 02's Heap test runs with the release's stored summary: a solution's heap passes, "
+          "a pop towards the greater child fails; ./plab says a warning in the student's heap.hpp")
 
 
 def student_quick_start(out, clone, kit, scratch):

@@ -284,6 +284,15 @@ void print_summary(const std::string& head, const std::vector<Case>& cases) {
       what += " (" + std::to_string(scenes.size()) +
               (scenes.size() == 1 ? " scene differs: " : " scenes differ: ") + all + ")";
     }
+    // The other failed cases by name: a spec's names are its rules ("NothingAtOrAfterOneIsPushed"),
+    // and the first in the file's order is not always the one that points at the mistake
+    std::string others;
+    int listed = 0;
+    for (const Case& c : cases)
+      if (c.status == "failed" && &c != first && listed++ < 5)
+        others += (others.empty() ? "" : ", ") + c.name;
+    if (failed > 6) others += ", ...";
+    if (!others.empty()) what += "; also failed: " + others;
   }
   std::printf("%s%s\n", head.c_str(), what.c_str());
 }

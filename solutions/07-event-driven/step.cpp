@@ -9,8 +9,8 @@
 //         to its end):
 //         1. each particle keeps ONE predicted event in a priority queue: its earliest wall hit,
 //            pair collision (robust contact time, model::contact_time) or cell crossing;
-//         2. pop the earliest; a pair event is stale when the partner has collided since it was
-//            predicted (per-particle collision counters): predict the particle again instead;
+//         2. pop the earliest; an event that a collision since its prediction has made stale
+//            is not a collision: predict the particle again instead;
 //         3. particles are advanced lazily: each keeps its position at its own last event time;
 //         4. cell lists (cells at least 2r wide, crossing events) keep a prediction O(1), so an
 //            event costs O(log N), not O(N).
@@ -317,7 +317,7 @@ class EventDriven final : public Stepper {
   Box box_;
   Particles p_;                    //!< positions at each particle's own time t_[i]
   std::vector<double> t_;          //!< the time each particle's position is stored at
-  std::vector<long long> hits_;    //!< collisions so far (wall and pair): what makes events stale
+  std::vector<long long> hits_;    //!< collisions so far (wall and pair)
   std::vector<int> last_;          //!< the last pair partner (-1 after a wall)
   std::vector<Event> cached_;      //!< each particle's earliest wall or pair event
   std::vector<int> cx_, cy_;       //!< each particle's cell
