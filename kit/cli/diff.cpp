@@ -97,6 +97,9 @@ void add_diff(CLI::App& app) {
     g_status = d ? 1 : 0;
     if (!*json) {
       std::printf("%s\n", d ? d->describe().c_str() : "equal");
+      if (d && d->step == "0")  // step 0 is the scene's own state: no stage has moved it yet
+        std::printf("(step 0 is the initial state, before any step: outputs of two different "
+                    "scenes, or one printed wrong from the start?)\n");
       return;
     }
     nlohmann::ordered_json out;

@@ -400,7 +400,10 @@ void add_view(CLI::App& app) {
         a->out.empty() ? fs::path(a->input).stem().string() + ".html" : a->out;
     write_text(out, page);
     if (!other.blocks.empty())
-      std::printf("%s\n", first ? first->describe().c_str() : "the two outputs are equal");
+      std::printf("%s\n%s", first ? first->describe().c_str() : "the two outputs are equal",
+                  first_step == 0 ? "(step 0 is the initial state, before any step: outputs of "
+                                    "two different scenes, or one printed wrong from the start?)\n"
+                                  : "");
     std::printf("wrote %s: %zu particles, %zu of %zu steps%s, %.1f MB\n", out.c_str(), n,
                 kept.size(), steps.size(),
                 k > 1 ? (" (one in " + std::to_string(k) + ", past --max-mb)").c_str() : "",

@@ -75,7 +75,9 @@
                     "ends early)" : "") +
           `, particle ${esc(cmp.first.particle)}, ${esc(cmp.first.field)}: ` +
           `${esc(cmp.first.a)} in the first run, ${esc(cmp.first.b)} expected ` +
-          "(the compared run); " + count(cmp.first.lines, "line differs", "lines differ")
+          "(the compared run); " + count(cmp.first.lines, "line differs", "lines differ") +
+          (cmp.first.step === 0 ? " (step 0 is the initial state: two different scenes, or one " +
+                                  "printed wrong from the start?)" : "")
         : "<br>the two runs are equal";
   }
   $("title").innerHTML = title;
