@@ -27,6 +27,7 @@ namespace plab {
 template <class T, class Less>
 class MinHeap {
  public:
+  /// An empty heap ordered by `less` (less(a, b): a comes before b).
   explicit MinHeap(Less less = Less()) : less_(less) {}
 
   /// Whether the heap holds no item.
