@@ -53,6 +53,8 @@ and, measured by the grader outside the student's code (each must score nothing)
   ties            02 whose heap orders events by time only loses the hidden-ties scene; 07
                   whose queue compares times only loses hidden-converging and the public
                   simultaneous-hits (a disk hit by two at one instant: the order decides)
+  heap            02 whose MinHeap is the library's heap (std::push_heap, std::pop_heap) or a
+                  std::multiset: right outputs, no points (the idea test's heap probe)
   shortcuts       the one-step answers (next-state), a stage 02 that skips the work on the timed
                   scene (no performance points), the untouched starting point of 03 (no race points)
   gpu-ideas       (on a GPU) 04 stepping on the host between whole-state copies, 05 on one
@@ -1521,12 +1523,60 @@ def case_bypass():
               f"stage {sid} with {symbol} scored {got} on correctness; its output: {said[:300]!r}")
 
 
+def case_heap():
+    """Stage 02 without a binary heap of its own, its outputs right: heap.hpp's MinHeap on the
+    library's heap (std::push_heap / std::pop_heap: the same arrays on random keys, fewer
+    comparisons) and on a std::multiset (its items() the sorted order). Both must lose every
+    correctness point through the idea test's heap probe, with the probe's reason."""
+    solved = (kit / "solutions/02-heap/heap.hpp").read_text()
+    push_at, end_at = solved.index("  void push(const T& x) {"), solved.index(" private:")
+    member = "  Less less_;"
+    variants = {
+        "library": ("""  void push(const T& x) {
+    items_.push_back(x);
+    std::push_heap(items_.begin(), items_.end(), [this](const T& a, const T& b) { return less_(b, a); });
+  }
+  void pop() {
+    std::pop_heap(items_.begin(), items_.end(), [this](const T& a, const T& b) { return less_(b, a); });
+    items_.pop_back();
+  }
+""", "", "fewer than the binary heap's moves make"),
+        "multiset": ("""  void push(const T& x) { set_.insert(x); items_.assign(set_.begin(), set_.end()); }
+  void pop() { set_.erase(set_.begin()); items_.assign(set_.begin(), set_.end()); }
+""", """  struct Order {
+    Less less;
+    bool operator()(const T& a, const T& b) const { return less(a, b); }
+  };
+  std::multiset<T, Order> set_{Order{less_}};
+""", "a binary heap's array is"),
+    }
+    for label, (body, extra, said) in variants.items():
+        name = f"redteam-heap-{label}"
+        root = scratch / name
+        shutil.rmtree(root, ignore_errors=True)
+        folder = root / "stages" / FOLDERS["02"]
+        shutil.copytree(kit / "solutions/02-heap", folder)
+        text = solved[:push_at] + body + "\n" + solved[end_at:]
+        line_end = text.index("\n", text.index(member)) + 1  # the set after less_, which it copies
+        text = text[:line_end] + extra + text[line_end:]
+        text = text.replace("#include <vector>", "#include <vector>\n#include <algorithm>\n#include <set>")
+        (folder / "heap.hpp").write_text(text)
+        tests, doc, _ = grade(name, root, "02", "--no-races")
+        idea = next((t for n, t in tests.items() if n.startswith("02: idea")), {})
+        got = sum(t["score"] for t in correctness(tests, "02").values())
+        check("heap", idea.get("status") == "failed" and said in idea.get("output", "") and
+              got == 0, f"stage 02 on a {label} heap scored {got} on correctness; its idea "
+              f"test: {idea.get('output', 'none')[-300:]!r}")
+        print(f"stage 02 on a {label} heap: 0 on correctness; its idea test: "
+              f"{idea.get('output', '')[-160:]}")
+
+
 CASES = {"copy": case_copy, "escape": case_escape, "processes": case_processes,
          "oracle": case_oracle, "mpi": case_mpi, "control": case_control, "ideas": case_ideas,
          "shortcuts": case_shortcuts, "links": case_links, "gpu-ideas": case_gpu_ideas,
          "rounds-03": lambda: case_rounds("03"), "rounds-07": lambda: case_rounds("07"),
          "rounds-08": lambda: case_rounds("08"), "ties": case_ties, "leaderboard": case_leaderboard,
-         "bypass": case_bypass}
+         "bypass": case_bypass, "heap": case_heap}
 if only - set(CASES):
     sys.exit(f"grader_redteam.py: no case {sorted(only - set(CASES))}; the cases: {', '.join(CASES)}")
 scratch.mkdir(parents=True, exist_ok=True)
