@@ -1444,8 +1444,11 @@ def case_ties():
     name = "redteam-ties"
     shutil.rmtree(scratch / name, ignore_errors=True)
     root = patched(name, "02", "solutions/02-heap", [(
-        "return model::key_less(a, b); }", "return a.t < b.t; }")],
-        "stage 02's solution no longer orders its heap with model::key_less")
+        "  MinHeap<model::Event, EventOrder> heap;", """  struct ByTime {
+    bool operator()(const model::Event& a, const model::Event& b) const { return a.t < b.t; }
+  };
+  MinHeap<model::Event, ByTime> heap;""")],
+        "stage 02's solution no longer orders its heap with plab::EventOrder")
     # and stage 07 whose event queue compares times only (no particle index at equal times)
     root07 = patched(name, "07", "solutions/07-event-driven", [(
         "return a.t < b.t || (a.t == b.t && a.i < b.i);", "return a.t < b.t;")],

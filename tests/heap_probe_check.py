@@ -2,7 +2,8 @@
 """Checks stage 02's heap probe (plab.grade.heap_probe): the local test's stored summary
 (kit/grade/probes/heap_probe.expected.json) is the kit's own heap's, and the shortcuts a student
 could take for the heap each fail it, with a message that names what is wrong: a library heap
-(std::push_heap / std::pop_heap: the same arrays with fewer comparisons), a sorted array, an
+(std::push_heap / std::pop_heap: the same arrays with fewer comparisons), the same padded with
+dummy comparisons (more than the binary heap's moves: a student trial's shortcut), a sorted array, an
 unsorted array whose least is kept in front (a scan per pop), a pop that sinks towards the greater
 child, and a push that moves the new item up one level at most. Run by CTest (label kit; the
 instructor's copy: it reads solutions/).
@@ -29,6 +30,10 @@ assert heap_probe.summary(heap_probe.parse(out), want["seed"], want["ops"]) == w
     f"{heap_probe.EXPECTED} is not the kit's heap's summary: run python3 -m plab.grade.heap_probe " \
     "build/bin/plab-heap-probe-02-solution --write-expected"
 assert heap_probe.judge(out, want)[0] is None, heap_probe.judge(out, want)
+# The probe's heap is the step's own type: what the step uses is what is measured
+probe_text = (kit / heap_probe.PROBE).read_text()
+assert "plab::MinHeap<plab::model::Event, plab::EventOrder>" in probe_text
+assert "MinHeap<model::Event, EventOrder> heap;" in (kit / "stages/02-heap/step.cpp").read_text()
 
 solution = (kit / "solutions" / "02-heap" / "heap.hpp").read_text()
 push_at, end_at = solution.index("  void push(const T& x) {"), solution.index(" private:")
@@ -42,9 +47,19 @@ SHORTCUTS = {
     items_.pop_back();
   }
 """, "fewer than the binary heap's moves make"),
+    "library heap padded": ("""  void push(const T& x) {
+    items_.push_back(x);
+    std::push_heap(items_.begin(), items_.end(), [this](const T& a, const T& b) { return less_(b, a); });
+  }
+  void pop() {
+    std::pop_heap(items_.begin(), items_.end(), [this](const T& a, const T& b) { return less_(b, a); });
+    items_.pop_back();
+    for (std::size_t n = items_.size(); n > 1; n /= 2) (void)less_(items_[0], items_[0]);
+  }
+""", "more than the binary heap's moves need"),
     "sorted array": ("""  void push(const T& x) { items_.insert(std::upper_bound(items_.begin(), items_.end(), x, less_), x); }
   void pop() { items_.erase(items_.begin()); }
-""", "items() is [1, 3, 5, 8]"),
+""", "items() holds the times [1, 3, 5, 8]"),
     "least in front, a scan per pop": ("""  void push(const T& x) {
     items_.push_back(x);
     if (less_(items_.back(), items_.front())) std::swap(items_.back(), items_.front());
@@ -55,16 +70,23 @@ SHORTCUTS = {
     for (std::size_t k = 1; k < items_.size(); ++k)
       if (less_(items_[k], items_.front())) std::swap(items_[k], items_.front());
   }
-""", "items() is [1, 5, 8, 3]"),
+""", "items() holds the times [1, 5, 8, 3]"),
     "sinks towards the greater child": (
-        solution[push_at:end_at].replace("? right : left", "? left : right"),
-        "and popping once, items() is [5, 3, 8]"),
+        solution[push_at:end_at].replace("less_(items_[right], items_[left]) ? right : left", "less_(items_[left], items_[right]) ? right : left"),
+        "and popping once, items() holds the times [5, 3, 8]"),
+    "parent at k / 2": (
+        solution[push_at:end_at].replace("const std::size_t parent = (k - 1) / 2;",
+                                         "const std::size_t parent = k / 2;"),
+        "is earlier than its parent"),
+    "a child's bound off by one": (
+        solution[push_at:end_at].replace("if (left >= n) break;", "if (left > n) break;")
+        .replace("right < n &&", "right <= n &&"), "an index past the array's end"),
     "push one level at most": (
         solution[push_at:end_at].replace("      k = parent;\n", "      break;\n"),
-        "items() is [3, 1, 8, 5]"),
+        "items() holds the times [3, 1, 8, 5]"),
 }
 for name, (body, said) in SHORTCUTS.items():
-    folder = scratch / name.replace(" ", "-").replace(",", "")
+    folder = scratch / "".join(c if c.isalnum() else "-" for c in name)
     folder.mkdir()
     text = solution[:push_at] + body + "\n" + solution[end_at:]
     (folder / "heap.hpp").write_text(text.replace("#include <vector>",
@@ -80,5 +102,5 @@ for name, (body, said) in SHORTCUTS.items():
     assert problem and said in problem, f"{name}: {problem!r} (expected it to say {said!r})"
     print(f"{name}: fails: {problem[:110]}...")
 shutil.rmtree(scratch)
-print(f"heap probe: the kit's heap passes ({want['comparisons']} comparisons), "
+print(f"heap probe: the kit's heap passes ({want['comparisons'][0]} comparisons), "
       f"{len(SHORTCUTS)} shortcuts fail")

@@ -6,26 +6,20 @@
 // =================================================================================================
 //  GOAL   The same step as stage 01, bit for bit, without rescanning N^2 times per accepted event:
 //         the candidates (given: stage 01's pair and wall events in this step) go into your
-//         MinHeap (heap.hpp, exercises 1 and 2), ordered by model::key_less;
+//         MinHeap (heap.hpp, exercises 1 and 2), ordered by model::key_less (plab::EventOrder);
 //         3. pop events in order; accept one when none of its particles has an event yet.
 //         The chosen events are applied as in stage 01 (given).
 //  READ   handouts/02-heap.md           TEST   ./plab test --impl student --stage 02
 // =================================================================================================
 #include "heap.hpp"
+#include "plab/event_order.hpp"
 #include "plab/stage.hpp"
 
 namespace plab {
 
-namespace {
-/// The heap's order: model.md's key (time, kind, lower index, higher index), the earliest first.
-struct Earlier {
-  bool operator()(const model::Event& a, const model::Event& b) const { return model::key_less(a, b); }
-};
-}  // namespace
-
 void step(const Box& box, Particles& p) {
   const int n = static_cast<int>(p.size());
-  MinHeap<model::Event, Earlier> heap;
+  MinHeap<model::Event, EventOrder> heap;  // the earliest by model.md's key on top
 
   // Every wall event and every pair event (i < j) that happens in this step (stage 01's).
   for (int i = 0; i < n; ++i) {

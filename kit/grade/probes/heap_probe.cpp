@@ -1,13 +1,16 @@
 /// \file heap_probe.cpp
 /// \brief The kit's probe of stage 02's heap (the student's heap.hpp), measured outside the step:
 /// compiled beside heap.hpp by the grader (in its sandbox, plab.grade.heap_probe) and by the
-/// local test stageNN.IMPL.Heap, it drives a MinHeap of plain keys through a fixed example and a
-/// long random run of pushes and pops, counting the comparisons its order makes, and prints what
-/// it sees; plab.grade.heap_probe judges the text against the textbook binary heap.
+/// local test stageNN.IMPL.Heap, it drives the step's own heap type, MinHeap<model::Event,
+/// plab::EventOrder>, alone: the handout's example, then a long random run of pushes and pops of
+/// events like a step's, counting the comparisons the heap asks EventOrder for, and prints what
+/// it sees; plab.grade.heap_probe judges the text against the kit's own heap's.
 ///
-/// Output, one line each: `example-push K...` and `example-pop K...` (the array after pushing
-/// 5, 3, 8, 1, then after one pop); `pop K` for each pop of the run (the top it removed);
-/// `layout OPS K...` every 2000 operations and at the end; `comparisons C` last. A heap.hpp whose
+/// Output, one line each: `example-push T...` and `example-pop T...` (the array's times after
+/// pushing events at 5, 3, 8, 1, then after one pop); `pop T` for each pop of the run (the time
+/// of the event it removed); `layout OPS T...` every 2000 operations and at the end; and last
+/// `comparisons C PUSHES PUSH_C POPS POP_C LARGEST` (in all; the pushes and their comparisons; the
+/// pops and theirs; the most items held). Times are printed exactly (C's %a). A heap.hpp whose
 /// exercise is not done throws: its message goes to stderr and the probe exits 3.
 ///
 ///   heap_probe SEED OPS
@@ -18,29 +21,25 @@
 #include <initializer_list>
 
 #include "heap.hpp"
+#include "plab/event_order.hpp"
 
 namespace {
 
-/// A key of the run: distinct, so that exactly one array is the textbook heap's.
-struct Item {
-  std::uint64_t key;
-};
+using Heap = plab::MinHeap<plab::model::Event, plab::EventOrder>;
 
-/// The heap's order, counting every comparison it is asked for.
-struct Counted {
-  long long* count;
-  bool operator()(const Item& a, const Item& b) const {
-    ++*count;
-    return a.key < b.key;
-  }
-};
-
-using Heap = plab::MinHeap<Item, Counted>;
-
-void print_items(const char* head, const Heap& h) {
+void print_times(const char* head, const Heap& h) {
   std::fputs(head, stdout);
-  for (const Item& x : h.items()) std::printf(" %llu", static_cast<unsigned long long>(x.key));
+  for (const plab::model::Event& e : h.items()) std::printf(" %a", e.t);
   std::fputc('\n', stdout);
+}
+
+/// The run's next event: a time in [0, 1) (53 random bits), a wall or a pair of particles below
+/// 5000, as a step's candidates are (plab.grade.heap_probe.events() makes the same).
+plab::model::Event next_event(std::uint64_t state) {
+  const double t = static_cast<double>(state >> 11) * 0x1p-53;
+  const int lo = static_cast<int>((state >> 3) % 4999);
+  if ((state >> 2) & 1) return plab::model::wall_event_key(t, lo);
+  return plab::model::pair_event_key(t, lo, lo + 1 + static_cast<int>((state >> 40) % (4999 - lo)));
 }
 
 }  // namespace
@@ -52,33 +51,43 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "heap_probe: OPS must be 1 to 2^20 - 1\n");
     return 2;
   }
-  long long count = 0;
+  long long& count = plab::EventOrder::count();
   try {
     {
-      Heap h(Counted{&count});
-      for (std::uint64_t k : {5, 3, 8, 1}) h.push(Item{k});
-      print_items("example-push", h);
+      Heap h;
+      for (int k : {5, 3, 8, 1}) h.push(plab::model::wall_event_key(k, k));
+      print_times("example-push", h);
       h.pop();
-      print_items("example-pop", h);
+      print_times("example-pop", h);
     }
     count = 0;
-    Heap h(Counted{&count});
+    Heap h;
     std::uint64_t state = seed;
+    long long pushes = 0, pops = 0, push_count = 0, pop_count = 0;
+    std::size_t largest = 0;
     char head[32];
     for (long op = 0; op < ops; ++op) {
       state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+      const long long before = count;
       if (h.empty() || (state >> 33) % 3 != 0) {
-        h.push(Item{((state >> 24) << 20) | static_cast<std::uint64_t>(op)});
+        h.push(next_event(state));
+        ++pushes;
+        push_count += count - before;
       } else {
-        std::printf("pop %llu\n", static_cast<unsigned long long>(h.top().key));
+        std::printf("pop %a\n", h.top().t);
+        const long long at_top = count;  // top() compares nothing; the pop's own comparisons:
         h.pop();
+        ++pops;
+        pop_count += count - at_top;
       }
+      if (h.size() > largest) largest = h.size();
       if ((op + 1) % 2000 == 0 || op + 1 == ops) {
         std::snprintf(head, sizeof head, "layout %ld", op + 1);
-        print_items(head, h);
+        print_times(head, h);
       }
     }
-    std::printf("comparisons %lld\n", count);
+    std::printf("comparisons %lld %lld %lld %lld %lld %zu\n", count, pushes, push_count, pops,
+                pop_count, largest);
   } catch (const std::exception& e) {
     std::fflush(stdout);
     std::fprintf(stderr, "%s\n", e.what());
