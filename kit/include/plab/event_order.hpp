@@ -11,6 +11,7 @@ namespace plab {
 
 /// The earlier of two events by model.md's key (time, then wall before pair, then indices).
 struct EventOrder {
+  /// Whether `a` comes before `b` (model::key_less()), counted.
   bool operator()(const model::Event& a, const model::Event& b) const {
     ++count();
     return model::key_less(a, b);
