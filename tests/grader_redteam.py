@@ -1531,39 +1531,17 @@ def case_heap():
     library's heap (std::push_heap / std::pop_heap: the same arrays on random keys, fewer
     comparisons) and on a std::multiset (its items() the sorted order). Both must lose every
     correctness point through the idea test's heap probe, with the probe's reason."""
-    solved = (kit / "solutions/02-heap/heap.hpp").read_text()
-    push_at, end_at = solved.index("  void push(const T& x) {"), solved.index(" private:")
-    member = "  Less less_;"
-    variants = {
-        "library": ("""  void push(const T& x) {
-    items_.push_back(x);
-    std::push_heap(items_.begin(), items_.end(), [this](const T& a, const T& b) { return less_(b, a); });
-  }
-  void pop() {
-    std::pop_heap(items_.begin(), items_.end(), [this](const T& a, const T& b) { return less_(b, a); });
-    items_.pop_back();
-  }
-""", "", "fewer than the binary heap's moves make"),
-        "multiset": ("""  void push(const T& x) { set_.insert(x); items_.assign(set_.begin(), set_.end()); }
-  void pop() { set_.erase(set_.begin()); items_.assign(set_.begin(), set_.end()); }
-""", """  struct Order {
-    Less less;
-    bool operator()(const T& a, const T& b) const { return less(a, b); }
-  };
-  std::multiset<T, Order> set_{Order{less_}};
-""", "a binary heap's array is"),
-    }
-    for label, (body, extra, said) in variants.items():
-        name = f"redteam-heap-{label}"
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+    from heap_shortcuts import shortcut_heaps  # the heap probe's own check uses the same
+    heaps = shortcut_heaps((kit / "solutions/02-heap/heap.hpp").read_text())
+    for label, said in (("library heap", "fewer than the binary heap's moves make"),
+                        ("multiset", "a binary heap's array is")):
+        name = f"redteam-heap-{label.replace(' ', '-')}"
         root = scratch / name
         shutil.rmtree(root, ignore_errors=True)
         folder = root / "stages" / FOLDERS["02"]
         shutil.copytree(kit / "solutions/02-heap", folder)
-        text = solved[:push_at] + body + "\n" + solved[end_at:]
-        line_end = text.index("\n", text.index(member)) + 1  # the set after less_, which it copies
-        text = text[:line_end] + extra + text[line_end:]
-        text = text.replace("#include <vector>", "#include <vector>\n#include <algorithm>\n#include <set>")
-        (folder / "heap.hpp").write_text(text)
+        (folder / "heap.hpp").write_text(heaps[label][0])
         tests, doc, _ = grade(name, root, "02", "--no-races")
         idea = next((t for n, t in tests.items() if n.startswith("02: idea")), {})
         got = sum(t["score"] for t in correctness(tests, "02").values())

@@ -35,62 +35,13 @@ probe_text = (kit / heap_probe.PROBE).read_text()
 assert "plab::MinHeap<plab::model::Event, plab::EventOrder>" in probe_text
 assert "MinHeap<model::Event, EventOrder> heap;" in (kit / "stages/02-heap/step.cpp").read_text()
 
-solution = (kit / "solutions" / "02-heap" / "heap.hpp").read_text()
-push_at, end_at = solution.index("  void push(const T& x) {"), solution.index(" private:")
-SHORTCUTS = {
-    "library heap": ("""  void push(const T& x) {
-    items_.push_back(x);
-    std::push_heap(items_.begin(), items_.end(), [this](const T& a, const T& b) { return less_(b, a); });
-  }
-  void pop() {
-    std::pop_heap(items_.begin(), items_.end(), [this](const T& a, const T& b) { return less_(b, a); });
-    items_.pop_back();
-  }
-""", "fewer than the binary heap's moves make"),
-    "library heap padded": ("""  void push(const T& x) {
-    items_.push_back(x);
-    std::push_heap(items_.begin(), items_.end(), [this](const T& a, const T& b) { return less_(b, a); });
-  }
-  void pop() {
-    std::pop_heap(items_.begin(), items_.end(), [this](const T& a, const T& b) { return less_(b, a); });
-    items_.pop_back();
-    for (std::size_t n = items_.size(); n > 1; n /= 2) (void)less_(items_[0], items_[0]);
-  }
-""", "more than the binary heap's moves need"),
-    "sorted array": ("""  void push(const T& x) { items_.insert(std::upper_bound(items_.begin(), items_.end(), x, less_), x); }
-  void pop() { items_.erase(items_.begin()); }
-""", "items() holds the times [1, 3, 5, 8]"),
-    "least in front, a scan per pop": ("""  void push(const T& x) {
-    items_.push_back(x);
-    if (less_(items_.back(), items_.front())) std::swap(items_.back(), items_.front());
-  }
-  void pop() {
-    std::swap(items_.front(), items_.back());
-    items_.pop_back();
-    for (std::size_t k = 1; k < items_.size(); ++k)
-      if (less_(items_[k], items_.front())) std::swap(items_[k], items_.front());
-  }
-""", "items() holds the times [1, 5, 8, 3]"),
-    "sinks towards the greater child": (
-        solution[push_at:end_at].replace("less_(items_[right], items_[left]) ? right : left", "less_(items_[left], items_[right]) ? right : left"),
-        "and popping once, items() holds the times [5, 3, 8]"),
-    "parent at k / 2": (
-        solution[push_at:end_at].replace("const std::size_t parent = (k - 1) / 2;",
-                                         "const std::size_t parent = k / 2;"),
-        "is earlier than its parent"),
-    "a child's bound off by one": (
-        solution[push_at:end_at].replace("if (left >= n) break;", "if (left > n) break;")
-        .replace("right < n &&", "right <= n &&"), "an index past the array's end"),
-    "push one level at most": (
-        solution[push_at:end_at].replace("      k = parent;\n", "      break;\n"),
-        "items() holds the times [3, 1, 8, 5]"),
-}
-for name, (body, said) in SHORTCUTS.items():
+from heap_shortcuts import shortcut_heaps  # noqa: E402  (beside this file)
+
+shortcuts = shortcut_heaps((kit / "solutions" / "02-heap" / "heap.hpp").read_text())
+for name, (text, said) in shortcuts.items():
     folder = scratch / "".join(c if c.isalnum() else "-" for c in name)
     folder.mkdir()
-    text = solution[:push_at] + body + "\n" + solution[end_at:]
-    (folder / "heap.hpp").write_text(text.replace("#include <vector>",
-                                                  "#include <vector>\n#include <algorithm>"))
+    (folder / "heap.hpp").write_text(text)
     shutil.copyfile(kit / heap_probe.PROBE, folder / "heap_probe.cpp")
     made = subprocess.run(heap_probe.compiler_command(cxx, kit / "kit" / "include", folder,
                                                       folder / "probe"),
@@ -103,4 +54,4 @@ for name, (body, said) in SHORTCUTS.items():
     print(f"{name}: fails: {problem[:110]}...")
 shutil.rmtree(scratch)
 print(f"heap probe: the kit's heap passes ({want['comparisons'][0]} comparisons), "
-      f"{len(SHORTCUTS)} shortcuts fail")
+      f"{len(shortcuts)} shortcuts fail")

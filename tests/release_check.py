@@ -241,32 +241,19 @@ def release_tests(out, kit):
           "kit/reference/bin/plab-reference and pass, none skipped")
     # Stage 03's rounds, counted as the grade counts them, with the compiled instruments the
     # release ships (kit/reference/bin): a solution passes, the same made serial fails.
-    rounds = r"^stage03\.student\.Rounds$"
     solution = (kit / "solutions" / "03-openmp" / "step.cpp").read_text()
-    for text, want in ((solution, 0), (solution.replace("#pragma omp", "// #pragma omp"), 1)):
-        (out / "stages" / "03-openmp" / "step.cpp").write_text(text)
-        run("cmake", "--build", build, "-j", "2")
-        r = run("ctest", "--test-dir", build, "-R", rounds, "--output-on-failure", ok=False)
-        check("stage03.student.Rounds" in r.stdout and (r.returncode == 0) == (want == 0)
-              and (want == 0 or "were expected" in r.stdout),
-              f"stage 03's Rounds test on {'a solution' if want == 0 else 'a serial stage'}:\n"
-              f"{r.stdout[-2000:]}")
-    shutil.copyfile(kit / "stages" / "03-openmp" / "step.cpp", out / "stages" / "03-openmp" / "step.cpp")
+    local_idea_test(build, out, kit, "03-openmp/step.cpp", "Rounds", solution,
+                    solution.replace("#pragma omp", "// #pragma omp"), "were expected")
     print("stage 03's Rounds test runs with the release's kit/reference/bin: a solution passes, "
           "the same without its OpenMP pragmas fails")
     # Stage 02's heap, driven alone by the kit's probe as the grade drives it (the stored summary
     # the release ships): a solution's heap passes, one whose pop sinks towards the greater child
     # fails, naming the handout's example
-    heap = r"^stage02\.student\.Heap$"
     solved = (kit / "solutions" / "02-heap" / "heap.hpp").read_text()
-    for text, want in ((solved, 0), (solved.replace("less_(items_[right], items_[left]) ? right : left", "less_(items_[left], items_[right]) ? right : left"), 1)):
-        (out / "stages" / "02-heap" / "heap.hpp").write_text(text)
-        run("cmake", "--build", build, "-j", "2")
-        r = run("ctest", "--test-dir", build, "-R", heap, "--output-on-failure", ok=False)
-        check("stage02.student.Heap" in r.stdout and (r.returncode == 0) == (want == 0)
-              and (want == 0 or "and popping once, items() holds the times [5, 3, 8]" in r.stdout),
-              f"stage 02's Heap test on {'a solution' if want == 0 else 'a wrong pop'}:\n"
-              f"{r.stdout[-2000:]}")
+    local_idea_test(build, out, kit, "02-heap/heap.hpp", "Heap", solved,
+                    solved.replace("less_(items_[right], items_[left]) ? right : left",
+                                   "less_(items_[left], items_[right]) ? right : left"),
+                    "and popping once, items() holds the times [5, 3, 8]")
     # A warning in the student's own code is said by ./plab as the build that compiled it ends
     (out / "stages" / "02-heap" / "heap.hpp").write_text(solved.replace(
         "    items_.push_back(x);\n", "    items_.push_back(x);\n    int plab_unused_here = 0;\n"))
@@ -277,6 +264,23 @@ def release_tests(out, kit):
     shutil.copyfile(kit / "stages" / "02-heap" / "heap.hpp", out / "stages" / "02-heap" / "heap.hpp")
     print("stage 02's Heap test runs with the release's stored summary: a solution's heap passes, "
           "a pop towards the greater child fails; ./plab says a warning in the student's heap.hpp")
+
+
+def local_idea_test(build, out, kit, path, test, right, wrong, wrong_says):
+    """A stage's local check of its idea (stageNN.student.TEST), in the release built at `build`:
+    passes with the file stages/`path` written as `right`, fails saying `wrong_says` with `wrong`;
+    the starting point's file is put back."""
+    stage = path.split("-")[0]
+    name = f"stage{stage}.student.{test}"
+    for text, want in ((right, 0), (wrong, 1)):
+        (out / "stages" / path).write_text(text)
+        run("cmake", "--build", build, "-j", "2")
+        r = run("ctest", "--test-dir", build, "-R", f"^{re.escape(name)}$", "--output-on-failure",
+                ok=False)
+        check(name in r.stdout and (r.returncode == 0) == (want == 0)
+              and (want == 0 or wrong_says in r.stdout),
+              f"{name} on {'a solution' if want == 0 else 'a wrong one'}:\n{r.stdout[-2000:]}")
+    shutil.copyfile(kit / "stages" / path, out / "stages" / path)
 
 
 def student_quick_start(out, clone, kit, scratch):

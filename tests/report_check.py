@@ -18,12 +18,23 @@ from PIL import Image
 
 plab, scratch = sys.argv[1], pathlib.Path(sys.argv[2])
 shutil.rmtree(scratch, ignore_errors=True)
+
+
+def report(stage, out, n, counts):
+    """`plab report` of the kit's solution of `stage` at sizes `n` on `counts` threads (or
+    ranks), 1 run of 5 steps (3 on ranks) into `out`; exits on a failure."""
+    option = "--ranks" if stage == "08" else "--threads"
+    done = subprocess.run([plab, "report", "--stage", stage, "--impl", "solution", "--n", n,
+                           option, counts, "--steps", "3" if stage == "08" else "5", "--runs", "1",
+                           "--out", str(out)], capture_output=True, text=True)
+    if done.returncode != 0:
+        sys.exit(f"plab report --stage {stage} exited {done.returncode}:\n{done.stdout}\n"
+                 f"{done.stderr}")
+    return done
+
+
 out = scratch / "report-03"
-done = subprocess.run([plab, "report", "--stage", "03", "--impl", "solution", "--n", "100,200",
-                       "--threads", "1,2", "--steps", "5", "--runs", "1", "--out", str(out)],
-                      capture_output=True, text=True)
-if done.returncode != 0:
-    sys.exit(f"plab report exited {done.returncode}:\n{done.stdout}\n{done.stderr}")
+report("03", out, "100,200", "1,2")
 md = (out / "report.md").read_text()
 rows = list(csv.DictReader(open(out / "bench.csv", newline="")))
 assert len(rows) == 4, f"{len(rows)} timings, expected 2 sizes x 2 thread counts"
@@ -44,9 +55,7 @@ for fig in ("time-vs-n.png", "speedup.png", "efficiency.png"):
 mine = md.replace("*your name, the date*", "Ada Student, 7 December").replace(
     "*In a paragraph: the stage's idea", "I wrote rounds. *In a paragraph: the stage's idea")
 (out / "report.md").write_text(mine)
-again = subprocess.run([plab, "report", "--stage", "03", "--impl", "solution", "--n", "150",
-                        "--threads", "1", "--steps", "5", "--runs", "1", "--out", str(out)],
-                       capture_output=True, text=True)
+again = report("03", out, "150", "1")
 assert again.returncode == 0 and "the rest kept as you wrote it" in again.stdout, again.stdout
 md2 = (out / "report.md").read_text()
 assert "Ada Student, 7 December" in md2 and "I wrote rounds." in md2, "the student's text is lost"
@@ -54,19 +63,13 @@ assert "| 150 | 1 |" in md2 and "| 100 | 1 |" not in md2, "the measurements were
 assert md2.count("## Measurements") == 1 and md2.count("| cores the OS sees |") == 1, md2
 # Marks removed by the student: their report is left as it was, the new skeleton beside it
 (out / "report.md").write_text("my own report, no marks\n")
-third = subprocess.run([plab, "report", "--stage", "03", "--impl", "solution", "--n", "150",
-                        "--threads", "1", "--steps", "5", "--runs", "1", "--out", str(out)],
-                       capture_output=True, text=True)
+third = report("03", out, "150", "1")
 assert third.returncode == 0 and "report.new.md" in third.stdout, third.stdout
 assert (out / "report.md").read_text() == "my own report, no marks\n", "the report was overwritten"
 assert "| 150 | 1 |" in (out / "report.new.md").read_text()
 # On ranks (stage 08): the bytes a step, in all and by MPI function (handout 08's question 2).
 out8 = scratch / "report-08"
-done = subprocess.run([plab, "report", "--stage", "08", "--impl", "solution", "--n", "400",
-                       "--ranks", "1,2", "--steps", "3", "--runs", "1", "--out", str(out8)],
-                      capture_output=True, text=True)
-if done.returncode != 0:
-    sys.exit(f"plab report --stage 08 exited {done.returncode}:\n{done.stdout}\n{done.stderr}")
+report("08", out8, "400", "1,2")
 md8 = (out8 / "report.md").read_text()
 assert "| bytes a step | by call, a step |" in md8, f"no bytes columns:\n{md8}"
 two = [line for line in md8.splitlines() if line.startswith("| 400 | 2 |")]

@@ -1,0 +1,69 @@
+"""Shortcuts for stage 02's heap that the kit's heap probe must stop (tests/heap_probe_check.py
+checks the probe's message for each; tests/grader_redteam.py grades some). Instructor-only: it
+edits the kit's solved heap.hpp.
+"""
+
+
+def shortcut_heaps(solution):
+    """{name: (heap.hpp text, what the probe must say)}: the kit's solved heap.hpp (`solution`)
+    with MinHeap's push and pop replaced by each shortcut, or slipped."""
+    push_at, end_at = solution.index("  void push(const T& x) {"), solution.index(" private:")
+    SHORTCUTS = {
+        "library heap": ("""  void push(const T& x) {
+        items_.push_back(x);
+        std::push_heap(items_.begin(), items_.end(), [this](const T& a, const T& b) { return less_(b, a); });
+      }
+      void pop() {
+        std::pop_heap(items_.begin(), items_.end(), [this](const T& a, const T& b) { return less_(b, a); });
+        items_.pop_back();
+      }
+    """, "fewer than the binary heap's moves make"),
+        "library heap padded": ("""  void push(const T& x) {
+        items_.push_back(x);
+        std::push_heap(items_.begin(), items_.end(), [this](const T& a, const T& b) { return less_(b, a); });
+      }
+      void pop() {
+        std::pop_heap(items_.begin(), items_.end(), [this](const T& a, const T& b) { return less_(b, a); });
+        items_.pop_back();
+        for (std::size_t n = items_.size(); n > 1; n /= 2) (void)less_(items_[0], items_[0]);
+      }
+    """, "more than the binary heap's moves need"),
+        "multiset": ("""  void push(const T& x) { set_.insert(x); items_.assign(set_.begin(), set_.end()); }
+      void pop() { set_.erase(set_.begin()); items_.assign(set_.begin(), set_.end()); }
+      struct Order {
+        Less less;
+        bool operator()(const T& a, const T& b) const { return less(a, b); }
+      };
+      std::multiset<T, Order> set_;  // (EventOrder holds nothing: a default one is the same)
+    """, "items() holds the times [1, 3, 5, 8]"),
+        "sorted array": ("""  void push(const T& x) { items_.insert(std::upper_bound(items_.begin(), items_.end(), x, less_), x); }
+      void pop() { items_.erase(items_.begin()); }
+    """, "items() holds the times [1, 3, 5, 8]"),
+        "least in front, a scan per pop": ("""  void push(const T& x) {
+        items_.push_back(x);
+        if (less_(items_.back(), items_.front())) std::swap(items_.back(), items_.front());
+      }
+      void pop() {
+        std::swap(items_.front(), items_.back());
+        items_.pop_back();
+        for (std::size_t k = 1; k < items_.size(); ++k)
+          if (less_(items_[k], items_.front())) std::swap(items_[k], items_.front());
+      }
+    """, "items() holds the times [1, 5, 8, 3]"),
+        "sinks towards the greater child": (
+            solution[push_at:end_at].replace("less_(items_[right], items_[left]) ? right : left", "less_(items_[left], items_[right]) ? right : left"),
+            "and popping once, items() holds the times [5, 3, 8]"),
+        "parent at k / 2": (
+            solution[push_at:end_at].replace("const std::size_t parent = (k - 1) / 2;",
+                                             "const std::size_t parent = k / 2;"),
+            "is earlier than its parent"),
+        "a child's bound off by one": (
+            solution[push_at:end_at].replace("if (left >= n) break;", "if (left > n) break;")
+            .replace("right < n &&", "right <= n &&"), "an index past the array's end"),
+        "push one level at most": (
+            solution[push_at:end_at].replace("      k = parent;\n", "      break;\n"),
+            "items() holds the times [3, 1, 8, 5]"),
+    }
+    return {name: ((solution[:push_at] + body + "\n" + solution[end_at:]).replace(
+        "#include <vector>", "#include <vector>\n#include <algorithm>\n#include <set>"), said)
+        for name, (body, said) in SHORTCUTS.items()}
