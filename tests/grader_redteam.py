@@ -54,7 +54,9 @@ and, measured by the grader outside the student's code (each must score nothing)
                   whose queue compares times only loses hidden-converging and the public
                   simultaneous-hits (a disk hit by two at one instant: the order decides)
   heap            02 whose MinHeap is the library's heap (std::push_heap, std::pop_heap) or a
-                  std::multiset: right outputs, no points (the idea test's heap probe)
+                  std::multiset, or whose step sorts its events beside a right heap: right
+                  outputs, no points (the idea test's heap probe and the step's traced
+                  comparisons)
   shortcuts       the one-step answers (next-state), a stage 02 that skips the work on the timed
                   scene (no performance points), the untouched starting point of 03 (no race points)
   gpu-ideas       (on a GPU) 04 stepping on the host between whole-state copies, 05 on one
@@ -1529,19 +1531,24 @@ def case_bypass():
 def case_heap():
     """Stage 02 without a binary heap of its own, its outputs right: heap.hpp's MinHeap on the
     library's heap (std::push_heap / std::pop_heap: the same arrays on random keys, fewer
-    comparisons) and on a std::multiset (its items() the sorted order). Both must lose every
-    correctness point through the idea test's heap probe, with the probe's reason."""
+    comparisons), on a std::multiset (its items() the sorted order), and the kit's own heap with
+    a step that sorts its candidates instead (the heap unused). Each must lose every correctness
+    point through the idea test's heap checks, with their reason."""
     sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-    from heap_shortcuts import shortcut_heaps  # the heap probe's own check uses the same
+    from heap_shortcuts import shortcut_heaps, sorting_step  # the probe's own check uses them
     heaps = shortcut_heaps((kit / "solutions/02-heap/heap.hpp").read_text())
     for label, said in (("library heap", "fewer than the binary heap's moves make"),
-                        ("multiset", "a binary heap's array is")):
+                        ("multiset", "a binary heap's array is"),
+                        ("sorting step", "none: the step does not order a heap")):
         name = f"redteam-heap-{label.replace(' ', '-')}"
         root = scratch / name
         shutil.rmtree(root, ignore_errors=True)
         folder = root / "stages" / FOLDERS["02"]
         shutil.copytree(kit / "solutions/02-heap", folder)
-        (folder / "heap.hpp").write_text(heaps[label][0])
+        if label == "sorting step":  # the kit's heap, right; the step sorts its events instead
+            (folder / "step.cpp").write_text(sorting_step((folder / "step.cpp").read_text()))
+        else:
+            (folder / "heap.hpp").write_text(heaps[label][0])
         tests, doc, _ = grade(name, root, "02", "--no-races")
         idea = next((t for n, t in tests.items() if n.startswith("02: idea")), {})
         got = sum(t["score"] for t in correctness(tests, "02").values())

@@ -67,3 +67,21 @@ def shortcut_heaps(solution):
     return {name: ((solution[:push_at] + body + "\n" + solution[end_at:]).replace(
         "#include <vector>", "#include <vector>\n#include <algorithm>\n#include <set>"), said)
         for name, (body, said) in SHORTCUTS.items()}
+
+
+def sorting_step(solution_step):
+    """The kit's solved step.cpp with its candidates kept in a vector and sorted (std::sort, in
+    model.md's order through plab::EventOrder) instead of a heap: the right output, no heap."""
+    edits = (("  MinHeap<model::Event, EventOrder> heap;", "  std::vector<model::Event> all;"),
+             ("heap.push(w)", "all.push_back(w)"), ("heap.push(e)", "all.push_back(e)"),
+             ("""  while (!heap.empty()) {
+    const model::Event e = heap.top();
+    heap.pop();
+    if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
+  }""", """  std::sort(all.begin(), all.end(), EventOrder{});
+  for (const model::Event& e : all)
+    if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);"""))
+    for old, new in edits:
+        assert old in solution_step, f"the kit's step.cpp changed shape (no {old[:40]!r})"
+        solution_step = solution_step.replace(old, new)
+    return "#include <algorithm>\n#include <vector>\n" + solution_step

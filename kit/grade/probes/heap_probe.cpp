@@ -9,8 +9,9 @@
 /// Output, one line each: `example-push T...` and `example-pop T...` (the array's times after
 /// pushing events at 5, 3, 8, 1, then after one pop); `pop T` for each pop of the run (the time
 /// of the event it removed); `layout OPS T...` every 2000 operations and at the end; and last
-/// `comparisons C PUSHES PUSH_C POPS POP_C LARGEST` (in all; the pushes and their comparisons; the
-/// pops and theirs; the most items held). Times are printed exactly (C's %a). A heap.hpp whose
+/// `comparisons C PUSHES PUSH_C POPS POP_C LARGEST TRACE` (in all; the pushes and their
+/// comparisons; the pops and theirs; the most items held; EventOrder's trace of them: which
+/// events were compared, in order). Times are printed exactly (C's %a). A heap.hpp whose
 /// exercise is not done throws: its message goes to stderr and the probe exits 3.
 ///
 ///   heap_probe SEED OPS
@@ -61,6 +62,7 @@ int main(int argc, char** argv) {
       print_times("example-pop", h);
     }
     count = 0;
+    plab::EventOrder::trace() = 0;
     Heap h;
     std::uint64_t state = seed;
     long long pushes = 0, pops = 0, push_count = 0, pop_count = 0;
@@ -86,8 +88,9 @@ int main(int argc, char** argv) {
         print_times(head, h);
       }
     }
-    std::printf("comparisons %lld %lld %lld %lld %lld %zu\n", count, pushes, push_count, pops,
-                pop_count, largest);
+    std::printf("comparisons %lld %lld %lld %lld %lld %zu %016llx\n", count, pushes, push_count,
+                pops, pop_count, largest,
+                static_cast<unsigned long long>(plab::EventOrder::trace()));
   } catch (const std::exception& e) {
     std::fflush(stdout);
     std::fprintf(stderr, "%s\n", e.what());

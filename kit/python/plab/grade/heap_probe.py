@@ -65,8 +65,9 @@ def parse(text):
                 got["pops"].append(float.fromhex(words[1]))
             elif words[0] == "layout" and len(words) >= 2:
                 got["layouts"][int(words[1])] = [float.fromhex(w) for w in words[2:]]
-            elif words[0] == "comparisons" and len(words) == 7:
-                got["comparisons"] = [int(w) for w in words[1:]]
+            elif words[0] == "comparisons" and len(words) == 8:
+                got["comparisons"] = [int(w) for w in words[1:7]]
+                got["trace"] = words[7]
             else:
                 raise ValueError(line)
         except ValueError:
@@ -79,7 +80,8 @@ def summary(parsed, seed, ops):
     pops' digest and the comparisons (of the kit's own heap)."""
     return {"seed": seed, "ops": ops, **{k: parsed.get(k) for k in EXAMPLE},
             "layouts": {str(k): digest(v) for k, v in sorted(parsed["layouts"].items())},
-            "pops": digest(parsed["pops"]), "comparisons": parsed["comparisons"]}
+            "pops": digest(parsed["pops"]), "comparisons": parsed["comparisons"],
+            "trace": parsed.get("trace")}
 
 
 def events(seed, ops):
@@ -168,7 +170,40 @@ def judge(text, want, hint=""):
                 f"costs two, one to pick the lesser child, one to compare it; a comparison "
                 f"beyond these, or a library heap padded with some, is not these moves). "
                 f"{hint}").strip(), text
+    if got.get("trace") != want.get("trace"):  # as many, but not the same events compared
+        return (f"{text}, but not the comparisons of the binary heap's moves: other events "
+                f"compared, or in another order (the right child against the left, then the "
+                f"lesser against the sinking item; the new item against its parent). "
+                f"{hint}").strip(), text
     return None, text
+
+
+def judge_step(mine, theirs, hint=""):
+    """(problem or None, what was measured) for the step's own heap: `mine`, the text of the
+    stage's report of a run (its order_comparisons and order_trace: every comparison its step
+    asked plab::EventOrder for, in order), against `theirs`, the path or text of the kit's own
+    solution's report of the same scene. The same candidates pushed in the given order into a
+    binary heap and popped one by one, as the kit's step does, compare the same events in the
+    same order; a step that sorts, scans or keeps a set, or a heap that is not the binary heap
+    in the step (whatever it was when probed), does not."""
+    try:
+        mine = json.loads(mine or "")
+        theirs = json.loads(pathlib.Path(theirs).read_text() if isinstance(theirs, pathlib.Path)
+                            else theirs)
+        count, trace = int(mine["order_comparisons"]), str(mine["order_trace"])
+        kit_count, kit_trace = int(theirs["order_comparisons"]), str(theirs["order_trace"])
+    except (OSError, TypeError, ValueError, KeyError) as e:
+        return f"its run left no report of its heap's comparisons ({e})", ""
+    text = f"its step's heap: {count} comparisons through plab::EventOrder (the kit's: {kit_count})"
+    if (count, trace) != (kit_count, kit_trace):
+        why = ("none: the step does not order a heap with plab::EventOrder" if count == 0 else
+               "the same number, other events compared" if count == kit_count else
+               f"{count - kit_count:+d}")
+        return (f"{text}, {why}: the step's events must come from your MinHeap, every given "
+                f"candidate pushed in the given order and every event popped (a sort, a scan, "
+                f"a set or another heap in the step compares other events, or as many in "
+                f"another order). {hint}").strip(), text
+    return None, f"{text}, the same events in the same order"
 
 
 def run_probe(probe, seed, ops, timeout=60):
@@ -256,26 +291,49 @@ def grade_probe(g, st, idea):
 
 
 def main():
-    """`python3 -m plab.grade.heap_probe PROBE`: the local test (stageNN.IMPL.Heap), against the
-    kit's summary of its own heap (EXPECTED); `--write-expected` writes that summary from PROBE
-    (the kit's solution's: tests/heap_probe_check.py)."""
-    args = [a for a in sys.argv[1:] if a != "--write-expected"]
-    if len(args) != 1:
-        sys.exit("usage: python3 -m plab.grade.heap_probe PROBE [--write-expected]")
+    """`python3 -m plab.grade.heap_probe PROBE [--program STAGE --reference KIT_STAGE --scene S]`:
+    the local test (stageNN.IMPL.Heap): the probe against the kit's summary of its own heap
+    (EXPECTED), then, given the stage's program and the kit's (the reference program in a
+    student's copy), the step's own heap comparisons on SCENE against the kit's. With
+    `--write-expected`, writes EXPECTED from PROBE (the kit's solution's:
+    tests/heap_probe_check.py)."""
+    import argparse
+    ap = argparse.ArgumentParser(prog="python3 -m plab.grade.heap_probe")
+    ap.add_argument("probe")
+    ap.add_argument("--program", help="the stage's program (plab-run-02-student)")
+    ap.add_argument("--reference", help="the kit's stage 02 program (its solution's, compiled)")
+    ap.add_argument("--scene", help="the scene both run (3 steps)")
+    ap.add_argument("--write-expected", action="store_true")
+    a = ap.parse_args()
     kit = pathlib.Path(__file__).resolve().parents[4]
     expected = kit / EXPECTED
-    if "--write-expected" in sys.argv:
-        out, problem = run_probe(args[0], 2019, 20000)
+    if a.write_expected:
+        out, problem = run_probe(a.probe, 2019, 20000)
         if problem:
             sys.exit(f"FAILED: {problem}")
         expected.write_text(json.dumps(summary(parse(out), 2019, 20000), indent=1) + "\n")
         print(f"wrote {expected}")
         return
+    hint = "(handout 02, exercises 1 to 3; the grader runs the same checks on scenes of its own)"
     want = json.loads(expected.read_text())
-    out, problem = run_probe(args[0], want["seed"], want["ops"])
+    out, problem = run_probe(a.probe, want["seed"], want["ops"])
     if problem is None:
-        problem, text = judge(out, want, "(handout 02, exercises 1 and 2; the grader runs the "
-                                         "same probe on a seed of its own)")
+        problem, text = judge(out, want, hint)
+    if problem is None and a.program and a.reference and a.scene:
+        import tempfile
+        reports = []
+        with tempfile.TemporaryDirectory(prefix="plab-heap-step-") as tmp:
+            for k, program in enumerate((a.program, a.reference)):
+                report = pathlib.Path(tmp) / f"report-{k}.json"
+                done = subprocess.run([program, a.scene, "--steps", "3", "--quiet", "--out",
+                                       "/dev/null", "--report", str(report)],
+                                      capture_output=True, text=True, timeout=300)
+                if done.returncode != 0:
+                    sys.exit(f"FAILED: {program} on {a.scene} (3 steps) exited {done.returncode}: "
+                             f"{done.stderr.strip()[-400:]}")
+                reports.append(report.read_text())
+        problem, measured = judge_step(reports[0], reports[1], hint)
+        text += f"; on {pathlib.Path(a.scene).name}, 3 steps: {measured}"
     if problem:
         sys.exit(f"FAILED: {problem}")
     print(f"passed: {text}")

@@ -49,9 +49,10 @@ class Ideas:
             return
         scene, what = self.idea_scene(st, folder)
         kind = idea["kind"]
-        own_report = folder / "idea-own-report.json" if kind == "ranks" else None
+        traced = "heap_probe" in idea  # stage 02: the step's heap comparisons, traced (EventOrder)
+        own_report = folder / "idea-own-report.json" if kind == "ranks" or traced else None
         expected, own_seconds = self.own_run(st, scene, idea.get("threads", 1), folder / "idea.out",
-                                             idea.get("ranks", 1) if own_report else 1, own_report)
+                                             idea.get("ranks", 1), own_report)
         limit = max(idea.get("seconds", 0), idea.get("multiple", 0) * own_seconds)
         threads = str(idea.get("threads", st.threads))
         env = dict(st.env, OMP_WAIT_POLICY="passive") if kind == "threads" else st.env
@@ -61,7 +62,7 @@ class Ideas:
         if counter:
             env = dict(env, **counter.env(program))
         # Ranks: the kit's MPI layer (not the student's code) counts the bytes the ranks send.
-        report = ["--report", "/plab/out/report.json"] if kind == "ranks" else []
+        report = ["--report", "/plab/out/report.json"] if own_report else []
         run = self.run_program(program, scene, ["--quiet", "--threads", threads, "--out",
                                                 "/plab/out/out.txt", *report], limit,
                                max(self.rubric["limits"]["output_min_mb"] * 2**20,
@@ -80,6 +81,10 @@ class Ideas:
             problem, text = self.rounds_follow(st, program, folder, counter, limit, text)
         if problem is None and kind != "scale":
             problem, text = self.work_shared(idea, run, text)
+        if problem is None and traced:  # the step's own comparisons against the kit's heap's
+            problem, measured = heap_probe.judge_step(run.read_output("report.json"), own_report,
+                                                      idea.get("hint", ""))
+            text += f"; {measured}" if measured else ""
         if problem is None and "heap_probe" in idea:  # stage 02's own heap, driven alone
             problem, measured = heap_probe.grade_probe(self, st, idea)
             text += f"; {measured}" if measured else ""
@@ -114,9 +119,11 @@ class Ideas:
     def own_run(self, st, scene, threads, out, ranks=1, report=None):
         """(output, seconds) of the stage's own solution on `scene` (the same bits as the
         reference, and the speed a limit is set from), written to `out`; on `ranks` processes
-        under mpirun, writing the kit's report of the run to `report`, when ranks > 1."""
+        under mpirun when ranks > 1; the kit's report of the run written to `report` if given."""
         argv = [self.solution(st.sid), scene, "--quiet", "--threads", str(threads), "--out", out]
         env = dict(os.environ, **st.env)
+        if ranks <= 1 and report:
+            argv += ["--report", str(report)]
         if ranks > 1:
             argv = [shutil.which("mpirun") or "mpirun", "--quiet", "--oversubscribe", "-np",
                     str(ranks), *argv, "--report", report]
