@@ -52,6 +52,20 @@ for name, (text, said) in shortcuts.items():
         problem, _ = heap_probe.judge(out, want)
     assert problem and said in problem, f"{name}: {problem!r} (expected it to say {said!r})"
     print(f"{name}: fails: {problem[:110]}...")
+from heap_shortcuts import honest_heaps  # noqa: E402
+for name, text in honest_heaps((kit / "solutions" / "02-heap" / "heap.hpp").read_text()).items():
+    folder = scratch / "".join(c if c.isalnum() else "-" for c in name)
+    folder.mkdir()
+    (folder / "heap.hpp").write_text(text)
+    shutil.copyfile(kit / heap_probe.PROBE, folder / "heap_probe.cpp")
+    made = subprocess.run(heap_probe.compiler_command(cxx, kit / "kit" / "include", folder,
+                                                      folder / "probe"),
+                          capture_output=True, text=True)
+    assert made.returncode == 0, f"{name}: did not compile:\n{made.stderr[-2000:]}"
+    out, problem = heap_probe.run_probe(folder / "probe", want["seed"], want["ops"])
+    problem = problem or heap_probe.judge(out, want)[0]
+    assert problem is None, f"an honest heap ({name}) fails the probe: {problem}"
+    print(f"{name}: passes (honest)")
 shutil.rmtree(scratch)
 print(f"heap probe: the kit's heap passes ({want['comparisons'][0]} comparisons), "
       f"{len(shortcuts)} shortcuts fail")

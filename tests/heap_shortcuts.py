@@ -60,6 +60,30 @@ def shortcut_heaps(solution):
         "a child's bound off by one": (
             solution[push_at:end_at].replace("if (left >= n) break;", "if (left > n) break;")
             .replace("right < n &&", "right <= n &&"), "an index past the array's end"),
+        "CLRS's sink (the same heap, other comparisons)": ("""  void push(const T& x) {
+        items_.push_back(x);
+        for (std::size_t k = items_.size() - 1; k > 0;) {
+          const std::size_t parent = (k - 1) / 2;
+          if (!less_(items_[k], items_[parent])) break;
+          std::swap(items_[k], items_[parent]);
+          k = parent;
+        }
+      }
+      void pop() {
+        if (items_.size() > 1) items_.front() = std::move(items_.back());
+        items_.pop_back();
+        const std::size_t n = items_.size();
+        for (std::size_t k = 0;;) {
+          const std::size_t left = 2 * k + 1, right = left + 1;
+          std::size_t least = k;
+          if (left < n && less_(items_[left], items_[least])) least = left;
+          if (right < n && less_(items_[right], items_[least])) least = right;
+          if (least == k) break;
+          std::swap(items_[k], items_[least]);
+          k = least;
+        }
+      }
+    """, "not the comparisons of the binary heap's moves"),
         "push one level at most": (
             solution[push_at:end_at].replace("      k = parent;\n", "      break;\n"),
             "items() holds the times [3, 1, 8, 5]"),
@@ -85,3 +109,18 @@ def sorting_step(solution_step):
         assert old in solution_step, f"the kit's step.cpp changed shape (no {old[:40]!r})"
         solution_step = solution_step.replace(old, new)
     return "#include <algorithm>\n#include <vector>\n" + solution_step
+
+
+def honest_heaps(solution):
+    """{name: heap.hpp text}: the kit's solved heap.hpp written other honest ways that the probe
+    must pass: each comparison asked the other way round (`less(parent, item)` to stop a climb,
+    the left child against the right)."""
+    other_way = (solution
+                 .replace("if (!less_(items_[k], items_[parent])) break;",
+                          "if (less_(items_[parent], items_[k])) break;")
+                 .replace("less_(items_[right], items_[left]) ? right : left",
+                          "!less_(items_[left], items_[right]) ? right : left")
+                 .replace("if (!less_(items_[child], items_[k])) break;",
+                          "if (less_(items_[k], items_[child])) break;"))
+    assert other_way.count("less_(") == solution.count("less_("), "the solved heap changed shape"
+    return {"each comparison the other way round": other_way}

@@ -20,7 +20,8 @@ struct EventOrder {
   /// Whether `a` comes before `b` (model::key_less()), counted and traced.
   bool operator()(const model::Event& a, const model::Event& b) const {
     ++count();
-    trace() = fold(fold(trace() * 0x100000001b3ULL, a), b);
+    const std::uint64_t x = mix(a), y = mix(b);  // the pair, whichever way round it is asked
+    trace() = (trace() ^ ((x + y) ^ (x * y))) * 0x100000001b3ULL;
     return model::key_less(a, b);
   }
   /// The comparisons made so far on this thread.
@@ -28,20 +29,23 @@ struct EventOrder {
     thread_local long long made = 0;
     return made;
   }
-  /// The comparisons so far on this thread, folded in order: which events were compared, in
-  /// which order, as one number.
+  /// The comparisons so far on this thread, folded in order: which pairs of events were
+  /// compared (each pair either way round: `less(a, b)` and `less(b, a)` fold alike), in which
+  /// order, as one number.
   static std::uint64_t& trace() {
     thread_local std::uint64_t folded = 0xcbf29ce484222325ULL;
     return folded;
   }
 
  private:
-  static std::uint64_t fold(std::uint64_t h, const model::Event& e) {
-    std::uint64_t bits = 0;
-    std::memcpy(&bits, &e.t, sizeof bits);
-    h ^= bits + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
-    return h ^ (static_cast<std::uint64_t>(static_cast<std::uint32_t>(e.lo)) << 32 |
-                static_cast<std::uint32_t>(e.hi + 2 * e.kind));
+  /// One event as a 64-bit number (its time's bits, its kind and particles mixed in).
+  static std::uint64_t mix(const model::Event& e) {
+    std::uint64_t h = 0;
+    std::memcpy(&h, &e.t, sizeof h);
+    h ^= (static_cast<std::uint64_t>(static_cast<std::uint32_t>(e.lo)) << 32 |
+          static_cast<std::uint32_t>(e.hi + 2 * e.kind)) * 0x9e3779b97f4a7c15ULL;
+    h ^= h >> 31;
+    return h * 0xbf58476d1ce4e5b9ULL;
   }
 };
 

@@ -171,10 +171,12 @@ def judge(text, want, hint=""):
                 f"beyond these, or a library heap padded with some, is not these moves). "
                 f"{hint}").strip(), text
     if got.get("trace") != want.get("trace"):  # as many, but not the same events compared
-        return (f"{text}, but not the comparisons of the binary heap's moves: other events "
-                f"compared, or in another order (the right child against the left, then the "
-                f"lesser against the sinking item; the new item against its parent). "
-                f"{hint}").strip(), text
+        return (f"{text}, but not the comparisons of the binary heap's moves: other pairs "
+                f"compared, or in another order. A push compares the new item with its parent "
+                f"(either way round); a pop compares the two children, then the lesser with the "
+                f"sinking item (comparing the item with each child in turn, as CLRS's "
+                f"MIN-HEAPIFY does, builds the same heap by other comparisons; handout 02 asks "
+                f"for these). {hint}").strip(), text
     return None, text
 
 

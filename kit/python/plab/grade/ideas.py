@@ -81,12 +81,12 @@ class Ideas:
             problem, text = self.rounds_follow(st, program, folder, counter, limit, text)
         if problem is None and kind != "scale":
             problem, text = self.work_shared(idea, run, text)
-        if problem is None and traced:  # the step's own comparisons against the kit's heap's
-            problem, measured = heap_probe.judge_step(run.read_output("report.json"), own_report,
-                                                      idea.get("hint", ""))
-            text += f"; {measured}" if measured else ""
         if problem is None and "heap_probe" in idea:  # stage 02's own heap, driven alone
             problem, measured = heap_probe.grade_probe(self, st, idea)
+            text += f"; {measured}" if measured else ""
+        if problem is None and traced:  # then the step's own comparisons against the kit's heap's
+            problem, measured = heap_probe.judge_step(run.read_output("report.json"), own_report,
+                                                      idea.get("hint", ""))
             text += f"; {measured}" if measured else ""
         if problem:
             self.idea_failed[st.sid] = f"the idea test of stage {st.sid} failed: {problem}"
