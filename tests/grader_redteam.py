@@ -1539,7 +1539,7 @@ def case_heap():
     heaps = shortcut_heaps((kit / "solutions/02-heap/heap.hpp").read_text())
     for label, said in (("library heap", "fewer than the binary heap's moves make"),
                         ("multiset", "a binary heap's array is"),
-                        ("sorting step", "none: the step does not order a heap")):
+                        ("sorting step", "the step's events must come from your MinHeap")):
         name = f"redteam-heap-{label.replace(' ', '-')}"
         root = scratch / name
         shutil.rmtree(root, ignore_errors=True)
@@ -1553,9 +1553,9 @@ def case_heap():
         idea = next((t for n, t in tests.items() if n.startswith("02: idea")), {})
         got = sum(t["score"] for t in correctness(tests, "02").values())
         check("heap", idea.get("status") == "failed" and said in idea.get("output", "") and
-              got == 0, f"stage 02 on a {label} heap scored {got} on correctness; its idea "
+              got == 0, f"stage 02 with its {label} scored {got} on correctness; its idea "
               f"test: {idea.get('output', 'none')[-300:]!r}")
-        print(f"stage 02 on a {label} heap: 0 on correctness; its idea test: "
+        print(f"stage 02 with its {label}: 0 on correctness; its idea test: "
               f"{idea.get('output', '')[-160:]}")
 
 

@@ -250,6 +250,8 @@ def release_tests(out, kit):
     # the release ships): a solution's heap passes, one whose pop sinks towards the greater child
     # fails, naming the handout's example
     solved = (kit / "solutions" / "02-heap" / "heap.hpp").read_text()
+    # (the step measured too: the solution's step.cpp, its heap the one under test)
+    shutil.copyfile(kit / "solutions" / "02-heap" / "step.cpp", out / "stages" / "02-heap" / "step.cpp")
     local_idea_test(build, out, kit, "02-heap/heap.hpp", "Heap", solved,
                     solved.replace("less_(items_[right], items_[left]) ? right : left",
                                    "less_(items_[left], items_[right]) ? right : left"),
@@ -262,6 +264,7 @@ def release_tests(out, kit):
           "stages/02-heap/heap.hpp:" in r.stderr and "plab_unused_here" in r.stderr,
           f"./plab did not say the compiler's warning about the student's heap.hpp:\n{r.stderr}")
     shutil.copyfile(kit / "stages" / "02-heap" / "heap.hpp", out / "stages" / "02-heap" / "heap.hpp")
+    shutil.copyfile(kit / "stages" / "02-heap" / "step.cpp", out / "stages" / "02-heap" / "step.cpp")
     print("stage 02's Heap test runs with the release's stored summary: a solution's heap passes, "
           "a pop towards the greater child fails; ./plab says a warning in the student's heap.hpp")
 
