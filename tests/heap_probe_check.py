@@ -35,10 +35,12 @@ probe_text = (kit / heap_probe.PROBE).read_text()
 assert "plab::MinHeap<plab::model::Event, plab::EventOrder>" in probe_text
 assert "MinHeap<model::Event, EventOrder> heap;" in (kit / "stages/02-heap/step.cpp").read_text()
 
-from heap_shortcuts import shortcut_heaps  # noqa: E402  (beside this file)
+from heap_shortcuts import honest_heaps, shortcut_heaps  # noqa: E402  (beside this file)
 
-shortcuts = shortcut_heaps((kit / "solutions" / "02-heap" / "heap.hpp").read_text())
-for name, (text, said) in shortcuts.items():
+
+def probe_problem(name, text):
+    """The probe's verdict (problem or None) on heap.hpp written as `text`, compiled and run in a
+    scratch folder of its own."""
     folder = scratch / "".join(c if c.isalnum() else "-" for c in name)
     folder.mkdir()
     (folder / "heap.hpp").write_text(text)
@@ -48,22 +50,17 @@ for name, (text, said) in shortcuts.items():
                           capture_output=True, text=True)
     assert made.returncode == 0, f"{name}: did not compile:\n{made.stderr[-2000:]}"
     out, problem = heap_probe.run_probe(folder / "probe", want["seed"], want["ops"])
-    if problem is None:
-        problem, _ = heap_probe.judge(out, want)
+    return problem or heap_probe.judge(out, want)[0]
+
+
+solved = (kit / "solutions" / "02-heap" / "heap.hpp").read_text()
+shortcuts = shortcut_heaps(solved)
+for name, (text, said) in shortcuts.items():
+    problem = probe_problem(name, text)
     assert problem and said in problem, f"{name}: {problem!r} (expected it to say {said!r})"
     print(f"{name}: fails: {problem[:110]}...")
-from heap_shortcuts import honest_heaps  # noqa: E402
-for name, text in honest_heaps((kit / "solutions" / "02-heap" / "heap.hpp").read_text()).items():
-    folder = scratch / "".join(c if c.isalnum() else "-" for c in name)
-    folder.mkdir()
-    (folder / "heap.hpp").write_text(text)
-    shutil.copyfile(kit / heap_probe.PROBE, folder / "heap_probe.cpp")
-    made = subprocess.run(heap_probe.compiler_command(cxx, kit / "kit" / "include", folder,
-                                                      folder / "probe"),
-                          capture_output=True, text=True)
-    assert made.returncode == 0, f"{name}: did not compile:\n{made.stderr[-2000:]}"
-    out, problem = heap_probe.run_probe(folder / "probe", want["seed"], want["ops"])
-    problem = problem or heap_probe.judge(out, want)[0]
+for name, text in honest_heaps(solved).items():
+    problem = probe_problem(name, text)
     assert problem is None, f"an honest heap ({name}) fails the probe: {problem}"
     print(f"{name}: passes (honest)")
 shutil.rmtree(scratch)

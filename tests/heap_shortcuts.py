@@ -60,16 +60,8 @@ def shortcut_heaps(solution):
         "a child's bound off by one": (
             solution[push_at:end_at].replace("if (left >= n) break;", "if (left > n) break;")
             .replace("right < n &&", "right <= n &&"), "an index past the array's end"),
-        "CLRS's sink (the same heap, other comparisons)": ("""  void push(const T& x) {
-        items_.push_back(x);
-        for (std::size_t k = items_.size() - 1; k > 0;) {
-          const std::size_t parent = (k - 1) / 2;
-          if (!less_(items_[k], items_[parent])) break;
-          std::swap(items_[k], items_[parent]);
-          k = parent;
-        }
-      }
-      void pop() {
+        "CLRS's sink (the same heap, other comparisons)": (
+            solution[push_at:solution.index("  void pop() {")] + """  void pop() {
         if (items_.size() > 1) items_.front() = std::move(items_.back());
         items_.pop_back();
         const std::size_t n = items_.size();

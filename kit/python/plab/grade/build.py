@@ -40,6 +40,28 @@ class Build:
         `sid` refuse in its code (`refuse_calls`)."""
         return symbols.refused_groups(self.rubric, sid)
 
+    def probe_beside(self, st, lang, name, source):
+        """A grader's probe of the student's code (stage 05's branch probe, stage 02's heap
+        probe): the compiler that configured the stages' build for `lang` ("CXX" or "CUDA"), and
+        a writable folder in the sandbox holding the stage's built sources with the probe's
+        `source` beside them as `name` (readable and writable by the sandbox's user). Returns
+        (compiler or None, the sources' folder, the probe's folder)."""
+        import re
+        src, build = self.built_in
+        folder = next((src / "stages").glob(f"{st.sid}-*"))
+        cache = (build / "CMakeCache.txt").read_text(errors="replace")
+        found = re.search(rf"^CMAKE_{lang}_COMPILER:\w+=(.+)$", cache, re.M)
+        if not found:
+            return None, src, None
+        probe_dir = self.sandbox.writable_dir(self.sandbox.box, "probe-")
+        for f in folder.iterdir():  # the stage's sources (read-only there) and the probe beside
+            if f.is_file():
+                shutil.copyfile(f, probe_dir / f.name)
+        (probe_dir / name).write_text(source)
+        for f in probe_dir.iterdir():
+            os.chmod(f, 0o666)
+        return found.group(1).strip(), src, probe_dir
+
     def build(self, stages, found):
         """Builds each stage's program from the submission's sources and the kit's own CMake, kit
         and runner, in the sandbox (the compiler sees the system, the kit's public part and the

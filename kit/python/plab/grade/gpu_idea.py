@@ -31,7 +31,6 @@ test says that it could not measure and is not held against the stage.
 import json
 import os
 import pathlib
-import re
 import shutil
 import subprocess
 import time
@@ -225,20 +224,10 @@ def branch_probe(g, st, hint):
     """The grader's probe of the student's branchless wall (branches.py), compiled to PTX in the
     sandbox beside the stage's sources with the nvcc that configured its build. Returns
     (problem or None, what was measured)."""
-    src, build = g.built_in
-    folder = next((src / "stages").glob(f"{st.sid}-*"))
-    cache = (build / "CMakeCache.txt").read_text(errors="replace")
-    found = re.search(r"^CMAKE_CUDA_COMPILER:\w+=(.+)$", cache, re.M)
-    if not found:
+    nvcc, src, probe_dir = g.probe_beside(st, "CUDA", branches.SOURCE, branches.PROBE)
+    if nvcc is None:
         return "the kit's build found no CUDA compiler to compile the branch probe with", ""
-    probe_dir = g.sandbox.writable_dir(g.sandbox.box, "probe-")
-    for f in folder.iterdir():  # the stage's sources (read-only there) and the probe beside them
-        if f.is_file():
-            shutil.copyfile(f, probe_dir / f.name)
-    (probe_dir / branches.SOURCE).write_text(branches.PROBE)
-    for f in probe_dir.iterdir():
-        os.chmod(f, 0o666)
-    cmd = branches.nvcc_command(found.group(1).strip(), "/plab/src/kit/include", "/plab/probe")
+    cmd = branches.nvcc_command(nvcc, "/plab/src/kit/include", "/plab/probe")
     run = g.sandbox.run(cmd, {"/plab/src": src}, {"/plab/probe": probe_dir}, "/plab/probe",
                         300, 2**28, memory=False)
     out = probe_dir / branches.OUTPUT

@@ -240,19 +240,15 @@ def grade_probe(g, st, idea):
     the student's heap.hpp on the grading's seed, judged against the same probe of the kit's own
     heap (solutions/02-heap/heap.hpp, compiled and run outside: the kit's code). Returns (problem
     or None, what was measured)."""
-    import os
-    import re
     import shutil
     import tempfile
     ops = int(idea["heap_probe"].get("ops", 20000))
     seed = (g.seed * 31 + 2) % 2**32
-    src, build = g.built_in
-    folder = next((src / "stages").glob(f"{st.sid}-*"))
-    cache = (build / "CMakeCache.txt").read_text(errors="replace")
-    found = re.search(r"^CMAKE_CXX_COMPILER:\w+=(.+)$", cache, re.M)
-    if not found:
+    cxx, src, probe_dir = g.probe_beside(st, "CXX", "heap_probe.cpp",
+                                         (g.kit / PROBE).read_text())
+    if cxx is None:
         return "the kit's build names no C++ compiler to compile the heap probe with", ""
-    cxx = found.group(1).strip()
+    folder = next((src / "stages").glob(f"{st.sid}-*"))
     # The kit's own heap, here
     with tempfile.TemporaryDirectory(prefix="plab-heap-") as tmp:
         tmp = pathlib.Path(tmp)
@@ -267,13 +263,6 @@ def grade_probe(g, st, idea):
             raise RuntimeError(f"the kit's own heap failed its probe: {problem}")
         want = summary(parse(out), seed, ops)
     # The student's, in the sandbox: compiled there (a header is the student's code) and run there
-    probe_dir = g.sandbox.writable_dir(g.sandbox.box, "heap-")
-    for f in folder.iterdir():
-        if f.is_file():
-            shutil.copyfile(f, probe_dir / f.name)
-    shutil.copyfile(g.kit / PROBE, probe_dir / "heap_probe.cpp")
-    for f in probe_dir.iterdir():
-        os.chmod(f, 0o666)
     cmd = compiler_command(cxx, "/plab/src/kit/include", "/plab/probe", "/plab/probe/probe")
     made = g.sandbox.run(cmd, {"/plab/src": src}, {"/plab/probe": probe_dir}, "/plab/probe", 300,
                          2**28, memory=False)
