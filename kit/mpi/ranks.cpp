@@ -532,7 +532,8 @@ void act(int command, const Ranks& r, Run& run, Particles* all) {
         if (c.name[0] == '\0') continue;
         const std::string name(c.name, strnlen(c.name, sizeof c.name));
         auto& by = run.traffic.bytes_by_call;
-        auto it = std::find_if(by.begin(), by.end(), [&](const auto& b) { return b.first == name; });
+        auto it = std::find_if(by.begin(), by.end(),
+                               [&](const auto& b) { return b.first == name; });
         if (it == by.end()) by.emplace_back(name, c.bytes);
         else it->second += c.bytes;
       }

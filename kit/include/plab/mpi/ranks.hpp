@@ -11,9 +11,10 @@
 /// MPI_Sendrecv_replace, the collectives, rooted or not, blocking or not (MPI_Alltoall,
 /// MPI_Alltoallv, MPI_Alltoallw, MPI_Allreduce, MPI_Allgather, MPI_Allgatherv, MPI_Bcast,
 /// MPI_Gather, MPI_Gatherv, MPI_Scatter, MPI_Scatterv, MPI_Reduce, MPI_Reduce_scatter,
-/// MPI_Reduce_scatter_block, MPI_Scan, MPI_Exscan: the bytes this rank sends to other ranks, 16 more a message for its envelope; an
-/// all-reduce counts its buffer once) and the calls that wait or poll (receives, probes, waits,
-/// tests, barriers: time), each calling the library's PMPI_ version; what could move data past
+/// MPI_Reduce_scatter_block, MPI_Scan, MPI_Exscan: the bytes this rank sends to other ranks, 16
+/// more a message for its envelope; an all-reduce counts its buffer once) and the calls that wait
+/// or poll (receives, probes, waits, tests, barriers: time), each calling the library's PMPI_
+/// version; what could move data past
 /// the count (one-sided windows, persistent requests, neighbourhood collectives, MPI I/O) ends the
 /// run with a message. The runner's summary (mpirun -np N build/bin/plab-run-08-IMPL SCENE), its
 /// `--report` JSON and `plab bench --stage 08 --ranks ...` give the sum of the bytes, the same

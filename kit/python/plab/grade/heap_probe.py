@@ -1,26 +1,33 @@
-"""Stage 02's heap (its exercises 1 and 2), measured outside the student's step.
+"""Stage 02's heap (its exercises 1 to 3), measured outside the student's code.
 
 The golden files compare bits, and any priority queue, or a scan of the candidates for their
-least, gives the same bits as a heap: so the kit drives the student's own MinHeap (heap.hpp)
-with a probe of its own (kit/grade/probes/heap_probe.cpp, compiled beside heap.hpp), through the
-handout's example and a long random run of pushes and pops of events like a step's, and compares
-what it prints with what the same probe prints of the kit's own heap: the same items popped (each
-the least of what is in, checked here), the same arrays after every 2000 operations (the binary
-heap's moves, which handout 02 states: a sorted array, a linear scan or an unordered list leave
-other arrays), and exactly as many comparisons (libstdc++'s std::pop_heap, which sinks the hole to
-a leaf and moves the last item up, Floyd's way, leaves the same arrays on random keys with fewer
-comparisons: 152 821 against 213 158 on one run; a library heap padded with dummy comparisons to
-look like the textbook's was within 5% of it, 223 906, and passed while twice the count was
-allowed, found by a student trial). The probe's heap is the step's own type, MinHeap<model::Event,
-plab::EventOrder>: a heap.hpp cannot tell the probe from the step by its types (a student trial's
-heap gave its step a std::multiset and the probe's own item type a heap).
+least, gives the same bits as a heap. So the kit measures twice:
 
-What is compared with is a summary (summary()): the example's arrays, digests of the arrays and
-of the pops, and the comparison count. The grader makes it on each grading's seed from the kit's
-solution (Grader.heap_probe, the student's probe run in its sandbox); the local test
-stage02.IMPL.Heap (`python3 -m plab.grade.heap_probe PROBE`) reads the summary of a fixed seed
-from kit/grade/probes/heap_probe.expected.json, which tests/heap_probe_check.py keeps equal to
-the kit's solution's. Neither holds a heap.
+- **The heap alone** (judge()): a probe of the kit's own (kit/grade/probes/heap_probe.cpp,
+  compiled beside the student's heap.hpp) drives the step's own type, MinHeap<model::Event,
+  plab::EventOrder>, through the handout's example and a long random run of pushes and pops of
+  events, and what it prints is compared with what the same probe prints of the kit's own heap:
+  each pop the earliest event in (checked here), the heap order of every array it prints, the
+  binary heap's array every 2000 operations (a sorted array, a scan, a list leave others), and the
+  comparisons EventOrder counted and traced: as many, and the same pairs in the same order.
+  libstdc++'s std::pop_heap (Floyd's way: the hole sunk to a leaf, the last item moved up) leaves
+  the same arrays with fewer comparisons (152 821 against 213 158 on one run); a red team padded
+  it to the exact count (its pairs are not the binary heap's: the trace tells); CLRS's
+  MIN-HEAPIFY builds the same heap by other comparisons (told apart, and named).
+- **The step** (judge_step()): the runner reports EventOrder's count and trace for a run of the
+  stage (`--report`: order_comparisons, order_trace), which must be the kit's solution's on the
+  same scene: the given candidates pushed in the given order into the student's heap, every event
+  popped. A red team's step that sorted, scanned or kept a set while the probe saw a heap (told
+  apart by a compiler flag or the probe's file name) failed here.
+
+The heap alone is compared with a summary (summary(): the example's arrays, digests of the arrays
+and of the pops, the comparisons and their trace). The grader makes it on each grading's seed
+from the kit's solution (grade_probe(), the student's probe compiled and run in its sandbox) and
+runs the step on its idea scene; the local test stage02.IMPL.Heap (`python3 -m
+plab.grade.heap_probe PROBE --program ... --reference ... --scene ...`) reads the summary of a
+fixed seed from kit/grade/probes/heap_probe.expected.json (tests/heap_probe_check.py keeps it the
+kit's solution's) and runs the student's stage and the kit's (the reference program in a
+student's copy) on one scene. Nothing here holds a heap.
 """
 import bisect
 import hashlib
