@@ -992,7 +992,7 @@ ROUNDS_03 = {
           const int o = cand.other[k];
           if (resolved[o]) continue;
           const model::Event e = model::pair_event_key(cand.time[k], i < o ? i : o, i < o ? o : i);
-          if (model::key_less(e, b)) b = e;
+          if (earlier(e, b)) b = e;
         }
         best[i] = b;
       }
@@ -1027,6 +1027,50 @@ ROUNDS_03 = {
     if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
   (void)resolved;
   (void)best;
+
+""",
+    # cheat: the rounds on one thread, one parallel region a round (the synchronisations follow
+    # the rounds) in which the other thread spins until the round is done (its CPU time even);
+    # `PAD` (the padded variant) has the spinner compare events too, so that both threads count
+    "serial-rounds": """  const model::Event none = model::pair_event_key(model::never(), n, n);
+  for (bool open = true; open;) {
+    std::atomic<bool> done{false};
+#pragma omp parallel num_threads(2)
+    if (omp_get_thread_num() == 0) {
+      for (int i = 0; i < n; ++i) {
+        if (resolved[i]) continue;
+        model::Event b = model::in_step(wall[i]) ? model::wall_event_key(wall[i], i) : none;
+        for (int k = cand.start[i]; k < cand.start[i + 1]; ++k) {
+          const int o = cand.other[k];
+          if (resolved[o]) continue;
+          const model::Event e = model::pair_event_key(cand.time[k], i < o ? i : o, i < o ? o : i);
+          if (earlier(e, b)) b = e;
+        }
+        best[i] = b;
+      }
+      open = false;
+      for (int i = 0; i < n; ++i) {
+        if (resolved[i]) continue;
+        const model::Event& e = best[i];
+        const int o = (e.lo == i) ? e.hi : e.lo;
+        if (!model::in_step(e.t) || e.kind == model::kWall ||
+            (best[o].lo == e.lo && best[o].hi == e.hi && best[o].kind == model::kPair)) {
+          if (model::in_step(e.t)) plan.accept_for(i, e);
+          resolved[i] = 1;
+        } else {
+          open = true;
+        }
+      }
+      done = true;
+    } else {
+      volatile double x = 0;
+      int k = 0;
+      while (!done.load()) {
+        x = x + 1;
+        PAD
+      }
+    }
+  }
 
 """,
 }
@@ -1286,16 +1330,36 @@ def rounds_03():
     """Stage 03's gradings of case rounds-03: (name, stage key, must pass the idea test)."""
     gradings = []
     sol03 = (kit / "solutions/03-openmp/step.cpp").read_text()
-    for variant, honest in (("one-region", True), ("sequential-selection", False)):
+    pad = ("if (k < n && model::in_step(wall[k])) {\n          const model::Event w = "
+           "model::wall_event_key(wall[k], k);\n          (void)earlier(w, w);\n        }\n"
+           "        k = (k + 1) % (n + 1);")
+    shared, rounds = "were not shared by its 2 threads", "are not the mutual-earliest rounds'"
+    for variant, body, honest, why in (
+            ("one-region", ROUNDS_03["one-region"], True, None),
+            ("sequential-selection", ROUNDS_03["sequential-selection"], False, None),
+            ("serial-rounds", ROUNDS_03["serial-rounds"].replace("PAD", ""), False, shared),
+            ("serial-rounds-padded", ROUNDS_03["serial-rounds"].replace("PAD", pad), False,
+             rounds)):
         name = f"redteam-rounds-{variant}"
         shutil.rmtree(scratch / name, ignore_errors=True)
         step = stage_folder(scratch / name, "03", "solutions/03-openmp")
-        text = between(sol03, "  const model::Event none", "  // EXERCISE 3", ROUNDS_03[variant])
+        text = between(sol03, "  const model::Event none", "  // EXERCISE 3", body)
         if text is None:
             print(f"SKIP {name}: stage 03's solution changed shape", flush=True)
             continue
-        step.write_text(text.replace("#include <omp.h>", "#include <omp.h>\n\n#include <algorithm>"))
-        gradings.append((name, "03", honest))
+        step.write_text(text.replace("#include <omp.h>", "#include <omp.h>\n\n#include <algorithm>"
+                                     "\n#include <atomic>"))
+        gradings.append((name, "03", honest, None, why))
+    name = "redteam-rounds-compare-then-skip"
+    skip = ("        if (resolved[o]) continue;\n", "        if (earlier(e, b)) b = e;")
+    if all(x in sol03 for x in skip):
+        shutil.rmtree(scratch / name, ignore_errors=True)
+        stage_folder(scratch / name, "03", "solutions/03-openmp").write_text(
+            sol03.replace(skip[0], "").replace(skip[1],
+                                               "        if (earlier(e, b) && !resolved[o]) b = e;"))
+        gradings.append((name, "03", False, None, rounds))
+    else:
+        print(f"SKIP {name}: stage 03's solution changed shape", flush=True)
     name = "redteam-rounds-padded"
     shutil.rmtree(scratch / name, ignore_errors=True)
     stage_folder(scratch / name, "03", "solutions/03-openmp").write_text(PADDED_03)
@@ -1386,7 +1450,11 @@ def case_rounds(sid):
     case a stage (rounds-03, rounds-07, rounds-08, so that CTest runs them side by side): 03
     that selects its events sequentially after a parallel phase, 03 that does so with its parallel
     phase split into 64 loops a step (a count that does not follow the rounds), 03 that keeps a thread burning
-    CPU beside a serial step, 07 with a linear scan for the next event, 08 whose rank 0 steps
+    CPU beside a serial step, 03 whose rounds run on one thread inside a parallel region a round
+    while the other thread spins (the synchronisations follow the rounds, the CPU time is shared:
+    its comparisons are not), the same with the spinner comparing events too, 03 that compares a
+    candidate before asking whether its partner is resolved (the right output, not the rounds'
+    comparisons), 07 with a linear scan for the next event, 08 whose rank 0 steps
     everything through gathers and scatters must score nothing on correctness; 03 written as one
     parallel region with dynamic and guided `omp for` loops keeps every correctness point."""
     gradings = {"03": rounds_03, "07": rounds_07, "08": rounds_08}[sid]()

@@ -35,7 +35,7 @@ SLIPS = [
     ("02", "return model::key_less(b, a);", "return a.t > b.t;"),
     ("02", "if (model::in_step(e.t)) heap.push(e);",
      "if (e.t > 0 && model::in_step(e.t)) heap.push(e);"),
-    ("03", "if (model::key_less(e, b)) b = e;", "if (e.t <= b.t) b = e;"),
+    ("03", "if (earlier(e, b)) b = e;", "if (earlier(e, b) || e.t == b.t) b = e;"),
     ("03", "std::vector<FoundPair>& mine = found[omp_get_thread_num()];",
      "std::vector<FoundPair>& mine = found[0];"),
 ]

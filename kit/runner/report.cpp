@@ -60,7 +60,11 @@ void report(const Options& o, const RunStats& stats) {
         // A stage whose heap is ordered by plab::EventOrder (02): its comparisons on this thread
         // (the steps'), counted and traced; the grader compares them with the kit's heap's
         {"order_comparisons", EventOrder::count()},
-        {"order_trace", format_trace(EventOrder::trace())}};
+        {"order_trace", format_trace(EventOrder::trace())},
+        // A stage whose rounds compare with it (03): the comparisons of events in the step by
+        // thread and their later events summed; the grader compares them with plab-rounds'
+        {"order_step_comparisons", EventOrder::in_step_by_thread()},
+        {"order_later_sum", format_trace(EventOrder::later_sum())}};
     const std::string text = j.dump(2) + "\n";
     std::fputs(text.c_str(), file.get());
     file.commit();

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "plab/candidates.hpp"
+#include "plab/event_order.hpp"
 #include "plab/stage.hpp"
 
 namespace plab {
@@ -44,6 +45,7 @@ void step(const Box& box, Particles& p) {
 
   // EXERCISE 2: rounds until every particle is resolved. (a) In parallel, each unresolved
   // particle finds its earliest event: its wall, or a candidate pair with an unresolved partner.
+  // Compare two events with earlier(a, b): model.md's order, counted by the kit on each thread.
   // (b) In parallel, each unresolved particle accepts its choice when it is a wall, no event, or
   // a pair its partner chose too; each iteration writes only its own particle, and a reduction
   // over the particles says whether another round is needed.
@@ -51,6 +53,7 @@ void step(const Box& box, Particles& p) {
   plan.reset(n);
   std::vector<char> resolved(n, 0);
   std::vector<model::Event> best(n);
+  const EventOrder earlier;  // earlier(a, b): whether event a comes before b (model::key_less())
   const model::Event none = model::pair_event_key(model::never(), n, n);
   for (bool open = true; open;) {
 #pragma omp parallel for schedule(static)
@@ -61,7 +64,7 @@ void step(const Box& box, Particles& p) {
         const int o = cand.other[k];
         if (resolved[o]) continue;
         const model::Event e = model::pair_event_key(cand.time[k], i < o ? i : o, i < o ? o : i);
-        if (model::key_less(e, b)) b = e;
+        if (earlier(e, b)) b = e;
       }
       best[i] = b;
     }

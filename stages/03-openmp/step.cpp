@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "plab/candidates.hpp"
+#include "plab/event_order.hpp"
 #include "plab/stage.hpp"
 
 namespace plab {
@@ -35,6 +36,7 @@ void step([[maybe_unused]] const Box& box, Particles& p) {
 
   // EXERCISE 2: rounds until every particle is resolved. (a) In parallel, each unresolved
   // particle finds its earliest event: its wall, or a candidate pair with an unresolved partner.
+  // Compare two events with earlier(a, b): model.md's order, counted by the kit on each thread.
   // (b) In parallel, each unresolved particle accepts its choice when it is a wall, no event, or
   // a pair its partner chose too; each iteration writes only its own particle
   // (plab::Plan::accept_for()), and a reduction over the particles says whether another round is
@@ -43,6 +45,7 @@ void step([[maybe_unused]] const Box& box, Particles& p) {
   plan.reset(n);
   std::vector<char> resolved(n, 0);
   std::vector<model::Event> best(n);
+  [[maybe_unused]] const EventOrder earlier;  // earlier(a, b): whether a comes before b
   PLAB_EXERCISE(2, "select events in mutual-earliest rounds");
 
   // EXERCISE 3: apply the chosen events in parallel (plab::apply_one() writes each particle once).

@@ -1,15 +1,24 @@
 /// \file event_order.hpp
-/// \brief model.md's order of events as a heap's `Less`: plab::model::key_less(), counting the
-/// comparisons it makes and folding each into a trace. Stage 02's step orders its MinHeap with
-/// it; the runner reports the count and the trace of a run (`--report`: order_comparisons,
-/// order_trace), and the grader compares them with the kit's own heap's on the same scene: the
-/// same candidates pushed in the same order into a binary heap and popped one by one make the
-/// same comparisons of the same events, which a sort, a scan, a set or a library heap do not. The
-/// kit's heap probe (kit/grade/probes/heap_probe.cpp) reads them too.
+/// \brief model.md's order of events as a comparator: plab::model::key_less(), counting the
+/// comparisons it makes on each thread and folding each into a trace. Stage 02's step orders its
+/// MinHeap with it; stage 03's rounds compare their events with it. The runner reports the count
+/// and the trace of a run (`--report`: order_comparisons, order_comparisons_by_thread,
+/// order_trace), and the grader compares them with the kit's own:
+/// - stage 02: the same candidates pushed in the same order into a binary heap and popped one by
+///   one make the same comparisons of the same events, which a sort, a scan, a set or a library
+///   heap do not. The kit's heap probe (kit/grade/probes/heap_probe.cpp) reads them too;
+/// - stage 03: the comparisons of two events in the step, and the later event of each summed
+///   over every thread (order_step_comparisons by thread, order_later_sum). Mutual-earliest
+///   rounds make the same ones however their loops are scheduled and their candidates ordered
+///   (in a scan for the least, each event but the least is the later of exactly one comparison),
+///   so the grader compares them with plab-rounds' (the kit's rounds), and asks each thread for a
+///   share: a selection on one thread makes them all on that thread.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <cstring>
+#include <vector>
 
 #include "plab/model.hpp"
 
@@ -17,27 +26,82 @@ namespace plab {
 
 /// The earlier of two events by model.md's key (time, then wall before pair, then indices).
 struct EventOrder {
-  /// Whether `a` comes before `b` (model::key_less()), counted and traced.
+  /// Threads whose comparisons are tallied apart (the first to compare; later ones count alone).
+  static constexpr int kThreads = 256;
+
+  /// Whether `a` comes before `b` (model::key_less()), counted and traced on this thread.
   bool operator()(const model::Event& a, const model::Event& b) const {
-    ++count();
+    Tally& mine = tally();
+    ++mine.count;
     const std::uint64_t x = mix(a), y = mix(b);  // the pair, whichever way round it is asked
-    trace() = (trace() ^ ((x + y) ^ (x * y))) * 0x100000001b3ULL;
-    return model::key_less(a, b);
+    mine.trace = (mine.trace ^ ((x + y) ^ (x * y))) * 0x100000001b3ULL;
+    const bool less = model::key_less(a, b);
+    if (model::in_step(a.t) && model::in_step(b.t)) {  // (a wall or "none" after the step: not)
+      ++mine.in_step;
+      mine.later += less ? y : x;
+    }
+    return less;
   }
   /// The comparisons made so far on this thread.
-  static long long& count() {
-    thread_local long long made = 0;
-    return made;
-  }
+  static long long& count() { return tally().count; }
   /// The comparisons so far on this thread, folded in order: which pairs of events were
   /// compared (each pair either way round: `less(a, b)` and `less(b, a)` fold alike), in which
   /// order, as one number.
-  static std::uint64_t& trace() {
-    thread_local std::uint64_t folded = 0xcbf29ce484222325ULL;
-    return folded;
+  static std::uint64_t& trace() { return tally().trace; }
+  /// The comparisons of each thread that made any, in the order the threads first compared
+  /// (read it when no thread compares: after the step's parallel loops have ended).
+  static std::vector<long long> by_thread() {
+    std::vector<long long> counts;
+    for (int k = 0; k < used(); ++k)
+      if (slots()[k].count > 0) counts.push_back(slots()[k].count);
+    return counts;
+  }
+  /// The comparisons of two events in the step (model::in_step()) of each thread that made any,
+  /// in the order the threads first compared (read as by_thread()).
+  static std::vector<long long> in_step_by_thread() {
+    std::vector<long long> counts;
+    for (int k = 0; k < used(); ++k)
+      if (slots()[k].in_step > 0) counts.push_back(slots()[k].in_step);
+    return counts;
+  }
+  /// The later event of every comparison of two events in the step, on every thread, summed
+  /// (each event as a 64-bit number): the same for any order of the comparisons and any split
+  /// of them among threads.
+  static std::uint64_t later_sum() {
+    std::uint64_t sum = 0;
+    for (int k = 0; k < used(); ++k) sum += slots()[k].later;
+    return sum;
   }
 
  private:
+  /// One thread's comparisons and trace, on a cache line of its own.
+  struct alignas(64) Tally {
+    long long count = 0;                          //!< comparisons
+    std::uint64_t trace = 0xcbf29ce484222325ULL;  //!< the comparisons folded in order
+    long long in_step = 0;                        //!< comparisons of two events in the step
+    std::uint64_t later = 0;                      //!< their later events, summed
+  };
+  /// The tallies of the first kThreads threads to compare.
+  static Tally* slots() {
+    static Tally all[kThreads];
+    return all;
+  }
+  /// How many threads have taken a tally.
+  static std::atomic<int>& next() {
+    static std::atomic<int> taken{0};
+    return taken;
+  }
+  /// The tallies taken.
+  static int used() { return next().load() < kThreads ? next().load() : kThreads; }
+  /// This thread's tally: a slot on its first comparison, or (past kThreads threads) its own.
+  static Tally& tally() {
+    thread_local Tally own;
+    thread_local Tally* mine = [] {
+      const int k = next().fetch_add(1);
+      return k < kThreads ? &slots()[k] : &own;
+    }();
+    return *mine;
+  }
   /// One event as a 64-bit number (its time's bits, its kind and particles mixed in).
   static std::uint64_t mix(const model::Event& e) {
     std::uint64_t h = 0;

@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "plab/event_order.hpp"
 #include "plab/greedy.hpp"
 #include "plab/model.hpp"
 
@@ -47,6 +48,7 @@ Plan plan_in_rounds(const Box& box, const Particles& p, int& rounds) {
   std::vector<char> resolved(n, 0);
   std::vector<model::Event> best(n);
   const model::Event none = model::pair_event_key(model::never(), n, n);
+  const EventOrder earlier;  // counted, as stage 03's rounds are (plab-rounds reads the counts)
   rounds = 0;
   for (bool open = true; open; ++rounds) {
     for (int i = 0; i < n; ++i) {
@@ -54,7 +56,7 @@ Plan plan_in_rounds(const Box& box, const Particles& p, int& rounds) {
       model::Event b = model::in_step(wall[i]) ? model::wall_event_key(wall[i], i) : none;
       for (const auto& [t, o] : cand[i]) {
         const model::Event e = model::pair_event_key(t, i < o ? i : o, i < o ? o : i);
-        if (!resolved[o] && model::key_less(e, b)) b = e;
+        if (!resolved[o] && earlier(e, b)) b = e;
       }
       best[i] = b;
     }

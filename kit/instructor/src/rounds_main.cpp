@@ -1,12 +1,17 @@
 /// \file rounds_main.cpp
 /// \brief `plab-rounds SCENE`: the mutual-earliest rounds that each step of a scene needs
 /// (plan_in_rounds(), oracle.hpp), as JSON on stdout: `{"n": N, "steps": S, "rounds": [r0, ...],
-/// "total": R}`. The grader's idea test of stage 03 reads it (instructor only: it steps the scene).
+/// "total": R, "comparisons": C, "later_sum": "HEX"}`: C the rounds' comparisons of two events in
+/// the step, HEX the sum of their later events (plab::EventOrder), which a stage 03 whose rounds
+/// compare with EventOrder makes alike. The grader's idea test of stage 03 reads it (instructor
+/// only: it steps the scene).
 #include <cstdio>
+#include <numeric>
 #include <exception>
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "plab/event_order.hpp"
 #include "plab/io.hpp"
 #include "plab/oracle.hpp"
 
@@ -27,8 +32,16 @@ int main(int argc, char** argv) {
       total += r;
       for (int i = 0; i < static_cast<int>(p.size()); ++i) plab::apply_one(scene.box, p, plan, i);
     }
-    const nlohmann::json j = {{"n", p.size()}, {"steps", scene.steps}, {"rounds", rounds},
-                              {"total", total}};
+    const std::vector<long long> made = plab::EventOrder::in_step_by_thread();
+    char later[24];
+    std::snprintf(later, sizeof later, "%016llx",
+                  static_cast<unsigned long long>(plab::EventOrder::later_sum()));
+    const nlohmann::json j = {{"n", p.size()},
+                              {"steps", scene.steps},
+                              {"rounds", rounds},
+                              {"total", total},
+                              {"comparisons", std::accumulate(made.begin(), made.end(), 0LL)},
+                              {"later_sum", later}};
     std::printf("%s\n", j.dump().c_str());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "plab-rounds: %s\n", e.what());

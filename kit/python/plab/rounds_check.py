@@ -9,7 +9,9 @@ reads libgomp's entry points, never your code): on a scene of N = 8000 at stage 
 density, then on the same scene with slow speeds (fewer rounds). The kit's plab-rounds says how
 many rounds each scene's steps need. A stage whose rounds are parallel loops passes at least one
 synchronisation a round on the first scene, and at least one fewer a round on the calmer one; a
-stage that selects its events on one thread passes a few a step on both. The thresholds are
+stage that selects its events on one thread passes a few a step on both. Its comparisons with
+earlier() (plab::EventOrder, counted by the kit on each thread) must be the rounds' own, as
+plab-rounds makes them, each of the threads making a share. The thresholds are
 stage 03's idea in kit/grade/rubric.json, the grade's own; the grade measures again on hidden
 scenes, and also each thread's share of the CPU time. CTest runs this as stage03.IMPL.Rounds.
 Exit 0: the selection follows the rounds; 1: it does not (or the stage failed); 2: bad use.
@@ -46,7 +48,8 @@ def run_counted(program, scene, counter, folder, threads):
     folder.mkdir()
     env = dict(os.environ, OMP_WAIT_POLICY="passive", **counter.env(program))
     done = subprocess.run([str(program), str(scene), "--quiet", "--threads", str(threads),
-                           "--out", "out.txt"], cwd=folder, env=env, capture_output=True,
+                           "--out", "out.txt", "--report", "report.json"], cwd=folder, env=env,
+                          capture_output=True,
                           text=True, timeout=300)
     if done.returncode != 0:
         tail = "\n".join(done.stderr.strip().splitlines()[-3:])
@@ -89,6 +92,8 @@ def main():
         if problem is None:
             problem, text = counter.check(idea, run, text)
         if problem is None:
+            problem, text = counter.comparisons(idea, run, text, a.threads)
+        if problem is None:
             calm_run, problem = run_counted(program, calm_scene, calm, tmp / "calm", a.threads)
             if problem is None:
                 problem, text = counter.follows(idea, calm, calm_run, text, "the scene")
@@ -96,8 +101,8 @@ def main():
     if problem:
         print(f"FAILED: {problem}")
         return 1
-    print("  the synchronisations follow the rounds. The grade measures this again on hidden "
-          "scenes, with each thread's share of the CPU time (handouts/working.md).")
+    print("  the synchronisations and the comparisons follow the rounds. The grade measures this "
+          "again on hidden scenes, with each thread's share of the CPU time (handouts/working.md).")
     return 0
 
 

@@ -25,7 +25,9 @@ Plan plan_step(const Box& box, const Particles& p);
 /// particle picks its earliest event among unresolved partners; a wall, no event, or a pair both
 /// picked is accepted). Returns the plan (the greedy one, as model.md proves) and sets `rounds`
 /// to the number of rounds, the last included: what the grader's idea test of stage 03 expects
-/// a submission's work-sharing loops to follow (`plab-rounds`).
+/// a submission's work-sharing loops to follow (`plab-rounds`). Its comparisons are made with
+/// plab::EventOrder, on the calling thread: `plab-rounds` reports their count and later-event sum
+/// for the grader to compare with a stage 03's.
 Plan plan_in_rounds(const Box& box, const Particles& p, int& rounds);
 
 /// One line per particle of `which` saying its event in the step that starts from `p`, e.g.

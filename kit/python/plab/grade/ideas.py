@@ -31,7 +31,9 @@ class Ideas:
                    threads each used `share` of the program's CPU time (read from /proc), and
                    (`min_syncs_per_round`) it ran that many OpenMP synchronisations for each
                    mutual-earliest round of the scene's steps (rounds_count.RoundsCount: counted
-                   by the kit's preloaded libplab-ompcount.so, the rounds from plab-rounds);
+                   by the kit's preloaded libplab-ompcount.so, the rounds from plab-rounds), and
+                   (`min_comparison_share`) its comparisons with plab::EventOrder are the
+                   rounds' (plab-rounds'), each thread making that share of them;
           ranks:   the stage under mpirun on `ranks` processes: it sent at most
                    `max_bytes_per_particle_step` and more than none (counted by the kit's MPI
                    layer), every rank did `share` of the steps' work outside MPI calls (measured
@@ -62,7 +64,9 @@ class Ideas:
         if counter:
             env = dict(env, **counter.env(program))
         # Ranks: the kit's MPI layer (not the student's code) counts the bytes the ranks send.
-        report = ["--report", "/plab/out/report.json"] if own_report else []
+        # Stage 03: the kit's runner reports the rounds' comparisons (plab::EventOrder)
+        compared = counter is not None and "min_comparison_share" in idea
+        report = ["--report", "/plab/out/report.json"] if own_report or compared else []
         run = self.run_program(program, scene, ["--quiet", "--threads", threads, "--out",
                                                 "/plab/out/out.txt", *report], limit,
                                max(self.rubric["limits"]["output_min_mb"] * 2**20,
@@ -77,6 +81,8 @@ class Ideas:
             problem, text = self.work_outside_mpi(idea, run, text, own_work(own_report))
         if problem is None and counter:
             problem, text = counter.check(idea, run, text)  # counted, so decided first
+        if problem is None and compared:
+            problem, text = counter.comparisons(idea, run, text, int(threads))
         if problem is None and counter and "calm_speed" in idea:
             problem, text = self.rounds_follow(st, program, folder, counter, limit, text)
         if problem is None and kind != "scale":

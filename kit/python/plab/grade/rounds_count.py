@@ -9,6 +9,14 @@ parallel loops passes at least two synchronisations a round; one that runs a par
 then selects sequentially, or keeps a thread busy beside a sequential program, a few a step;
 and (the idea's "calm_speed") the count must grow with the rounds: a second run on a calmer scene
 (slow speeds, fewer rounds) must pass fewer synchronisations, at least one fewer a round.
+
+And (the idea's "min_comparison_share") the rounds' own comparisons: stage 03 compares events
+with the kit's plab::EventOrder (`earlier` in step.cpp), which tallies on each thread the
+comparisons of two events in the step and sums the later event of each (the runner's `--report`).
+Mutual-earliest rounds make the same ones as plab-rounds' (which compares with EventOrder too),
+however their loops are scheduled and their candidates ordered; each of the run's threads must
+have made a share of them. A selection on one thread, empty barriers beside it, or a thread that
+burns CPU or compares for show, fails here.
 """
 import json
 import os
@@ -83,6 +91,48 @@ class RoundsCount:
                     f"mutual-earliest rounds ({self.rounds['rounds']}); a round of parallel loops "
                     f"passes at least one, so at least {need:g} were expected. "
                     f"{idea['hint'][:1].upper()}{idea['hint'][1:]}"), text
+        return None, text
+
+    def comparisons(self, idea, run, text, threads):
+        """(problem or None, text): the run's comparisons of events in the step (by thread) and
+        the sum of their later events (report.json, written by the kit's runner) are the rounds'
+        (plab-rounds), and each of the `threads` threads made at least min_comparison_share."""
+        hint = f"{idea['hint'][:1].upper()}{idea['hint'][1:]}"
+        try:
+            report = json.loads(run.read_output("report.json") or "")
+            made = [int(x) for x in report["order_step_comparisons"]]
+            later = str(report["order_later_sum"])
+        except (ValueError, KeyError, TypeError):
+            return "its run left no report of its comparisons (the kit's runner writes it)", text
+        total, need = sum(made), int(self.rounds["comparisons"])
+        text += f"; {total} comparisons of events in the step ({need} in the rounds)"
+        if total == 0:
+            return (f"its selection made no comparisons with earlier() (plab::EventOrder, given "
+                    f"in step.cpp), where the scene's {self.rounds['total']} rounds make {need}: "
+                    f"a round compares each unresolved particle's wall (when in the step) and "
+                    f"each candidate whose partner is unresolved with earlier(a, b), which the "
+                    f"kit counts on each thread; model::key_less() or comparing the times "
+                    f"yourself is not counted. {hint}"), text
+        if total != need or later != self.rounds["later_sum"]:
+            what = (f"{total} comparisons of two events in the step" if total != need else
+                    f"{total} comparisons of two events in the step, as many, but not of the "
+                    f"same events")
+            return (f"its comparisons with earlier() are not the mutual-earliest rounds': it made "
+                    f"{what}; the {self.rounds['total']} rounds of its "
+                    f"{self.rounds['steps']} steps make {need} (each round, each unresolved "
+                    f"particle compares its wall, when in the step, and each candidate whose "
+                    f"partner is still unresolved, once, keeping the earlier; a particle "
+                    f"resolved in an earlier round compares nothing). {hint}"), text
+        shares = sorted(made, reverse=True) + [0] * max(0, threads - len(made))
+        shown = " / ".join(f"{100 * x / total:.0f}%" for x in shares)
+        text += f", by thread {shown}"
+        least = idea["min_comparison_share"]
+        if len(made) < threads or shares[threads - 1] < least * total:
+            return (f"its rounds' comparisons were not shared by its {threads} threads: {shown} "
+                    f"of the {total} (each of {threads} threads at least {100 * least:.0f}%; "
+                    f"counted by the kit's earlier() on the thread that compares). A round's "
+                    f"loops are shared by the team: #pragma omp for inside a parallel region, "
+                    f"or #pragma omp parallel for. {hint}"), text
         return None, text
 
     def follows(self, idea, calm, calm_run, text, scene="the hidden scene"):
