@@ -1410,14 +1410,18 @@ def rounds_08():
     and a step around it). The gather on rank 0 every step is stopped by the bytes; rank 0 taking
     every particle once and stepping them alone, by the driver's check of the owners. Every rank
     stepping every particle after one all-gather is stopped twice over: by the work in all,
-    graded with the bytes' most as it was when that check was written (20), and by the bytes
+    graded with the bytes' most as it was when that check was written (20, no multiple of the
+    solution's), and by the bytes
     alone, the work checks off: what a stepper of the student's own, fast enough to pass them
     (a red team's, 2.5 times the kit's, scored 164 of 164 so in 2026-12-07's first session),
     meets; and the same with its all-gather made in place (MPI_IN_PLACE, which the kit once
-    counted as nothing: a red team's 164 of 164 in the second session). The solution itself, graded the same way, keeps every point."""
+    counted as nothing: a red team's 164 of 164 in the second session). The fastest speed summed
+    over the ranks instead of its maximum (the same output, about 3 times the bytes) is stopped
+    by the bytes against the kit's solution's. The solution itself, graded the same way, keeps
+    every point."""
     gradings = []
     bytes_over = "bytes a particle and step (at most"
-    slow = rubric_08("08-work", max_bytes_per_particle_step=20)
+    slow = rubric_08("08-work", max_bytes_per_particle_step=20, max_bytes_multiple=1e9)
     fast = rubric_08("08-fast", share=0, max_share=1, max_work_share=1, min_work_multiple=0,
                      max_work_multiple=1e9)
     for cheat, step, rubric, why in (
@@ -1435,6 +1439,14 @@ def rounds_08():
                 ("#include <vector>\n", "#include <cstring>\n#include <vector>\n")],
                 f"stage 08's solution no longer has the shape the {cheat} patch needs"):
             gradings.append((name, "08-ranks3", False, rubric, why))
+    # A slip, not a cheat: the fastest speed summed over the ranks (MPI_SUM for MPI_MAX), so the
+    # reach and the halo are about 3 times larger on 3 ranks, and the output is the same
+    name = "redteam-rounds-sum-08"
+    shutil.rmtree(scratch / name, ignore_errors=True)
+    if patched(name, "08", "solutions/08-mpi", [("MPI_DOUBLE, MPI_MAX, r.comm",
+                                                 "MPI_DOUBLE, MPI_SUM, r.comm")],
+               "stage 08's solution no longer reduces the fastest speed with MPI_MAX"):
+        gradings.append((name, "08-ranks3", False, None, "times the kit's solution's"))
     # The control: the solution itself keeps every point, its idea test passed (0.19 bytes a
     # particle and step on the idea scene, each rank 25% to 40% of the work).
     name = "redteam-rounds-honest-08"

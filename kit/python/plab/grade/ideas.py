@@ -76,7 +76,7 @@ class Ideas:
         problem = self.idea_run_problem(run, what, limit, own_seconds, expected, idea["hint"])
         text = f"the {what}: {run.seconds:.2f} s (the kit's solution: {own_seconds:.2f} s)"
         if problem is None and kind == "ranks" and "max_bytes_per_particle_step" in idea:
-            problem, text = self.bytes_sent(idea, run, text)  # counted, so decided first
+            problem, text = self.bytes_sent(idea, run, text, own_report)  # counted: first
         if problem is None and kind == "ranks" and "min_work_seconds" in idea:
             problem, text = self.work_outside_mpi(idea, run, text, own_work(own_report))
         if problem is None and counter:
@@ -195,7 +195,7 @@ class Ideas:
             return f"its output on the {what} differs from the reference's"
         return None
 
-    def bytes_sent(self, idea, run, text):
+    def bytes_sent(self, idea, run, text, own_report=None):
         """(problem or None, text): the bytes the ranks sent a particle and step, counted by the
         kit's MPI layer, against the rubric's most. The halo and the rounds' messages of a
         slow scene are a fraction of a byte; every particle sent to one rank and back, about 75
@@ -206,10 +206,15 @@ class Ideas:
         each step every particle must each receive them all once; at 32 bytes a particle's
         state (its position and velocity, the least that holds it exactly) over the scene's
         few steps, both are above the most (`gather_once()`). The scene's particles are moved by
-        a secret amount (`unguessable()`), so no rank can make them again from the generator."""
+        a secret amount (`unguessable()`), so no rank can make them again from the generator.
+        And (`max_bytes_multiple`) at most that many times the bytes of the kit's solution on the
+        same scene and ranks (`own_report`): the halo and the ghosts' values are the particles
+        within the reach of another rank's slab, so a reach larger than the fastest speed of any
+        rank (a sum of the ranks' speeds, say) sends more and prints the same."""
         sc, most = idea["scene"], idea["max_bytes_per_particle_step"]
         try:
-            sent = float(json.loads(run.read_output("report.json") or "")["bytes_sent"])
+            report = json.loads(run.read_output("report.json") or "")
+            sent = float(report["bytes_sent"])
         except (ValueError, KeyError, TypeError):
             return "its run left no report of the bytes its ranks sent", text
         per = sent / (sc["n"] * sc["steps"])
@@ -227,6 +232,23 @@ class Ideas:
                     f"{sc['steps']} steps to rank 0 and back is {one:.1f}, to every rank "
                     f"{every:.1f}, and every particle sent to one rank and back every step about "
                     f"75). {idea['hint']}"), text
+        multiple = idea.get("max_bytes_multiple")
+        if multiple and own_report:
+            own = json.loads(pathlib.Path(own_report).read_text())
+            own_sent = float(own["bytes_sent"])
+            if own_sent > 0 and sent > multiple * own_sent:
+                calls = sorted(set(own.get("bytes_by_call", {})) |
+                               set(report.get("bytes_by_call", {})))
+                by_call = ", ".join(
+                    f"{c} {float(report.get('bytes_by_call', {}).get(c, 0)):.0f} / "
+                    f"{float(own['bytes_by_call'].get(c, 0)):.0f}" for c in calls)
+                return (f"its ranks sent {sent:.0f} bytes in {sc['steps']} steps, "
+                        f"{sent / own_sent:.1f} times the kit's solution's {own_sent:.0f} on the "
+                        f"same scene and ranks (at most {multiple:g} times). By call, its bytes / "
+                        f"the solution's: {by_call}. The halo and the ghosts' values hold the "
+                        f"particles within the reach of another rank's slab, the reach from the "
+                        f"fastest speed of any rank: more bytes in those calls mean a larger "
+                        f"halo than the step needs. {idea['hint']}"), text
         return None, text
 
     def work_outside_mpi(self, idea, run, text, own=None):
