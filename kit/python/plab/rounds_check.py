@@ -3,7 +3,7 @@ mutual-earliest rounds of parallel loops, or by one thread after a parallel phas
 
   python3 -m plab.rounds_check --program build/bin/plab-run-03-student --kit-bin DIR --plab PLAB
 
-Your stage 03 runs twice on 2 threads, with the kit's counter of OpenMP synchronisations preloaded
+Your stage 03 runs twice on 2 threads (its schedule(runtime) loops on `static,1`), with the kit's counter of OpenMP synchronisations preloaded
 (libplab-ompcount.so: parallel regions started, barriers and ends of work-sharing loops passed; it
 reads libgomp's entry points, never your code): on a scene of N = 8000 at stage 03's grading
 density, then on the same scene with slow speeds (fewer rounds). The kit's plab-rounds says how
@@ -30,6 +30,9 @@ from plab.grade.rounds_count import LIBRARY, RoundsCount
 #: The scenes: stage 03's idea scene (kit/grade/rubric.json) made smaller at the same density, so
 #: that the check takes about a second (N = 8000: 26 rounds in 4 steps; calm: 4).
 N, L, STEPS, SEED = 8000, 1265, 4, 2019
+#: The schedule of the stage's schedule(runtime) loops in these runs, as graded: the same share of
+#: every loop's iterations to each thread however busy the machine is.
+SCHEDULE = "static,1"
 
 
 class LocalRun:
@@ -48,7 +51,8 @@ def run_counted(program, scene, counter, folder, threads):
     folder.mkdir()
     env = dict(os.environ, OMP_WAIT_POLICY="passive", **counter.env(program))
     done = subprocess.run([str(program), str(scene), "--quiet", "--threads", str(threads),
-                           "--out", "out.txt", "--report", "report.json"], cwd=folder, env=env,
+                           "--schedule", SCHEDULE, "--out", "out.txt", "--report", "report.json"],
+                          cwd=folder, env=env,
                           capture_output=True,
                           text=True, timeout=300)
     if done.returncode != 0:

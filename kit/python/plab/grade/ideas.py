@@ -11,7 +11,7 @@ import tempfile
 import time
 
 from plab.grade import heap_probe
-from plab.grade.rounds_count import RoundsCount
+from plab.grade.rounds_count import SCHEDULE, RoundsCount
 from plab.grade.build import unbuilt
 from plab.grade.run import stderr_tail
 
@@ -67,8 +67,10 @@ class Ideas:
         # Stage 03: the kit's runner reports the rounds' comparisons (plab::EventOrder)
         compared = counter is not None and "min_comparison_share" in idea
         report = ["--report", "/plab/out/report.json"] if own_report or compared else []
-        run = self.run_program(program, scene, ["--quiet", "--threads", threads, "--out",
-                                                "/plab/out/out.txt", *report], limit,
+        # Stage 03: schedule(runtime) loops shared the same way however busy the machine is
+        schedule = ["--schedule", SCHEDULE] if compared else []
+        run = self.run_program(program, scene, ["--quiet", "--threads", threads, *schedule,
+                                                "--out", "/plab/out/out.txt", *report], limit,
                                max(self.rubric["limits"]["output_min_mb"] * 2**20,
                                    4 * len(expected)), st, env=env, watch=kind != "scale",
                                ranks=idea.get("ranks", st.ranks),
@@ -157,8 +159,8 @@ class Ideas:
         threads = str(idea.get("threads", st.threads))
         expected, own_seconds = self.own_run(st, scene, threads, folder / "idea-calm.out")
         calm = RoundsCount(self.kit_bin, self.sandbox, scene)
-        run = self.run_program(program, scene, ["--quiet", "--threads", threads, "--out",
-                                                "/plab/out/out.txt"], limit,
+        run = self.run_program(program, scene, ["--quiet", "--threads", threads, "--schedule",
+                                                SCHEDULE, "--out", "/plab/out/out.txt"], limit,
                                max(self.rubric["limits"]["output_min_mb"] * 2**20,
                                    4 * len(expected)), st,
                                env=dict(st.env, OMP_WAIT_POLICY="passive", **calm.env(program)),

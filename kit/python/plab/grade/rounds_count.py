@@ -24,6 +24,9 @@ import secrets
 import shutil
 import subprocess
 
+#: The schedule of a counted run's schedule(runtime) loops (the runner's --schedule): each thread
+#: the same share of every loop's iterations, however busy the machine is.
+SCHEDULE = "static,1"
 LIBRARY = "libplab-ompcount.so"
 INSIDE = "/plab/ompcount.so"  # where the sandbox (bubblewrap) shows the library
 
@@ -117,12 +120,17 @@ class RoundsCount:
             what = (f"{total} comparisons of two events in the step" if total != need else
                     f"{total} comparisons of two events in the step, as many, but not of the "
                     f"same events")
+            why = ("more: are events of resolved partners compared, or resolved particles "
+                   "searched again?" if total > need else
+                   "fewer: is a candidate left out (every pair event of exercise 1 with t < 1 is "
+                   "one, pruned by nothing), or a wall not compared?" if total < need else
+                   "are the events compared the particles' own, keyed as the model keys them?")
             return (f"its comparisons with earlier() are not the mutual-earliest rounds': it made "
                     f"{what}; the {self.rounds['total']} rounds of its "
                     f"{self.rounds['steps']} steps make {need} (each round, each unresolved "
                     f"particle compares its wall, when in the step, and each candidate whose "
                     f"partner is still unresolved, once, keeping the earlier; a particle "
-                    f"resolved in an earlier round compares nothing). {hint}"), text
+                    f"resolved in an earlier round compares nothing); {why} {hint}"), text
         shares = sorted(made, reverse=True) + [0] * max(0, threads - len(made))
         shown = " / ".join(f"{100 * x / total:.0f}%" for x in shares)
         text += f", by thread {shown}"
@@ -130,9 +138,12 @@ class RoundsCount:
         if len(made) < threads or shares[threads - 1] < least * total:
             return (f"its rounds' comparisons were not shared by its {threads} threads: {shown} "
                     f"of the {total} (each of {threads} threads at least {100 * least:.0f}%; "
-                    f"counted by the kit's earlier() on the thread that compares). A round's "
-                    f"loops are shared by the team: #pragma omp for inside a parallel region, "
-                    f"or #pragma omp parallel for. {hint}"), text
+                    f"counted by the kit's earlier() on the thread that compares; the "
+                    f"schedule(runtime) loops ran on {SCHEDULE}). A round's loops are shared by "
+                    f"the team: #pragma omp for inside a parallel region, or #pragma omp "
+                    f"parallel for, not a round in `single` or on one thread; a hard-coded "
+                    f"dynamic or guided schedule in the rounds can leave one thread most of "
+                    f"them on a busy machine: use schedule(runtime) or static. {hint}"), text
         return None, text
 
     def follows(self, idea, calm, calm_run, text, scene="the hidden scene"):
