@@ -978,13 +978,13 @@ def between(text, start, end, new):
 
 # Stage 03's rounds (from "const model::Event none" up to the third exercise) written other ways.
 ROUNDS_03 = {
-    # honest: one parallel region, `omp for` loops inside with a dynamic schedule
+    # honest: one parallel region, `omp for` loops inside (the schedule the kit sets, and static)
     "one-region": """  const model::Event none = model::pair_event_key(model::never(), n, n);
   bool open = true;
 #pragma omp parallel
   {
     while (open) {
-#pragma omp for schedule(dynamic, 64)
+#pragma omp for schedule(runtime)
       for (int i = 0; i < n; ++i) {
         if (resolved[i]) continue;
         model::Event b = model::in_step(wall[i]) ? model::wall_event_key(wall[i], i) : none;
@@ -998,7 +998,7 @@ ROUNDS_03 = {
       }
 #pragma omp single
       open = false;
-#pragma omp for schedule(guided) reduction(|| : open)
+#pragma omp for schedule(static) reduction(|| : open)
       for (int i = 0; i < n; ++i) {
         if (resolved[i]) continue;
         const model::Event& e = best[i];
@@ -1301,6 +1301,23 @@ def serial_rounds_03(sol03):
             "      while (!done.load()) {\n        x = x + 1;\n        PAD\n      }\n    }\n  }\n\n")
 
 
+def single_rounds_03(sol03):
+    """The body of a slip (from "const model::Event none" up to the third exercise): the
+    solution's rounds without their pragmas, each round made in `#pragma omp single` of one
+    parallel region, by whichever thread comes first (the synchronisations follow the rounds, and
+    the rounds fall to both threads). "" when the solution changed shape."""
+    head, end = "  for (bool open = true; open;) {\n", "  // EXERCISE 3"
+    if head not in sol03 or end not in sol03:
+        return ""
+    loop = sol03[sol03.index(head):sol03.index(end)]
+    body = "".join(line for line in loop[len(head):loop.rindex("  }\n")].splitlines(True)
+                   if not line.lstrip().startswith("#pragma omp"))
+    none = "  const model::Event none = model::pair_event_key(model::never(), n, n);\n"
+    return (none + "  bool open = true;\n#pragma omp parallel\n  {\n    bool more = true;\n"
+            "    while (more) {\n#pragma omp single\n      {\n" + body + "      }\n"
+            "      more = open;\n#pragma omp barrier\n    }\n  }\n\n")
+
+
 def rounds_03():
     """Stage 03's gradings of case rounds-03: (name, stage key, must pass the idea test)."""
     gradings = []
@@ -1314,7 +1331,8 @@ def rounds_03():
             ("one-region", ROUNDS_03["one-region"], True, None),
             ("sequential-selection", ROUNDS_03["sequential-selection"], False, None),
             ("serial-rounds", serial.replace("PAD", ""), False, shared),
-            ("serial-rounds-padded", serial.replace("PAD", pad), False, rounds)):
+            ("serial-rounds-padded", serial.replace("PAD", pad), False, rounds),
+            ("single-rounds", single_rounds_03(sol03), False, "loop by loop")):
         name = f"redteam-rounds-{variant}"
         shutil.rmtree(scratch / name, ignore_errors=True)
         step = stage_folder(scratch / name, "03", "solutions/03-openmp")
@@ -1441,9 +1459,10 @@ def case_rounds(sid):
     while the other thread spins (the synchronisations follow the rounds, the CPU time is shared:
     its comparisons are not), the same with the spinner comparing events too, 03 that compares a
     candidate before asking whether its partner is resolved (the right output, not the rounds'
-    comparisons), 07 with a linear scan for the next event, 08 whose rank 0 steps
-    everything through gathers and scatters must score nothing on correctness; 03 written as one
-    parallel region with dynamic and guided `omp for` loops keeps every correctness point."""
+    comparisons), 03 whose rounds are each made in `single` by whichever thread comes first, 07
+    with a linear scan for the next event, 08 whose rank 0 steps everything through gathers and
+    scatters must score nothing on correctness; 03 written as one parallel region with `omp for`
+    loops inside (runtime and static schedules) keeps every correctness point."""
     gradings = {"03": rounds_03, "07": rounds_07, "08": rounds_08}[sid]()
     for name, key, honest, *variant in gradings:
         rubric, why = variant or (None, None)

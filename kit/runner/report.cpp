@@ -62,8 +62,10 @@ void report(const Options& o, const RunStats& stats) {
         {"order_comparisons", EventOrder::count()},
         {"order_trace", format_trace(EventOrder::trace())},
         // A stage whose rounds compare with it (03): the comparisons of events in the step by
-        // thread and their later events summed; the grader compares them with plab-rounds'
+        // thread, how evenly the threads shared them loop by loop (the kit's OpenMP counter's
+        // epochs), and their later events summed; the grader compares them with plab-rounds'
         {"order_step_comparisons", EventOrder::in_step_by_thread()},
+        {"order_balanced_comparisons", EventOrder::balanced(threads)},
         {"order_later_sum", format_trace(EventOrder::later_sum())}};
     const std::string text = j.dump(2) + "\n";
     std::fputs(text.c_str(), file.get());

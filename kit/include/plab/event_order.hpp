@@ -15,12 +15,21 @@
 ///   share: a selection on one thread makes them all on that thread.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
 #include <cstring>
+#include <map>
+#include <utility>
 #include <vector>
 
 #include "plab/model.hpp"
+
+/// The loops' clock of the kit's OpenMP counter (kit/instructor/src/ompcount.cpp, preloaded by the
+/// checks of stage 03): it moves on at every parallel region's start and end, barrier and loop
+/// end. A weak reference: in a run without the counter its address is null, and no epochs are
+/// kept.
+extern "C" __attribute__((weak)) std::atomic<long long> plab_omp_epoch;
 
 namespace plab {
 
@@ -39,6 +48,7 @@ struct EventOrder {
     if (model::in_step(a.t) && model::in_step(b.t)) {  // (a wall or "none" after the step: not)
       ++mine.in_step;
       mine.later += less ? y : x;
+      if (&plab_omp_epoch != nullptr) mine.note(plab_omp_epoch.load(std::memory_order_relaxed));
     }
     return less;
   }
@@ -64,6 +74,30 @@ struct EventOrder {
       if (slots()[k].in_step > 0) counts.push_back(slots()[k].in_step);
     return counts;
   }
+  /// How evenly `threads` threads shared the comparisons of two events in the step loop by loop:
+  /// for each epoch of the counter's clock (one loop, or the serial code between two), `threads`
+  /// times the least that any of the `threads` busiest threads made in it, summed. Work-sharing
+  /// loops that split their iterations evenly give nearly all of them; a round made by one thread
+  /// (in `single`, say) gives none of its comparisons, however the rounds fall to the threads.
+  /// -1 when the run kept no epochs (the counter was not loaded). Read it as by_thread().
+  static long long balanced(int threads) {
+    std::map<long long, std::vector<long long>> by_epoch;
+    bool kept = false;
+    for (int k = 0; k < used(); ++k) {
+      const Tally& t = slots()[k];
+      kept = kept || t.epoch >= 0;
+      for (const auto& [epoch, made] : t.runs) by_epoch[epoch].push_back(made);
+      if (t.in_epoch > 0) by_epoch[t.epoch].push_back(t.in_epoch);
+    }
+    if (!kept) return -1;
+    long long sum = 0;
+    for (auto& [epoch, made] : by_epoch) {
+      if (static_cast<int>(made.size()) < threads) continue;  // a thread made none in it
+      std::sort(made.begin(), made.end(), std::greater<>());
+      sum += threads * made[threads - 1];
+    }
+    return sum;
+  }
   /// The later event of every comparison of two events in the step, on every thread, summed
   /// (each event as a 64-bit number): the same for any order of the comparisons and any split
   /// of them among threads.
@@ -80,6 +114,19 @@ struct EventOrder {
     std::uint64_t trace = 0xcbf29ce484222325ULL;  //!< the comparisons folded in order
     long long in_step = 0;                        //!< comparisons of two events in the step
     std::uint64_t later = 0;                      //!< their later events, summed
+    long long epoch = -1;                         //!< the loops' clock at the last of them
+    long long in_epoch = 0;                       //!< how many of them in that epoch
+    std::vector<std::pair<long long, long long>> runs;  //!< (epoch, how many) of earlier epochs
+
+    /// One more of them, in `now`'s epoch.
+    void note(long long now) {
+      if (now != epoch) {
+        if (in_epoch > 0) runs.emplace_back(epoch, in_epoch);
+        epoch = now;
+        in_epoch = 0;
+      }
+      ++in_epoch;
+    }
   };
   /// The tallies of the first kThreads threads to compare.
   static Tally* slots() {

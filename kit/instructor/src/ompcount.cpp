@@ -2,7 +2,8 @@
 /// \brief libplab-ompcount.so: loaded into a stage 03 program by the grader (LD_PRELOAD), it
 /// counts the OpenMP synchronisations the program runs, outside the program's own code: every
 /// parallel region that libgomp starts, and every barrier and end of a work-sharing loop that
-/// thread 0 of a team passes. The grader's idea test of stage 03 compares them with the
+/// thread 0 of a team passes; and it keeps the loops' clock, plab_omp_epoch, by which the kit's
+/// plab::EventOrder tells which comparisons one loop made. The grader's idea test of stage 03 compares them with the
 /// mutual-earliest rounds the scene needs (`plab-rounds`): a stage that selects its events in
 /// rounds of parallel loops passes at least one a round; one that selects them sequentially after
 /// a parallel phase, or keeps a thread busy beside a sequential program, passes a few a step.
@@ -21,6 +22,14 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+
+/// The loops' clock that plab::EventOrder reads (event_order.hpp, a weak reference: absent, it
+/// keeps no epochs): one more as each parallel region starts and ends and as thread 0 of a team
+/// leaves a barrier or the end of a work-sharing loop, so that the comparisons one loop makes
+/// share an epoch and the next loop's, or serial code's after it, do not.
+extern "C" {
+__attribute__((visibility("default"))) std::atomic<long long> plab_omp_epoch{0};
+}
 
 namespace {
 
@@ -76,6 +85,11 @@ void passed() {
   if (first_of_team()) ++syncs;
 }
 
+/// After a barrier or a loop's end: the next epoch (thread 0 of the team, as it leaves).
+void left() {
+  if (first_of_team()) ++plab_omp_epoch;
+}
+
 }  // namespace
 
 extern "C" {
@@ -85,20 +99,32 @@ using Body = void (*)(void*);
 void GOMP_parallel(Body fn, void* data, unsigned threads, unsigned flags) {
   static const auto real = next<void (*)(Body, void*, unsigned, unsigned)>("GOMP_parallel");
   ++regions;
+  ++plab_omp_epoch;
   real(fn, data, threads, flags);
+  ++plab_omp_epoch;
 }
 
 unsigned GOMP_parallel_reductions(Body fn, void* data, unsigned threads, unsigned flags) {
   static const auto real =
       next<unsigned (*)(Body, void*, unsigned, unsigned)>("GOMP_parallel_reductions");
   ++regions;
-  return real(fn, data, threads, flags);
+  ++plab_omp_epoch;
+  const unsigned done = real(fn, data, threads, flags);
+  ++plab_omp_epoch;
+  return done;
 }
 
 void GOMP_parallel_start(Body fn, void* data, unsigned threads) {
   static const auto real = next<void (*)(Body, void*, unsigned)>("GOMP_parallel_start");
   ++regions;
+  ++plab_omp_epoch;
   real(fn, data, threads);
+}
+
+void GOMP_parallel_end() {
+  static const auto real = next<void (*)()>("GOMP_parallel_end");
+  real();
+  ++plab_omp_epoch;
 }
 
 // `#pragma omp parallel for` with a schedule other than static: one call starts the region.
@@ -108,7 +134,9 @@ void GOMP_parallel_start(Body fn, void* data, unsigned threads) {
     static const auto real =                                                                   \
         next<void (*)(Body, void*, unsigned, long, long, long, long, unsigned)>(#name);        \
     ++regions;                                                                                 \
+    ++plab_omp_epoch;                                                                          \
     real(fn, data, threads, start, end, incr, chunk, flags);                                   \
+    ++plab_omp_epoch;                                                                          \
   }
 PLAB_PARALLEL_LOOP(GOMP_parallel_loop_static)
 PLAB_PARALLEL_LOOP(GOMP_parallel_loop_dynamic)
@@ -123,7 +151,9 @@ PLAB_PARALLEL_LOOP(GOMP_parallel_loop_nonmonotonic_guided)
     static const auto real =                                                                   \
         next<void (*)(Body, void*, unsigned, long, long, long, unsigned)>(#name);              \
     ++regions;                                                                                 \
+    ++plab_omp_epoch;                                                                          \
     real(fn, data, threads, start, end, incr, flags);                                          \
+    ++plab_omp_epoch;                                                                          \
   }
 PLAB_PARALLEL_RUNTIME_LOOP(GOMP_parallel_loop_runtime)
 PLAB_PARALLEL_RUNTIME_LOOP(GOMP_parallel_loop_nonmonotonic_runtime)
@@ -136,24 +166,30 @@ void GOMP_barrier() {
   static const auto real = next<void (*)()>("GOMP_barrier");
   passed();
   real();
+  left();
 }
 
 bool GOMP_barrier_cancel() {
   static const auto real = next<bool (*)()>("GOMP_barrier_cancel");
   passed();
-  return real();
+  const bool cancelled = real();
+  left();
+  return cancelled;
 }
 
 void GOMP_loop_end() {
   static const auto real = next<void (*)()>("GOMP_loop_end");
   passed();
   real();
+  left();
 }
 
 bool GOMP_loop_end_cancel() {
   static const auto real = next<bool (*)()>("GOMP_loop_end_cancel");
   passed();
-  return real();
+  const bool cancelled = real();
+  left();
+  return cancelled;
 }
 
 }  // extern "C"

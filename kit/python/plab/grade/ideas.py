@@ -32,8 +32,9 @@ class Ideas:
                    (`min_syncs_per_round`) it ran that many OpenMP synchronisations for each
                    mutual-earliest round of the scene's steps (rounds_count.RoundsCount: counted
                    by the kit's preloaded libplab-ompcount.so, the rounds from plab-rounds), and
-                   (`min_comparison_share`) its comparisons with plab::EventOrder are the
-                   rounds' (plab-rounds'), each thread making that share of them;
+                   (`min_balanced_comparisons`) its comparisons with plab::EventOrder are the
+                   rounds' (plab-rounds'), that share of them split evenly among the threads
+                   loop by loop;
           ranks:   the stage under mpirun on `ranks` processes: it sent at most
                    `max_bytes_per_particle_step` and more than none (counted by the kit's MPI
                    layer), every rank did `share` of the steps' work outside MPI calls (measured
@@ -65,7 +66,7 @@ class Ideas:
             env = dict(env, **counter.env(program))
         # Ranks: the kit's MPI layer (not the student's code) counts the bytes the ranks send.
         # Stage 03: the kit's runner reports the rounds' comparisons (plab::EventOrder)
-        compared = counter is not None and "min_comparison_share" in idea
+        compared = counter is not None and "min_balanced_comparisons" in idea
         report = ["--report", "/plab/out/report.json"] if own_report or compared else []
         # Stage 03: schedule(runtime) loops shared the same way however busy the machine is
         schedule = ["--schedule", SCHEDULE] if compared else []

@@ -10,13 +10,15 @@ then selects sequentially, or keeps a thread busy beside a sequential program, a
 and (the idea's "calm_speed") the count must grow with the rounds: a second run on a calmer scene
 (slow speeds, fewer rounds) must pass fewer synchronisations, at least one fewer a round.
 
-And (the idea's "min_comparison_share") the rounds' own comparisons: stage 03 compares events
+And (the idea's "min_balanced_comparisons") the rounds' own comparisons: stage 03 compares events
 with the kit's plab::EventOrder (`earlier` in step.cpp), which tallies on each thread the
-comparisons of two events in the step and sums the later event of each (the runner's `--report`).
-Mutual-earliest rounds make the same ones as plab-rounds' (which compares with EventOrder too),
-however their loops are scheduled and their candidates ordered; each of the run's threads must
-have made a share of them. A selection on one thread, empty barriers beside it, or a thread that
-burns CPU or compares for show, fails here.
+comparisons of two events in the step, sums the later event of each, and files them by the
+preloaded library's loops' clock (plab_omp_epoch: one epoch a loop); the runner's `--report`
+gives them. Mutual-earliest rounds make the same ones as plab-rounds' (which compares with
+EventOrder too), however their loops are scheduled and their candidates ordered; and loops
+shared by the team split each loop's comparisons evenly among the threads. A selection on one
+thread, empty barriers beside it, a thread that burns CPU or compares for show, or rounds done
+one at a time in `single`, fails here.
 """
 import json
 import os
@@ -99,7 +101,9 @@ class RoundsCount:
     def comparisons(self, idea, run, text, threads):
         """(problem or None, text): the run's comparisons of events in the step (by thread) and
         the sum of their later events (report.json, written by the kit's runner) are the rounds'
-        (plab-rounds), and each of the `threads` threads made at least min_comparison_share."""
+        (plab-rounds), and at least min_balanced_comparisons of them were shared evenly by the
+        `threads` threads loop by loop (EventOrder::balanced(): in each epoch of the preloaded
+        counter's clock, `threads` times the least that a thread made)."""
         hint = f"{idea['hint'][:1].upper()}{idea['hint'][1:]}"
         try:
             report = json.loads(run.read_output("report.json") or "")
@@ -134,16 +138,24 @@ class RoundsCount:
         shares = sorted(made, reverse=True) + [0] * max(0, threads - len(made))
         shown = " / ".join(f"{100 * x / total:.0f}%" for x in shares)
         text += f", by thread {shown}"
-        least = idea["min_comparison_share"]
-        if len(made) < threads or shares[threads - 1] < least * total:
-            return (f"its rounds' comparisons were not shared by its {threads} threads: {shown} "
-                    f"of the {total} (each of {threads} threads at least {100 * least:.0f}%; "
-                    f"counted by the kit's earlier() on the thread that compares; the "
-                    f"schedule(runtime) loops ran on {SCHEDULE}). A round's loops are shared by "
-                    f"the team: #pragma omp for inside a parallel region, or #pragma omp "
-                    f"parallel for, not a round in `single` or on one thread; a hard-coded "
-                    f"dynamic or guided schedule in the rounds can leave one thread most of "
-                    f"them on a busy machine: use schedule(runtime) or static. {hint}"), text
+        balanced = int(report.get("order_balanced_comparisons", -1))
+        if balanced < 0:
+            return ("its run kept no epochs of its comparisons (the kit's OpenMP counter gives "
+                    "them to plab::EventOrder: the stage must use OpenMP, built by the kit's "
+                    "CMake)"), text
+        least = idea["min_balanced_comparisons"]
+        text += f", {100 * balanced / total:.0f}% shared evenly loop by loop"
+        if balanced < least * total:
+            return (f"its rounds' comparisons were not shared by its {threads} threads loop by "
+                    f"loop: {100 * balanced / total:.0f}% of the {total} were made in loops "
+                    f"(between two synchronisations) in which each thread made an equal part (at "
+                    f"least {100 * least:.0f}% must be; by thread over the whole run {shown}; "
+                    f"counted by the kit's earlier() on the thread that compares, the "
+                    f"schedule(runtime) loops on {SCHEDULE}). A round's loops are shared by the "
+                    f"team: #pragma omp for inside a parallel region, or #pragma omp parallel "
+                    f"for, not a round in `single` or on one thread; a dynamic or guided "
+                    f"schedule written into the rounds' loops can leave one thread most of a loop "
+                    f"on a busy machine: use schedule(runtime) or static. {hint}"), text
         return None, text
 
     def follows(self, idea, calm, calm_run, text, scene="the hidden scene"):

@@ -63,6 +63,9 @@ RULES = [
     (re.compile(r"(P?MPI_|GOMP_|omp_|kmp_|__kmpc_|cupti|cuda[A-Z]|cu[A-Z])\w*$"), "D",
      "defines {name}, a function of the MPI, OpenMP or CUDA libraries: it would replace the "
      "library's own (and the kit's measurement of it); give your function another name", False),
+    (re.compile(r"plab_\w+$"), "D",
+     "defines {name}, a name of the kit's own measurements (the OpenMP counter's loops' clock, "
+     "say): it would replace the kit's; give yours another name", False),
     (re.compile(r"cupti\w*$"), "U",
      "calls {name}: CUPTI is how the kit traces the GPU's work, not for a stage", False),
     (re.compile(r".*mpi_stage_any_cut"), "U",
