@@ -15,6 +15,7 @@ TEST(TestLog, ReadsEachResultLine) {
       " 25/199 Test #218: stage04.solution.Golden ...***Skipped   0.05 sec\n"
       " 26/199 Test #5: stage06.engine.Spec ........***Failed    0.97 sec\n"
       "what the test printed\n"
+      "      Start 162: stage03.student.AgainstOtherStage\n"
       "99% tests passed, 1 tests failed out of 199\n";
   const std::vector<TestResult> tests = parse_log(log);
   ASSERT_EQ(tests.size(), 3u);
@@ -23,7 +24,7 @@ TEST(TestLog, ReadsEachResultLine) {
   EXPECT_DOUBLE_EQ(tests[0].seconds, 3.80);
   EXPECT_EQ(tests[1].status, "Skipped");
   EXPECT_EQ(tests[2].status, "Failed");
-  EXPECT_EQ(tests[2].output, "what the test printed\n");
+  EXPECT_EQ(tests[2].output, "what the test printed\n");  // (not another test's Start line)
 }
 
 // CTest writes a failed PASS_REGULAR_EXPRESSION ending in "$\n" into the result line, so that

@@ -54,7 +54,9 @@ std::vector<TestResult> parse_log(const std::string& text) {
       continue;
     }
     if (line.find("% tests passed") != std::string::npos) in_output = false;
-    if (in_output) tests.back().output += line + "\n";
+    // CTest's "Start N: NAME" of another test, printed amid a failed test's output (ctest -j)
+    static const std::regex start_line(R"(^\s*Start\s+\d+: \S+\s*$)");
+    if (in_output && !std::regex_match(line, start_line)) tests.back().output += line + "\n";
   }
   return tests;
 }
