@@ -6,8 +6,9 @@
 /// (a particle that just had its event and was predicted again), earlier, to "never", to a time
 /// another particle already has. After every change it asks top() for the earliest event and
 /// compares it with the earliest of the times it set, by the queue's own order (the earlier time
-/// first; at the same time, the lower particle). The first wrong answer is described: the change
-/// that preceded it, the particle top() gave and the one that comes first. Queues of 1 to 1000
+/// first; at the same time, the lower particle), and reads the queue's own arrays: heap_ in heap
+/// order, each particle in it once with its prediction's time, at_ saying where. The first wrong
+/// answer or array is described, with the change that preceded it. Queues of 1 to 1000
 /// particles, 20 000 changes each; the library's bounds checks are on, so an index past the heap's
 /// end stops the probe with the change it happened in.
 ///
@@ -23,7 +24,15 @@
 #include <unistd.h>
 #include <vector>
 
+// The queue's own arrays are read too (its heap order, at_ in step): the stage's code is compiled
+// with its private members public, after every standard header it uses is in.
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <optional>
+#define private public
 #include PLAB_STEP_SOURCE
+#undef private
 
 namespace {
 
@@ -53,6 +62,44 @@ std::string time_text(double t) {
   return s;
 }
 
+/// What is wrong with the queue's arrays (heap_ in heap order, each particle in it once, at_
+/// saying where), or empty.
+std::string arrays_broken(const plab::EventQueue& q, int n) {
+  char text[512];
+  if (static_cast<int>(q.heap_.size()) != n || static_cast<int>(q.at_.size()) != n) {
+    std::snprintf(text, sizeof text, "heap_ holds %zu entries and at_ %zu, not one for each of "
+                  "the %d particles (an indexed heap stays N long)", q.heap_.size(),
+                  q.at_.size(), n);
+    return text;
+  }
+  for (int k = 0; k < n; ++k) {
+    const int i = q.heap_[k].i;
+    if (i < 0 || i >= n || q.at_[i] != k) {
+      std::snprintf(text, sizeof text, "heap_[%d] holds particle %d, but at_[%d] = %d: move "
+                    "entries with put(), which keeps at_ in step", k, i, i < 0 || i >= n ? 0 : i,
+                    i < 0 || i >= n ? -1 : q.at_[i]);
+      return text;
+    }
+    if (q.heap_[k].t != q.events_[i].t) {
+      std::snprintf(text, sizeof text, "heap_[%d] holds particle %d at %s, but its prediction is "
+                    "at %s: store the new time in its entry", k, i, time_text(q.heap_[k].t).c_str(),
+                    time_text(q.events_[i].t).c_str());
+      return text;
+    }
+    const int parent = (k - 1) / 2;
+    if (k > 0 && plab::EventQueue::earlier(q.heap_[k], q.heap_[parent])) {
+      std::snprintf(text, sizeof text, "heap_[%d] (particle %d, %s) comes before its parent "
+                    "heap_[%d] (particle %d, %s): the heap order is lost (every entry after its "
+                    "parent heap_[(k - 1) / 2]; a changed entry moves up while it comes before "
+                    "its parent, down while a child comes before it, to the earlier child)",
+                    k, i, time_text(q.heap_[k].t).c_str(), parent, q.heap_[parent].i,
+                    time_text(q.heap_[parent].t).c_str());
+      return text;
+    }
+  }
+  return "";
+}
+
 /// Drives a queue of n particles through `changes` changes; empty, or what went wrong.
 std::string drive(int n, int changes, std::mt19937_64& rng) {
   plab::EventQueue queue(n);
@@ -77,17 +124,22 @@ std::string drive(int n, int changes, std::mt19937_64& rng) {
     queue.set(plab::Event{t, plab::kCross, i, -1, 0, 0});
     alarm(0);
     time[i] = t;
+    const std::string move = t == old ? "the same time again"
+                             : first(t, i, old, i)
+                                 ? "an earlier time: its entry must move up, towards the root"
+                                 : "a later time: its entry must move down, each time to the "
+                                   "earlier of its two children";
     int best = 0;
     for (int q = 1; q < n; ++q)
       if (first(time[q], q, time[best], best)) best = q;
+    if (const std::string broken = arrays_broken(queue, n); !broken.empty()) {
+      char text[1024];
+      std::snprintf(text, sizeof text, "after %s (%s): %s", doing, move.c_str(), broken.c_str());
+      return text;
+    }
     const plab::Event& top = queue.top();
     if (top.i != best || top.t != time[best]) {
       const int got = top.i;
-      const std::string move = t == old ? "the same time again"
-                               : first(t, i, old, i)
-                                   ? "an earlier time: its entry must move up, towards the root"
-                                   : "a later time: its entry must move down, each time to the "
-                                     "earlier of its two children";
       char text[1024];
       std::snprintf(text, sizeof text,
                     "after %s (%s), top() gave particle %d (%s), but particle %d (%s) comes "

@@ -25,11 +25,13 @@
 
 #include "plab/model.hpp"
 
-/// The loops' clock of the kit's OpenMP counter (kit/instructor/src/ompcount.cpp, preloaded by the
-/// checks of stage 03): it moves on at every parallel region's start and end, barrier and loop
-/// end. A weak reference: in a run without the counter its address is null, and no epochs are
-/// kept.
+// The loops' clock of the kit's OpenMP counter (kit/instructor/src/ompcount.cpp, preloaded by the
+// checks of stage 03): it moves on at every parallel region's start and end, barrier and loop
+// end. A weak reference: in a run without the counter its address is null, and no epochs are
+// kept. (Left out of the docs: Doxygen does not read the attribute.)
+/// \cond
 extern "C" __attribute__((weak)) std::atomic<long long> plab_omp_epoch;
+/// \endcond
 
 namespace plab {
 

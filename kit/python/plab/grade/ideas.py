@@ -10,7 +10,7 @@ import subprocess
 import tempfile
 import time
 
-from plab.grade import heap_probe
+from plab.grade import heap_probe, queue_probe
 from plab.grade.rounds_count import SCHEDULE, RoundsCount
 from plab.grade.build import unbuilt
 from plab.grade.run import stderr_tail
@@ -26,7 +26,8 @@ class Ideas:
           scale:   a hidden scene too large for the idea the stage replaces (stage 02: O(N^3)
                    selection; 06: O(N^2) pair tests; 07: a linear scan for each event), under a
                    time limit that the kit's solution meets many times over, with the
-                   reference's output;
+                   reference's output; and (07's `queue_probe`) the event queue driven alone
+                   by the kit's probe (queue_probe.py);
           threads: the stage on `threads` OpenMP threads (waiting passively): at least two
                    threads each used `share` of the program's CPU time (read from /proc), and
                    (`min_syncs_per_round`) it ran that many OpenMP synchronisations for each
@@ -92,6 +93,9 @@ class Ideas:
             problem, text = self.work_shared(idea, run, text)
         if problem is None and "heap_probe" in idea:  # stage 02's own heap, driven alone
             problem, measured = heap_probe.grade_probe(self, st, idea)
+            text += f"; {measured}" if measured else ""
+        if problem is None and "queue_probe" in idea:  # stage 07's event queue, driven alone
+            problem, measured = queue_probe.grade_probe(self, st, idea)
             text += f"; {measured}" if measured else ""
         if problem is None and traced:  # then the step's own comparisons against the kit's heap's
             problem, measured = heap_probe.judge_step(run.read_output("report.json"), own_report,
