@@ -1292,19 +1292,28 @@ std::unique_ptr<Stepper> make_stepper(const Box& box, Particles& p, const StageO
 """
 
 
+def rounds_parts_03(sol03):
+    """(the "none" line, the rounds' loop head, its body without pragmas) of the solution's
+    rounds, or None when the solution changed shape."""
+    head, end = "  for (bool open = true; open;) {\n", "  // EXERCISE 3"
+    if head not in sol03 or end not in sol03:
+        return None
+    loop = sol03[sol03.index(head):sol03.index(end)]
+    body = "".join(line for line in loop[len(head):loop.rindex("  }\n")].splitlines(True)
+                   if not line.lstrip().startswith("#pragma omp"))
+    return "  const model::Event none = model::pair_event_key(model::never(), n, n);\n", head, body
+
+
 def serial_rounds_03(sol03):
     """The body of a cheat (from "const model::Event none" up to the third exercise): the
     solution's rounds without their pragmas, run by thread 0 of one parallel region a round (so
     the synchronisations follow the rounds) while thread 1 spins until the round is done (so the
     CPU time is shared); `PAD` marks where the spinner may compare events too. "" when the
     solution changed shape."""
-    head, end = "  for (bool open = true; open;) {\n", "  // EXERCISE 3"
-    if head not in sol03 or end not in sol03:
+    parts = rounds_parts_03(sol03)
+    if parts is None:
         return ""
-    loop = sol03[sol03.index(head):sol03.index(end)]
-    body = "".join(line for line in loop[len(head):loop.rindex("  }\n")].splitlines(True)
-                   if not line.lstrip().startswith("#pragma omp"))
-    none = "  const model::Event none = model::pair_event_key(model::never(), n, n);\n"
+    none, head, body = parts
     return (none + head + "    std::atomic<bool> done{false};\n#pragma omp parallel num_threads(2)\n"
             "    if (omp_get_thread_num() == 0) {\n" + body + "      done = true;\n"
             "    } else {\n      volatile double x = 0;\n      int k = 0;\n"
@@ -1316,13 +1325,10 @@ def single_rounds_03(sol03):
     solution's rounds without their pragmas, each round made in `#pragma omp single` of one
     parallel region, by whichever thread comes first (the synchronisations follow the rounds, and
     the rounds fall to both threads). "" when the solution changed shape."""
-    head, end = "  for (bool open = true; open;) {\n", "  // EXERCISE 3"
-    if head not in sol03 or end not in sol03:
+    parts = rounds_parts_03(sol03)
+    if parts is None:
         return ""
-    loop = sol03[sol03.index(head):sol03.index(end)]
-    body = "".join(line for line in loop[len(head):loop.rindex("  }\n")].splitlines(True)
-                   if not line.lstrip().startswith("#pragma omp"))
-    none = "  const model::Event none = model::pair_event_key(model::never(), n, n);\n"
+    none, _, body = parts
     return (none + "  bool open = true;\n#pragma omp parallel\n  {\n    bool more = true;\n"
             "    while (more) {\n#pragma omp single\n      {\n" + body + "      }\n"
             "      more = open;\n#pragma omp barrier\n    }\n  }\n\n")

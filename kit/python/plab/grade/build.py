@@ -62,6 +62,18 @@ class Build:
             os.chmod(f, 0o666)
         return found.group(1).strip(), src, probe_dir
 
+    def compile_probe(self, cmd, src, probe_dir, what):
+        """Runs the compiler command `cmd` of a probe in the sandbox (the submission's sources
+        read-only at /plab/src, the probe's folder from probe_beside() writable at /plab/probe),
+        which must write /plab/probe/probe. Returns None, or why it did not compile."""
+        made = self.sandbox.run(cmd, {"/plab/src": src}, {"/plab/probe": probe_dir}, "/plab/probe",
+                                300, 2**28, memory=False)
+        program = probe_dir / "probe"
+        if made.rc != 0 or made.reason or not program.is_file() or program.is_symlink():
+            log = pathlib.Path(made.stdout).read_text(errors="replace") + made.stderr
+            return f"the grader's probe of {what} did not compile: {(made.reason or log)[-600:]}"
+        return None
+
     def build(self, stages, found):
         """Builds each stage's program from the submission's sources and the kit's own CMake, kit
         and runner, in the sandbox (the compiler sees the system, the kit's public part and the

@@ -271,13 +271,9 @@ def grade_probe(g, st, idea):
         want = summary(parse(out), seed, ops)
     # The student's, in the sandbox: compiled there (a header is the student's code) and run there
     cmd = compiler_command(cxx, "/plab/src/kit/include", "/plab/probe", "/plab/probe/probe")
-    made = g.sandbox.run(cmd, {"/plab/src": src}, {"/plab/probe": probe_dir}, "/plab/probe", 300,
-                         2**28, memory=False)
-    program = probe_dir / "probe"
-    if made.rc != 0 or made.reason or not program.is_file() or program.is_symlink():
-        log = pathlib.Path(made.stdout).read_text(errors="replace") + made.stderr
-        return (f"the grader's probe of MinHeap (heap.hpp) did not compile: "
-                f"{(made.reason or log)[-600:]}"), ""
+    problem = g.compile_probe(cmd, src, probe_dir, "MinHeap (heap.hpp)")
+    if problem:
+        return problem, ""
     run = g.sandbox.run(["/plab/probe/probe", str(seed), str(ops)], {"/plab/probe": probe_dir}, {},
                         "/plab/probe", 60, 2**26)
     text = pathlib.Path(run.stdout).read_text(errors="replace")

@@ -37,13 +37,9 @@ def grade_probe(g, st, idea):
         raise RuntimeError("no kit library (libplab_kit.a) to link the queue probe with")
     shutil.copyfile(library, probe_dir / library.name)
     cmd = compiler_command(cxx, "/plab/src/kit/include", "/plab/probe", "/plab/probe/probe")
-    made = g.sandbox.run(cmd, {"/plab/src": src}, {"/plab/probe": probe_dir}, "/plab/probe", 300,
-                         2**28, memory=False)
-    program = probe_dir / "probe"
-    if made.rc != 0 or made.reason or not program.is_file() or program.is_symlink():
-        log = pathlib.Path(made.stdout).read_text(errors="replace") + made.stderr
-        return (f"the grader's probe of the event queue (EventQueue in step.cpp) did not "
-                f"compile: {(made.reason or log)[-600:]}"), ""
+    problem = g.compile_probe(cmd, src, probe_dir, "the event queue (EventQueue in step.cpp)")
+    if problem:
+        return problem, ""
     run = g.sandbox.run(["/plab/probe/probe"], {"/plab/probe": probe_dir}, {}, "/plab/probe", 120,
                         2**26)
     text = pathlib.Path(run.stdout).read_text(errors="replace").strip()
