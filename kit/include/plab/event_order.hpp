@@ -2,8 +2,8 @@
 /// \brief model.md's order of events as a comparator: plab::model::key_less(), counting the
 /// comparisons it makes on each thread and folding each into a trace. Stage 02's step orders its
 /// MinHeap with it; stage 03's rounds compare their events with it. The runner reports the count
-/// and the trace of a run (`--report`: order_comparisons, order_comparisons_by_thread,
-/// order_trace), and the grader compares them with the kit's own:
+/// and the trace of a run (`--report`: order_comparisons, order_trace, order_step_comparisons,
+/// order_balanced_comparisons, order_later_sum), and the grader compares them with the kit's own:
 /// - stage 02: the same candidates pushed in the same order into a binary heap and popped one by
 ///   one make the same comparisons of the same events, which a sort, a scan, a set or a library
 ///   heap do not. The kit's heap probe (kit/grade/probes/heap_probe.cpp) reads them too;
@@ -11,8 +11,9 @@
 ///   over every thread (order_step_comparisons by thread, order_later_sum). Mutual-earliest
 ///   rounds make the same ones however their loops are scheduled and their candidates ordered
 ///   (in a scan for the least, each event but the least is the later of exactly one comparison),
-///   so the grader compares them with plab-rounds' (the kit's rounds), and asks each thread for a
-///   share: a selection on one thread makes them all on that thread.
+///   so the grader compares them with plab-rounds' (the kit's rounds); and how evenly the
+///   threads shared them loop by loop (balanced(), by the kit's OpenMP counter's clock): a
+///   selection on one thread, or a round in `single`, makes each loop's on one thread.
 #pragma once
 
 #include <algorithm>
@@ -60,16 +61,9 @@ struct EventOrder {
   /// compared (each pair either way round: `less(a, b)` and `less(b, a)` fold alike), in which
   /// order, as one number.
   static std::uint64_t& trace() { return tally().trace; }
-  /// The comparisons of each thread that made any, in the order the threads first compared
-  /// (read it when no thread compares: after the step's parallel loops have ended).
-  static std::vector<long long> by_thread() {
-    std::vector<long long> counts;
-    for (int k = 0; k < used(); ++k)
-      if (slots()[k].count > 0) counts.push_back(slots()[k].count);
-    return counts;
-  }
   /// The comparisons of two events in the step (model::in_step()) of each thread that made any,
-  /// in the order the threads first compared (read as by_thread()).
+  /// in the order the threads first compared (read it when no thread compares: after the step's
+  /// parallel loops have ended).
   static std::vector<long long> in_step_by_thread() {
     std::vector<long long> counts;
     for (int k = 0; k < used(); ++k)
@@ -81,7 +75,7 @@ struct EventOrder {
   /// times the least that any of the `threads` busiest threads made in it, summed. Work-sharing
   /// loops that split their iterations evenly give nearly all of them; a round made by one thread
   /// (in `single`, say) gives none of its comparisons, however the rounds fall to the threads.
-  /// -1 when the run kept no epochs (the counter was not loaded). Read it as by_thread().
+  /// -1 when the run kept no epochs (the counter was not loaded). Read it as in_step_by_thread().
   static long long balanced(int threads) {
     std::map<long long, std::vector<long long>> by_epoch;
     bool kept = false;
@@ -102,7 +96,7 @@ struct EventOrder {
   }
   /// The later event of every comparison of two events in the step, on every thread, summed
   /// (each event as a 64-bit number): the same for any order of the comparisons and any split
-  /// of them among threads.
+  /// of them among threads. Read it as in_step_by_thread().
   static std::uint64_t later_sum() {
     std::uint64_t sum = 0;
     for (int k = 0; k < used(); ++k) sum += slots()[k].later;
