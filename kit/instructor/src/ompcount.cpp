@@ -44,10 +44,13 @@ Fn next(const char* name) {
   return reinterpret_cast<Fn>(dlsym(RTLD_NEXT, name));
 }
 
-/// Whether the calling thread is thread 0 of its team (libgomp's omp_get_thread_num()).
+/// Whether the calling thread is thread 0 of a team of more than one (libgomp's
+/// omp_get_thread_num() and omp_get_num_threads()): a barrier in serial code (orphaned, outside
+/// any parallel region) or in a team of one synchronises nothing, and is not counted.
 bool first_of_team() {
   static const auto num = next<int (*)()>("omp_get_thread_num");
-  return num == nullptr || num() == 0;
+  static const auto size = next<int (*)()>("omp_get_num_threads");
+  return num == nullptr || size == nullptr || (num() == 0 && size() > 1);
 }
 
 /// Whether this process runs the program named by PLAB_OMP_COUNT_PROGRAM (the sandbox's own
