@@ -2,11 +2,12 @@
 /// \brief libplab-ompcount.so: loaded into a stage 03 program by the grader (LD_PRELOAD), it
 /// counts the OpenMP synchronisations the program runs, outside the program's own code: every
 /// parallel region that libgomp starts, and every barrier and end of a work-sharing loop that
-/// thread 0 of a team passes; and it keeps the loops' clock, plab_omp_epoch, by which the kit's
-/// plab::EventOrder tells which comparisons one loop made. The grader's idea test of stage 03 compares them with the
-/// mutual-earliest rounds the scene needs (`plab-rounds`): a stage that selects its events in
-/// rounds of parallel loops passes at least one a round; one that selects them sequentially after
-/// a parallel phase, or keeps a thread busy beside a sequential program, passes a few a step.
+/// thread 0 of a team of more than one passes; and it keeps the loops' clock, plab_omp_epoch, by
+/// which the kit's plab::EventOrder tells which comparisons one loop made. The grader's idea test
+/// of stage 03 compares them with the mutual-earliest rounds the scene needs (`plab-rounds`): a
+/// stage that selects its events in rounds of parallel loops passes at least one a round; one
+/// that selects them sequentially after a parallel phase, or keeps a thread busy beside a
+/// sequential program, passes a few a step.
 ///
 /// Each entry point is libgomp's own (GCC's OpenMP ABI), found with dlsym(RTLD_NEXT) and called
 /// with the same arguments. The grader gives a secret in PLAB_OMP_COUNT and the program's path in

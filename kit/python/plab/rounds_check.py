@@ -3,18 +3,19 @@ mutual-earliest rounds of parallel loops, or by one thread after a parallel phas
 
   python3 -m plab.rounds_check --program build/bin/plab-run-03-student --kit-bin DIR --plab PLAB
 
-Your stage 03 runs twice on 2 threads (its schedule(runtime) loops on `static,1`), with the kit's counter of OpenMP synchronisations preloaded
-(libplab-ompcount.so: parallel regions started, barriers and ends of work-sharing loops passed; it
-reads libgomp's entry points, never your code): on a scene of N = 8000 at stage 03's grading
-density, then on the same scene with slow speeds (fewer rounds). The kit's plab-rounds says how
-many rounds each scene's steps need. A stage whose rounds are parallel loops passes at least one
-synchronisation a round on the first scene, and at least one fewer a round on the calmer one; a
-stage that selects its events on one thread passes a few a step on both. Its comparisons with
-earlier() (plab::EventOrder, counted by the kit on each thread) must be the rounds' own, as
-plab-rounds makes them, each of the threads making a share. The thresholds are
-stage 03's idea in kit/grade/rubric.json, the grade's own; the grade measures again on hidden
-scenes, and also each thread's share of the CPU time. CTest runs this as stage03.IMPL.Rounds.
-Exit 0: the selection follows the rounds; 1: it does not (or the stage failed); 2: bad use.
+Your stage 03 runs twice on 2 threads (its schedule(runtime) loops on `static,1`), with the kit's
+counter of OpenMP synchronisations preloaded (libplab-ompcount.so: parallel regions started,
+barriers and ends of work-sharing loops passed; it reads libgomp's entry points, never your code):
+on a scene of N = 8000 at stage 03's grading density, then on the same scene with slow speeds
+(fewer rounds). The kit's plab-rounds says how many rounds each scene's steps need. A stage whose
+rounds are parallel loops passes at least one synchronisation a round on the first scene, and at
+least one fewer a round on the calmer one; a stage that selects its events on one thread passes a
+few a step on both. Its comparisons with earlier() (plab::EventOrder, counted by the kit on each
+thread) must be the rounds' own, as plab-rounds makes them, shared evenly by the threads loop by
+loop. The thresholds are stage 03's idea in kit/grade/rubric.json, the grade's own; the grade
+measures again on hidden scenes, and also each thread's share of the CPU time. CTest runs this as
+stage03.IMPL.Rounds. Exit 0: the selection follows the rounds; 1: it does not (or the stage
+failed); 2: bad use.
 """
 import argparse
 import json

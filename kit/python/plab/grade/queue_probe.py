@@ -26,7 +26,8 @@ def compiler_command(cxx, include, probe_dir, out):
 def grade_probe(g, st, idea):
     """Stage 07's queue measured by the grader `g`. Returns (problem or None, what was
     measured)."""
-    cxx, src, probe_dir = g.probe_beside(st, "CXX", "queue_probe.cpp", (g.kit / PROBE).read_text())
+    cxx, src, probe_dir = g.probe_beside(st, "CXX", "queue_probe.cpp",
+                                         (g.kit / PROBE).read_text())
     if cxx is None:
         return "the kit's build names no C++ compiler to compile the queue probe with", ""
     # The kit's library: the one the sandboxed build linked (prebuilt from the kit's sources
