@@ -1552,8 +1552,10 @@ def case_ties():
     """Stage 02 whose heap orders its events by time only (not model.md's whole key): the hidden
     tie scenes must cost it points (hidden-ties: every draw holds a wall-and-pair tie whose pair
     has the lower index, which only the key's kind decides). Stage 07 whose queue compares times
-    only (a heap still, so its idea test passes): the disks hit by two at one instant
-    (hidden-converging, and the public simultaneous-hits) must cost it those points."""
+    only (a heap still, in its own order): the disks hit by two at one instant
+    (hidden-converging, and the public simultaneous-hits) must cost it those points, and the
+    idea test's probe of the queue, which asks the queue's order at equal times too, fails it
+    and says so."""
     name = "redteam-ties"
     shutil.rmtree(scratch / name, ignore_errors=True)
     root = patched(name, "02", "solutions/02-heap", [(
@@ -1579,9 +1581,11 @@ def case_ties():
         check("ties", got.get("score", 1) == 0 and "the reference has" not in got.get("output", ""),
               f"stage 07 with a time-only queue got {got.get('score')} of {got.get('max_score')} "
               f"on {test}: {got.get('output', '')[:200]!r}")
+    # A heap still, in its own order: the queue's probe asks the queue's order too, and names it
     idea = next((t for n, t in tests.items() if n.startswith("07: idea")), {})
-    check("ties", idea.get("status") == "passed",  # a heap still: only the order is wrong
-          f"stage 07 with a time-only queue: its idea test {idea.get('output', 'none')[:200]!r}")
+    check("ties", idea.get("status") == "failed"
+          and "at the same time, the lower particle" in idea.get("output", ""),
+          f"stage 07 with a time-only queue: its idea test {idea.get('output', 'none')[:300]!r}")
 
 
 def case_leaderboard():
