@@ -20,13 +20,6 @@ std::string format_fixed(double v, int digits) {
   return text;
 }
 
-/// A trace as 16 hexadecimal digits (JSON numbers lose a 64-bit integer's low bits).
-std::string format_trace(std::uint64_t trace) {
-  char text[24];
-  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(trace));
-  return text;
-}
-
 /// `v` as "%.3g" (bytes: 1.23e+06).
 std::string format_bytes(double v) {
   char text[64];
@@ -60,13 +53,13 @@ void report(const Options& o, const RunStats& stats) {
         // A stage whose heap is ordered by plab::EventOrder (02): its comparisons on this thread
         // (the steps'), counted and traced; the grader compares them with the kit's heap's
         {"order_comparisons", EventOrder::count()},
-        {"order_trace", format_trace(EventOrder::trace())},
+        {"order_trace", EventOrder::hex(EventOrder::trace())},
         // A stage whose rounds compare with it (03): the comparisons of events in the step by
         // thread, how evenly the threads shared them loop by loop (the kit's OpenMP counter's
         // epochs), and their later events summed; the grader compares them with plab-rounds'
         {"order_step_comparisons", EventOrder::in_step_by_thread()},
         {"order_balanced_comparisons", EventOrder::balanced(threads)},
-        {"order_later_sum", format_trace(EventOrder::later_sum())}};
+        {"order_later_sum", EventOrder::hex(EventOrder::later_sum())}};
     const std::string text = j.dump(2) + "\n";
     std::fputs(text.c_str(), file.get());
     file.commit();

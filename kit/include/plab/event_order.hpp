@@ -19,8 +19,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <map>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -101,6 +103,13 @@ struct EventOrder {
     std::uint64_t sum = 0;
     for (int k = 0; k < used(); ++k) sum += slots()[k].later;
     return sum;
+  }
+  /// A trace or a sum as the runner's report and plab-rounds write it: 16 hexadecimal digits
+  /// (JSON numbers lose a 64-bit integer's low bits).
+  static std::string hex(std::uint64_t v) {
+    char text[24];
+    std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(v));
+    return text;
   }
 
  private:

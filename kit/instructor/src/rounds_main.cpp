@@ -33,15 +33,12 @@ int main(int argc, char** argv) {
       for (int i = 0; i < static_cast<int>(p.size()); ++i) plab::apply_one(scene.box, p, plan, i);
     }
     const std::vector<long long> made = plab::EventOrder::in_step_by_thread();
-    char later[24];
-    std::snprintf(later, sizeof later, "%016llx",
-                  static_cast<unsigned long long>(plab::EventOrder::later_sum()));
     const nlohmann::json j = {{"n", p.size()},
                               {"steps", scene.steps},
                               {"rounds", rounds},
                               {"total", total},
                               {"comparisons", std::accumulate(made.begin(), made.end(), 0LL)},
-                              {"later_sum", later}};
+                              {"later_sum", plab::EventOrder::hex(plab::EventOrder::later_sum())}};
     std::printf("%s\n", j.dump().c_str());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "plab-rounds: %s\n", e.what());
