@@ -1046,6 +1046,48 @@ void step(const Box& box, Particles& p) {
 
 /// Stage 03's entry point"""
 
+# Stage 03 whose rounds run only where it guesses the idea test counts them (COND), and stage 02's
+# heap selects on one thread everywhere else (ORDER: the heap's comparator). Its own rounds keep
+# the idea test's measures; the correctness scenes' comparisons must then be the rounds' too.
+ELSEWHERE_03 = """
+namespace {
+/// The later of two events first, for std::priority_queue (the least on top).
+struct Later {
+  bool operator()(const model::Event& a, const model::Event& b) const { return ORDER; }
+};
+
+/// Stage 02's way: every event in the step into a heap, popped in order, on one thread.
+void heap_step(const Box& box, Particles& p) {
+  const int n = static_cast<int>(p.size());
+  std::priority_queue<model::Event, std::vector<model::Event>, Later> heap;
+  for (int i = 0; i < n; ++i) {
+    const model::Event w = wall_candidate(box, p, i);
+    if (model::in_step(w.t)) heap.push(w);
+    for (int j = i + 1; j < n; ++j) {
+      const model::Event e = pair_candidate(box, p, i, j);
+      if (model::in_step(e.t)) heap.push(e);
+    }
+  }
+  Plan plan;
+  plan.reset(n);
+  while (!heap.empty()) {
+    const model::Event e = heap.top();
+    heap.pop();
+    if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
+  }
+  for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);
+}
+}  // namespace
+
+void step(const Box& box, Particles& p) {
+  if (COND)
+    rounds_step(box, p);
+  else
+    heap_step(box, p);
+}
+
+/// Stage 03's entry point"""
+
 # Stage 07: the earliest event found by a linear scan (O(N) an event, in the queue's own order:
 # the right output), put on top of the heap.
 LINEAR_07 = """    const int k = at_[e.i];
@@ -1373,6 +1415,21 @@ def rounds_03():
     shutil.rmtree(scratch / name, ignore_errors=True)
     stage_folder(scratch / name, "03", "solutions/03-openmp").write_text(PADDED_03)
     gradings.append((name, "03", False))
+    head, entry = "void step(const Box& box, Particles& p) {", "/// Stage 03's entry point"
+    for variant, cond, order, why in (
+            ("where-counted", "&plab_omp_epoch != nullptr", "EventOrder()(b, a)", rounds),
+            ("large-only", "p.size() >= 5000", "model::key_less(b, a)",
+             "made no comparisons with earlier()")):
+        name = f"redteam-rounds-{variant}"
+        if head not in sol03 or entry not in sol03:
+            print(f"SKIP {name}: stage 03's solution changed shape", flush=True)
+            continue
+        shutil.rmtree(scratch / name, ignore_errors=True)
+        stage_folder(scratch / name, "03", "solutions/03-openmp").write_text(
+            sol03.replace(head, "void rounds_step(const Box& box, Particles& p) {")
+            .replace(entry, ELSEWHERE_03.replace("COND", cond).replace("ORDER", order))
+            .replace("#include <omp.h>", "#include <omp.h>\n\n#include <queue>"))
+        gradings.append((name, "03", False, None, why))
     name = "redteam-rounds-burner"
     entry = "/// Stage 03's entry point"
     if "void step(const Box& box, Particles& p) {" in sol03 and entry in sol03:
@@ -1496,7 +1553,9 @@ def case_rounds(sid):
     while the other thread spins (the synchronisations follow the rounds, the CPU time is shared:
     its comparisons are not), the same with the spinner comparing events too, 03 that compares a
     candidate before asking whether its partner is resolved (the right output, not the rounds'
-    comparisons), 03 whose rounds are each made in `single` by whichever thread comes first, 07
+    comparisons), 03 whose rounds are each made in `single` by whichever thread comes first, 03
+    that selects in rounds only where it guesses it is counted (the counter loaded, or 5000
+    particles and more) and with a heap on one thread elsewhere, 07
     with a linear scan for the next event, 07 with a library set beside the given heap, 08 whose
     rank 0 steps everything through gathers and scatters must score nothing on correctness; 03 written as one parallel region with `omp for`
     loops inside (runtime and static schedules) keeps every correctness point."""

@@ -174,13 +174,16 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
             budget = max(limits["min_seconds"],
                          limits["time_multiple"] * self.ref_seconds(st, scene))
             cap = max(limits["output_min_mb"] * 2**20, limits["output_multiple"] * len(expected))
-            report = ["--report", "/plab/out/report.json"] if st.ranks > 1 else []
+            reported = st.ranks > 1 or self.compares_rounds(st)
+            report = ["--report", "/plab/out/report.json"] if reported else []
             run = self.run_program(program, scene, ["--quiet", "--threads", st.threads, "--out",
                                                     "/plab/out/out.txt", *report], budget, cap, st)
             verdict = self.verdict(st, run, scene, expected, how)
-            if verdict is None and st.ranks > 1 and not self.idea_failed.get(st.sid):
-                # the right text (and the idea test passed): did every rank step its slab?
-                verdict = self.ranks_work(st, run, scene, folder / f"ranks-{name}")
+            if verdict is None and reported and not self.idea_failed.get(st.sid):
+                # the right text (and the idea test passed): did every rank step its slab, did
+                # the rounds make their comparisons?
+                verdict = (self.ranks_work(st, run, scene, folder / f"ranks-{name}")
+                           if st.ranks > 1 else self.rounds_compared(st, run, scene))
                 if verdict:  # the idea faked off its test's scene: the folder's points go
                     faked = faked or f"{name}: {verdict}"
             if run.reason and "time limit" in run.reason:
@@ -222,7 +225,7 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
 
     def void_folder(self, st, why):
         """Stage folder st.sid fails its idea after all (`why`: a correctness scene on several
-        ranks, Ideas.ranks_work()): every result of the folder so far counts 0, its idea test
+        ranks, Ideas.ranks_work(), or stage 03's comparisons, Ideas.rounds_compared()): every result of the folder so far counts 0, its idea test
         says why, and later results count 0 too (idea_failed), as when the idea test fails."""
         failed = f"the idea test of stage {st.sid} failed on the correctness scene {why}"
         self.idea_failed[st.sid] = failed

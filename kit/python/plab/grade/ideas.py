@@ -11,6 +11,7 @@ import tempfile
 import time
 
 from plab.grade import heap_probe, queue_probe
+from plab.grade import rounds_count
 from plab.grade.rounds_count import SCHEDULE, RoundsCount
 from plab.grade.build import unbuilt
 from plab.grade.run import stderr_tail
@@ -35,7 +36,8 @@ class Ideas:
                    by the kit's preloaded libplab-ompcount.so, the rounds from plab-rounds), and
                    (`min_balanced_comparisons`) its comparisons with plab::EventOrder are the
                    rounds' (plab-rounds'), that share of them split evenly among the threads
-                   loop by loop;
+                   loop by loop (and, on every correctness scene, the comparisons are the
+                   rounds' there too: rounds_compared());
           ranks:   the stage under mpirun on `ranks` processes: it sent at most
                    `max_bytes_per_particle_step` and more than none (counted by the kit's MPI
                    layer), every rank did `share` of the steps' work outside MPI calls (measured
@@ -361,6 +363,27 @@ class Ideas:
                     f"times). CPU seconds of its ranks' steps outside MPI calls: {shown}. Every "
                     f"rank steps the particles of its own slab, on every scene")
         return None
+
+    @staticmethod
+    def compares_rounds(st):
+        """Whether stage folder st's runs are checked for the rounds' comparisons (stage 03: its
+        idea's min_balanced_comparisons): every graded run then writes the runner's report."""
+        return bool(st.idea) and "min_balanced_comparisons" in st.idea
+
+    def rounds_compared(self, st, run, scene):
+        """None, or why a stage 03 run that printed the reference's text still fails: its
+        comparisons with earlier() (the runner's report) must be those of the kit's rounds on
+        this scene (plab-rounds), on every scene, not only where the idea test counts them. So a
+        stage that selects in rounds only on large scenes, or only when the idea test's counter
+        is loaded, and otherwise (a heap, a scan) another way, loses those scenes."""
+        counted = rounds_count.made_and_later(run.read_output("report.json"))
+        if counted is None:
+            return "the output is right, but its run left no report of its comparisons"
+        made, later = counted
+        hint = f"{st.idea['hint'][:1].upper()}{st.idea['hint'][1:]}"
+        problem = rounds_count.not_the_rounds(sum(made), later,
+                                              rounds_count.plan(self.kit_bin, scene), hint)
+        return f"the output is right, but {problem}" if problem else None
 
     def work_shared(self, idea, run, text):
         """(problem or None, text) of a watched run: who did the work, threads or ranks."""

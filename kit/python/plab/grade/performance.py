@@ -5,7 +5,7 @@ import os
 import shutil
 import statistics
 
-from plab.grade import leaderboard
+from plab.grade import leaderboard, rounds_count
 from plab.grade.ideas import unguessable
 
 
@@ -31,6 +31,8 @@ class Performance:
         shutil.copyfile(kit_prog, ref_prog)  # may not read the kit's build folder
         os.chmod(ref_prog, 0o755)
         args = ["--quiet", "--threads", st.threads, "--out", "/plab/out/out.txt"]
+        if self.compares_rounds(st):  # stage 03: the rounds' comparisons, the reference's alike
+            args += ["--report", "/plab/out/report.json"]
         cap = limits["output_min_mb"] * 2**20
         # Runs alternate (reference, submission, ...) so that a change in the machine's load
         # falls on both alike; the reference runs in the same sandbox, paying its costs alike.
@@ -67,6 +69,11 @@ class Performance:
             expected = r.read_output()
             if not expected:
                 raise RuntimeError(f"the reference wrote no output on {moved}")
+            own_counts = None
+            if self.compares_rounds(st):  # the kit's rounds' comparisons on this moved scene
+                own_counts = rounds_count.made_and_later(r.read_output("report.json"))
+                if own_counts is None:
+                    raise RuntimeError(f"the reference wrote no report on {moved}")
             r = self.run_program(program, moved, args,
                                  max(limits["min_seconds"], limits["time_multiple"] * max(ref)),
                                  cap, st, watch=watch)
@@ -82,7 +89,25 @@ class Performance:
                                  "the timed run's output differs from the reference's (the "
                                  "timed scene is a hidden one: every run must be right)")
                 return
+            if own_counts is not None and (problem := self.timed_rounds(st, r, own_counts)):
+                self.results.add(test, 0, perf["points"], False, problem)
+                return
             mine.append(r.seconds)
+
+    @staticmethod
+    def timed_rounds(st, run, own_counts):
+        """None, or why stage 03's timed run fails though its output is right: its comparisons
+        with earlier() are not the kit's solution's on the same scene (rounds_count: the rounds
+        make the same ones however scheduled), so a stage cannot select another way where it is
+        timed."""
+        counted = rounds_count.made_and_later(run.read_output("report.json"))
+        if counted is None:
+            return "the timed run left no report of its comparisons (the kit's runner writes it)"
+        made, later = counted
+        own = {"comparisons": sum(own_counts[0]), "later_sum": own_counts[1]}
+        hint = f"{st.idea['hint'][:1].upper()}{st.idea['hint'][1:]}"
+        problem = rounds_count.not_the_rounds(sum(made), later, own, hint)
+        return f"the timed run's output is right, but {problem}" if problem else None
 
     def score_performance(self, st, test, ref, mine):
         perf, s = self.rubric["performance"], self.rubric["performance"]["scene"]

@@ -22,6 +22,7 @@ one at a time in `single`, fails here.
 """
 import json
 import os
+import pathlib
 import secrets
 import shutil
 import subprocess
@@ -31,6 +32,54 @@ import subprocess
 SCHEDULE = "static,1"
 LIBRARY = "libplab-ompcount.so"
 INSIDE = "/plab/ompcount.so"  # where the sandbox (bubblewrap) shows the library
+
+
+def plan(kit_bin, scene):
+    """plab-rounds' account of `scene` (JSON: the rounds of each step, their comparisons of two
+    events in the step and the sum of the later event of each): the kit's own rounds."""
+    tool = pathlib.Path(kit_bin) / "plab-rounds"
+    r = subprocess.run([tool, scene], capture_output=True, text=True)
+    if r.returncode != 0:
+        raise RuntimeError(f"plab-rounds failed on {scene}: {r.stderr}")
+    return json.loads(r.stdout)
+
+
+def made_and_later(report_text):
+    """(comparisons of two events in the step by thread, the sum of their later events) of a run's
+    report.json (the kit's runner), or None when the run left none."""
+    try:
+        report = json.loads(report_text or "")
+        return [int(x) for x in report["order_step_comparisons"]], str(report["order_later_sum"])
+    except (ValueError, KeyError, TypeError):
+        return None
+
+
+def not_the_rounds(total, later, rounds, hint):
+    """None when `total` comparisons of two events in the step whose later events sum to `later`
+    are those of `rounds` (plan(), or a report of the kit's solution on the same scene: the same
+    keys), else why not, for the student."""
+    need = int(rounds["comparisons"])
+    if total == need and later == rounds["later_sum"]:
+        return None
+    where = (f"the {rounds['total']} rounds of its {rounds['steps']} steps"
+             if "total" in rounds else "the kit's rounds on the same scene")
+    if total == 0:
+        return (f"its selection made no comparisons with earlier() (plab::EventOrder, given in "
+                f"step.cpp), where {where} make {need}: a round compares each unresolved "
+                f"particle's wall (when in the step) and each candidate whose partner is "
+                f"unresolved with earlier(a, b), which the kit counts on each thread; "
+                f"model::key_less() or comparing the times yourself is not counted. {hint}")
+    what = (f"{total} comparisons of two events in the step" if total != need else
+            f"{total} comparisons of two events in the step, as many, but not of the same events")
+    why = ("more: are events of resolved partners compared, or resolved particles searched "
+           "again?" if total > need else
+           "fewer: is a candidate left out (every pair event of exercise 1 with t < 1 is one, "
+           "pruned by nothing), or a wall not compared?" if total < need else
+           "are the events compared the particles' own, keyed as the model keys them?")
+    return (f"its comparisons with earlier() are not the mutual-earliest rounds': it made {what}; "
+            f"{where} make {need} (each round, each unresolved particle compares its wall, when "
+            f"in the step, and each candidate whose partner is still unresolved, once, keeping "
+            f"the earlier; a particle resolved in an earlier round compares nothing); {why} {hint}")
 
 
 class RoundsCount:
@@ -51,10 +100,7 @@ class RoundsCount:
             shutil.copyfile(lib, self.lib)
             os.chmod(self.lib, 0o755)
         self.secret = secrets.token_hex(16)
-        r = subprocess.run([tool, scene], capture_output=True, text=True)
-        if r.returncode != 0:
-            raise RuntimeError(f"plab-rounds failed on {scene}: {r.stderr}")
-        self.rounds = json.loads(r.stdout)
+        self.rounds = plan(kit_bin, scene)
 
     def mounts(self):
         return {INSIDE: self.lib}
@@ -105,36 +151,18 @@ class RoundsCount:
         `threads` threads loop by loop (EventOrder::balanced(): in each epoch of the preloaded
         counter's clock, `threads` times the least that a thread made)."""
         hint = f"{idea['hint'][:1].upper()}{idea['hint'][1:]}"
-        try:
-            report = json.loads(run.read_output("report.json") or "")
-            made = [int(x) for x in report["order_step_comparisons"]]
-            later = str(report["order_later_sum"])
-        except (ValueError, KeyError, TypeError):
+        report_text = run.read_output("report.json")
+        counted = made_and_later(report_text)
+        if counted is None:
             return "its run left no report of its comparisons (the kit's runner writes it)", text
-        total, need = sum(made), int(self.rounds["comparisons"])
-        text += f"; {total} comparisons of events in the step ({need} in the rounds)"
-        if total == 0:
-            return (f"its selection made no comparisons with earlier() (plab::EventOrder, given "
-                    f"in step.cpp), where the scene's {self.rounds['total']} rounds make {need}: "
-                    f"a round compares each unresolved particle's wall (when in the step) and "
-                    f"each candidate whose partner is unresolved with earlier(a, b), which the "
-                    f"kit counts on each thread; model::key_less() or comparing the times "
-                    f"yourself is not counted. {hint}"), text
-        if total != need or later != self.rounds["later_sum"]:
-            what = (f"{total} comparisons of two events in the step" if total != need else
-                    f"{total} comparisons of two events in the step, as many, but not of the "
-                    f"same events")
-            why = ("more: are events of resolved partners compared, or resolved particles "
-                   "searched again?" if total > need else
-                   "fewer: is a candidate left out (every pair event of exercise 1 with t < 1 is "
-                   "one, pruned by nothing), or a wall not compared?" if total < need else
-                   "are the events compared the particles' own, keyed as the model keys them?")
-            return (f"its comparisons with earlier() are not the mutual-earliest rounds': it made "
-                    f"{what}; the {self.rounds['total']} rounds of its "
-                    f"{self.rounds['steps']} steps make {need} (each round, each unresolved "
-                    f"particle compares its wall, when in the step, and each candidate whose "
-                    f"partner is still unresolved, once, keeping the earlier; a particle "
-                    f"resolved in an earlier round compares nothing); {why} {hint}"), text
+        made, later = counted
+        report = json.loads(report_text)
+        total = sum(made)
+        text += (f"; {total} comparisons of events in the step ({self.rounds['comparisons']} in "
+                 f"the rounds)")
+        problem = not_the_rounds(total, later, self.rounds, hint)
+        if problem:
+            return problem, text
         shares = sorted(made, reverse=True) + [0] * max(0, threads - len(made))
         shown = " / ".join(f"{100 * x / total:.0f}%" for x in shares)
         text += f", by thread {shown}"
