@@ -1376,6 +1376,11 @@ def single_rounds_03(sol03):
             "      more = open;\n#pragma omp barrier\n    }\n  }\n\n")
 
 
+#: Stage 03's timed scene's N (rubric.json's performance scene), and what its failure says.
+PERF_N = json.loads((kit / "kit/grade/rubric.json").read_text())["performance"]["scene"]["n"]
+TIMED = "the timed run's output is right, but"
+
+
 def rounds_03():
     """Stage 03's gradings of case rounds-03: (name, stage key, must pass the idea test)."""
     gradings = []
@@ -1419,7 +1424,8 @@ def rounds_03():
     for variant, cond, order, why in (
             ("where-counted", "&plab_omp_epoch != nullptr", "EventOrder()(b, a)", rounds),
             ("large-only", "p.size() >= 5000", "model::key_less(b, a)",
-             "made no comparisons with earlier()")):
+             "made no comparisons with earlier()"),
+            ("timed-other", f"p.size() != {PERF_N}", "model::key_less(b, a)", TIMED)):
         name = f"redteam-rounds-{variant}"
         if head not in sol03 or entry not in sol03:
             print(f"SKIP {name}: stage 03's solution changed shape", flush=True)
@@ -1429,7 +1435,7 @@ def rounds_03():
             sol03.replace(head, "void rounds_step(const Box& box, Particles& p) {")
             .replace(entry, ELSEWHERE_03.replace("COND", cond).replace("ORDER", order))
             .replace("#include <omp.h>", "#include <omp.h>\n\n#include <queue>"))
-        gradings.append((name, "03", False, None, why))
+        gradings.append((name, "03", why == TIMED, None, why))
     name = "redteam-rounds-burner"
     entry = "/// Stage 03's entry point"
     if "void step(const Box& box, Particles& p) {" in sol03 and entry in sol03:
@@ -1558,7 +1564,9 @@ def case_rounds(sid):
     particles and more) and with a heap on one thread elsewhere, 07
     with a linear scan for the next event, 07 with a library set beside the given heap, 08 whose
     rank 0 steps everything through gathers and scatters must score nothing on correctness; 03 written as one parallel region with `omp for`
-    loops inside (runtime and static schedules) keeps every correctness point."""
+    loops inside (runtime and static schedules) keeps every correctness point; and 03 that
+    selects with a heap only on the timed scene's N keeps its correctness points but none of the
+    performance test's."""
     gradings = {"03": rounds_03, "07": rounds_07, "08": rounds_08}[sid]()
     for name, key, honest, *variant in gradings:
         rubric, why = variant or (None, None)
@@ -1571,7 +1579,13 @@ def case_rounds(sid):
         broken = [t["output"] for t in mine.values() if unbuilt(t["output"])]
         said = (idea or {}).get("output", "none")[:400]
         check("rounds", bool(mine) and not broken, f"{name} was graded and compiles: {broken[:1]}")
-        if honest:
+        timed = tests.get(f"{key}: performance", {})
+        if honest and why == TIMED:  # right everywhere but where it is timed: no speed points
+            check("rounds", idea is not None and idea["status"] == "passed" and got == most and
+                  timed.get("score") == 0 and TIMED in timed.get("output", ""),
+                  f"{name} scored {got} of {most} on correctness, {timed.get('score')} on "
+                  f"performance: {timed.get('output', 'not run')[:300]!r}")
+        elif honest:
             check("rounds", idea is not None and idea["status"] == "passed" and got == most,
                   f"{name} (honest) scored {got} of {most}; its idea test: {said!r}")
         else:
