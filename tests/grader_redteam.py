@@ -1422,7 +1422,7 @@ def rounds_03():
     gradings.append((name, "03", False))
     head, entry = "void step(const Box& box, Particles& p) {", "/// Stage 03's entry point"
     for variant, cond, order, why in (
-            ("where-counted", "&plab_omp_epoch != nullptr", "EventOrder()(b, a)", rounds),
+            ("where-counted", 'std::getenv("LD_PRELOAD") != nullptr', "EventOrder()(b, a)", rounds),
             ("large-only", "p.size() >= 5000", "model::key_less(b, a)",
              "made no comparisons with earlier()"),
             ("timed-other", f"p.size() != {PERF_N}", "model::key_less(b, a)", TIMED)):
@@ -1434,7 +1434,7 @@ def rounds_03():
         stage_folder(scratch / name, "03", "solutions/03-openmp").write_text(
             sol03.replace(head, "void rounds_step(const Box& box, Particles& p) {")
             .replace(entry, ELSEWHERE_03.replace("COND", cond).replace("ORDER", order))
-            .replace("#include <omp.h>", "#include <omp.h>\n\n#include <queue>"))
+            .replace("#include <omp.h>", "#include <omp.h>\n\n#include <cstdlib>\n#include <queue>"))
         gradings.append((name, "03", why == TIMED, None, why))
     name = "redteam-rounds-burner"
     entry = "/// Stage 03's entry point"
@@ -1560,7 +1560,7 @@ def case_rounds(sid):
     its comparisons are not), the same with the spinner comparing events too, 03 that compares a
     candidate before asking whether its partner is resolved (the right output, not the rounds'
     comparisons), 03 whose rounds are each made in `single` by whichever thread comes first, 03
-    that selects in rounds only where it guesses it is counted (the counter loaded, or 5000
+    that selects in rounds only where it guesses it is counted (a library preloaded, or 5000
     particles and more) and with a heap on one thread elsewhere, 07
     with a linear scan for the next event, 07 with a library set beside the given heap, 08 whose
     rank 0 steps everything through gathers and scatters must score nothing on correctness; 03 written as one parallel region with `omp for`

@@ -49,6 +49,11 @@ CASES = [
     ("the C library's clock replaced (a red-team stage 08 hid its work so)", "step.cpp.o",
      '#include <time.h>\nextern "C" int clock_gettime(clockid_t, timespec* t) { t->tv_sec = 0; t->tv_nsec = 0; return 0; }',
      "defines clock_gettime, a function with a C name"),
+    ("the OpenMP counter's clock defined (its comparisons filed in one loop)", "step.cpp.o",
+     '#include <atomic>\nextern "C" std::atomic<long long> plab_omp_epoch{0};', "defines plab_omp_epoch"),
+    ("asks whether the OpenMP counter is loaded (rounds only where measured)", "step.cpp.o",
+     '#include <atomic>\nextern "C" __attribute__((weak)) std::atomic<long long> plab_omp_epoch;\n'
+     'bool counted() { return &plab_omp_epoch != nullptr; }', "uses plab_omp_epoch"),
     ("a helper of its own with a C name", "helpers.cpp.o", 'extern "C" int add_one(int x) { return x + 1; }',
      "helpers.cpp defines add_one, a function with a C name"),
     ("a global variable and a C++ function", "step.cpp.o", "int calls = 0;\nint f() { return ++calls; }", None),

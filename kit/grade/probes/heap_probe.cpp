@@ -10,8 +10,8 @@
 /// pushing events at 5, 3, 8, 1, then after one pop); `pop T` for each pop of the run (the time
 /// of the event it removed); `layout OPS T...` every 2000 operations and at the end; and last
 /// `comparisons C PUSHES PUSH_C POPS POP_C LARGEST TRACE` (in all; the pushes and their
-/// comparisons; the pops and theirs; the most items held; EventOrder's trace of them: which
-/// events were compared, in order). Times are printed exactly (C's %a). A heap.hpp whose
+/// comparisons; the pops and theirs; the most items held; EventOrder's trace of every comparison
+/// of the probe, the example's first: which events were compared, in order). Times are printed exactly (C's %a). A heap.hpp whose
 /// exercise is not done throws: its message goes to stderr and the probe exits 3.
 ///
 ///   heap_probe SEED OPS
@@ -52,7 +52,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "heap_probe: OPS must be 1 to 2^20 - 1\n");
     return 2;
   }
-  long long& count = plab::EventOrder::count();
+  // This thread's comparisons since the probe's own heap began (the tallies only grow)
+  long long start = 0;
+  const auto count = [&start] { return plab::EventOrder::count() - start; };
   try {
     {
       Heap h;
@@ -61,8 +63,7 @@ int main(int argc, char** argv) {
       h.pop();
       print_times("example-pop", h);
     }
-    count = 0;
-    plab::EventOrder::trace() = 0;
+    start = plab::EventOrder::count();
     Heap h;
     std::uint64_t state = seed;
     long long pushes = 0, pops = 0, push_count = 0, pop_count = 0;
@@ -70,17 +71,17 @@ int main(int argc, char** argv) {
     char head[32];
     for (long op = 0; op < ops; ++op) {
       state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-      const long long before = count;
+      const long long before = count();
       if (h.empty() || (state >> 33) % 3 != 0) {
         h.push(next_event(state));
         ++pushes;
-        push_count += count - before;
+        push_count += count() - before;
       } else {
         std::printf("pop %a\n", h.top().t);
-        const long long at_top = count;  // top() compares nothing; the pop's own comparisons:
+        const long long at_top = count();  // top() compares nothing; the pop's own comparisons:
         h.pop();
         ++pops;
-        pop_count += count - at_top;
+        pop_count += count() - at_top;
       }
       if (h.size() > largest) largest = h.size();
       if ((op + 1) % 2000 == 0 || op + 1 == ops) {
@@ -88,7 +89,7 @@ int main(int argc, char** argv) {
         print_times(head, h);
       }
     }
-    std::printf("comparisons %lld %lld %lld %lld %lld %zu %016llx\n", count, pushes, push_count,
+    std::printf("comparisons %lld %lld %lld %lld %lld %zu %016llx\n", count(), pushes, push_count,
                 pops, pop_count, largest,
                 static_cast<unsigned long long>(plab::EventOrder::trace()));
   } catch (const std::exception& e) {

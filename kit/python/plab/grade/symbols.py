@@ -13,6 +13,9 @@ counts as not compiling, with the reason):
     GOMP_*, omp_*, kmp_*, __kmpc_*, cuda*, cu* of the driver, cupti*): it would replace the
     library's own, and the kit's layer with it;
   - calls CUPTI (cupti*), the interface the kit's GPU trace is written with;
+  - defines or uses a C name of the kit's own measurements (plab_*: the OpenMP counter's loops'
+    clock, plab_omp_epoch, say), which only the kit's library reads: code that asks whether it
+    is measured could work one way where it is and another elsewhere;
   - makes a system call by its own instructions (inline assembly: `syscall`, `sysenter`,
     `int $0x80`, found by objdump), which names no function for the rules here to read;
   - looks a symbol or a loaded library up by name or address (dlopen, dlsym, dlvsym, dladdr,
@@ -66,6 +69,9 @@ RULES = [
     (re.compile(r"plab_\w+$"), "D",
      "defines {name}, a name of the kit's own measurements (the OpenMP counter's loops' clock, "
      "say): it would replace the kit's; give yours another name", False),
+    (re.compile(r"plab_\w+$"), "U",
+     "uses {name}, a name of the kit's own measurements (the OpenMP counter's loops' clock, say), "
+     "which only the kit reads: a stage's work does not depend on whether it is measured", False),
     (re.compile(r"cupti\w*$"), "U",
      "calls {name}: CUPTI is how the kit traces the GPU's work, not for a stage", False),
     (re.compile(r".*mpi_stage_any_cut"), "U",
