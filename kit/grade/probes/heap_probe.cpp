@@ -7,12 +7,13 @@
 /// it sees; plab.grade.heap_probe judges the text against the kit's own heap's.
 ///
 /// Output, one line each: `example-push T...` and `example-pop T...` (the array's times after
-/// pushing events at 5, 3, 8, 1, then after one pop); `pop T` for each pop of the run (the time
-/// of the event it removed); `layout OPS T...` every 2000 operations and at the end; and last
+/// pushing events at 5, 3, 8, 1, then after one pop); `pop T` for each pop of the run (the time of
+/// the event it removed); `layout OPS T...` every 2000 operations and at the end; and last
 /// `comparisons C PUSHES PUSH_C POPS POP_C LARGEST TRACE` (in all; the pushes and their
-/// comparisons; the pops and theirs; the most items held; EventOrder's trace of every comparison
-/// of the probe, the example's first: which events were compared, in order). Times are printed exactly (C's %a). A heap.hpp whose
-/// exercise is not done throws: its message goes to stderr and the probe exits 3.
+/// comparisons; the pops and theirs; the most items held; EventOrder's trace of every comparison of
+/// the probe, the example's first: which events were compared, in order). Times are printed exactly
+/// (C's %a). A heap.hpp whose exercise is not done throws: its message goes to stderr and the probe
+/// exits 3.
 ///
 ///   heap_probe SEED OPS
 #include <cstdint>

@@ -225,8 +225,9 @@ class Grader(Build, Run, Correctness, Ideas, RaceCheck, Performance):
 
     def void_folder(self, st, why):
         """Stage folder st.sid fails its idea after all (`why`: a correctness scene on several
-        ranks, Ideas.ranks_work(), or stage 03's comparisons, Ideas.rounds_compared()): every result of the folder so far counts 0, its idea test
-        says why, and later results count 0 too (idea_failed), as when the idea test fails."""
+        ranks, Ideas.ranks_work(), or stage 03's comparisons, Ideas.rounds_compared()): every result
+        of the folder so far counts 0, its idea test says why, and later results count 0 too
+        (idea_failed), as when the idea test fails."""
         failed = f"the idea test of stage {st.sid} failed on the correctness scene {why}"
         self.idea_failed[st.sid] = failed
         for t in self.results.tests:

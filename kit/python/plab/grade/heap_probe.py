@@ -240,8 +240,8 @@ def compiler_command(cxx, include, stage_dir, out):
     return [str(cxx), "-std=c++17", "-O2", "-DNDEBUG", "-D_GLIBCXX_ASSERTIONS",
             '-DPLAB_STAGE_ID="02"',
             "-DPLAB_STAGE_NUMBER=2", "-I", str(stage_dir), "-I", str(include),
-            f"{stage_dir}/heap_probe.cpp", str(pathlib.Path(include).parent / "src" / "event_order.cpp"),
-            "-o", str(out)]
+            f"{stage_dir}/heap_probe.cpp",
+            str(pathlib.Path(include).parent / "src" / "event_order.cpp"), "-o", str(out)]
 
 
 def grade_probe(g, st, idea):
