@@ -18,7 +18,9 @@ gives them. Mutual-earliest rounds make the same ones as plab-rounds' (which com
 EventOrder too), however their loops are scheduled and their candidates ordered; and loops
 shared by the team split each loop's comparisons evenly among the threads. A selection on one
 thread, empty barriers beside it, a thread that burns CPU or compares for show, or rounds done
-one at a time in `single`, fails here.
+one at a time in `single`, fails here. The comparisons are also asked of every other graded run
+(plan(), not_the_rounds(): each correctness scene against plab-rounds, each timed run against the
+kit's solution on the same scene), so that no scene is selected another way.
 """
 import json
 import os
