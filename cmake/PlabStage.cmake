@@ -151,6 +151,12 @@ function(plab_add_stage)
   # PLAB_STAGE_NUMBER: kit headers hide from a stage what its own exercise writes (stage 04: the
   # device arrays' copies and DeviceParticles, its exercise 1).
   target_compile_definitions(${lib} PRIVATE PLAB_STAGE_ID="${id}" PLAB_STAGE_NUMBER=${number})
+  # No NVTX in a stage's CUDA code: CUB's ranges start NVTX's loader, which calls dlopen and dlsym
+  # from the stage's own objects. Without it a stage's objects call neither, and the grader
+  # refuses them in CUDA objects as in C++ ones (a student's trial reached popen through dlsym in
+  # a host function of step.cu).
+  target_compile_definitions(${lib} PRIVATE
+                             $<$<COMPILE_LANGUAGE:CUDA>:CCCL_DISABLE_NVTX NVTX_DISABLE>)
   if(impl STREQUAL "solution" AND IS_DIRECTORY ${PROJECT_SOURCE_DIR}/stages/${folder})
     # A given file that the exercise leaves as it is lives once, in the starting point
     # (stages/NN-name): a solution folder holds only the files the student changes, and finds the

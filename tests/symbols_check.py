@@ -59,8 +59,9 @@ CASES = [
     ("a global variable and a C++ function", "step.cpp.o", "int calls = 0;\nint f() { return ++calls; }", None),
     ("clang's own helper (a noexcept function's terminate, in the TSan build)", "step.cpp.o",
      'extern "C" __attribute__((weak, visibility("hidden"))) void __clang_call_terminate(void*) {}', None),
-    ("dlsym in a CUDA object (the runtime's start-up code)", "step.cu.o",
-     '#include <dlfcn.h>\nvoid* f() { return dlsym(RTLD_NEXT, "x"); }', None),
+    ("dlsym in a host function of a CUDA object (popen reached without its name: a student's trial)",
+     "step.cu.o", '#include <dlfcn.h>\nvoid* f() { return dlsym(RTLD_DEFAULT, "po" "pen"); }',
+     "step.cu calls dlsym"),
 ]
 
 
@@ -155,8 +156,9 @@ GROUP_CASES = [
      'void* f() { return reinterpret_cast<void*>(&plab::load_scene); }', "opens no file"),
     ("a function of its own named like a reader", "step.cpp.o",
      'namespace mine { int read_file_count(int); }\nint f() { return mine::read_file_count(2); }', None),
-    ("dlopen in a CUDA object (NVTX's start-up code, through CUB: stage 06 refuses files)", "step.cu.o",
-     '#include <dlfcn.h>\nvoid* f() { return dlopen("libnvToolsExt.so", RTLD_LAZY); }', None),
+    ("dlopen in a CUDA object (the kit compiles CUDA without NVTX, whose loader called it)",
+     "step.cu.o", '#include <dlfcn.h>\nvoid* f() { return dlopen("libnvToolsExt.so", RTLD_LAZY); }',
+     "step.cu calls dlopen"),
     ("the kit's entry points (kit/mpi/stage_entry.cpp) are the kit's", "stage_entry.cpp.o",
      '#include <fstream>\nvoid f() { std::ofstream("x") << 1; }', None),
 ]

@@ -19,9 +19,12 @@ counts as not compiling, with the reason):
   - makes a system call by its own instructions (inline assembly: `syscall`, `sysenter`,
     `int $0x80`, found by objdump), which names no function for the rules here to read;
   - looks a symbol or a loaded library up by name or address (dlopen, dlsym, dlvsym, dladdr,
-    dl_iterate_phdr) from C++ code: the only way left to reach a
-    library's function without naming it. CUDA objects (*.cu.o) are left out of this rule: the
-    CUDA runtime's own start-up code, compiled into every one, calls them;
+    dl_iterate_phdr): the only way left to reach a library's function without naming it. In C++
+    and CUDA objects alike: the kit compiles a stage's CUDA code without NVTX
+    (cmake/PlabStage.cmake: CUB's NVTX ranges would start NVTX's loader, which calls dlopen and
+    dlsym from the stage's own objects), so none of the kit's calls them (a student's trial
+    reached popen through dlsym in a host function of step.cu when CUDA objects were left out of
+    this rule);
   - on MPI (stage 08), calls an MPI function that kit/mpi neither counts nor refuses (it defines
     its own MPI_Send, MPI_Alltoallv, ... which count the bytes, and MPI_Win_create, ... which
     stop the run) and that is not in NO_DATA, the calls that move no data of the stage between
@@ -57,29 +60,28 @@ import re
 import subprocess
 import sys
 
-# (pattern, kind of symbol: "U" undefined (called) or "D" defined and global, reason, whether
-# CUDA objects are left out)
+# (pattern, kind of symbol: "U" undefined (called) or "D" defined and global, reason)
 RULES = [
     (re.compile(r"PMPI_\w+$"), "U",
      "calls {name}, the MPI profiling interface, which passes by the kit's count of the bytes "
-     "the ranks send: call {plain} (kit/mpi counts it, then calls {name} itself)", False),
+     "the ranks send: call {plain} (kit/mpi counts it, then calls {name} itself)"),
     (re.compile(r"(P?MPI_|GOMP_|omp_|kmp_|__kmpc_|cupti|cuda[A-Z]|cu[A-Z])\w*$"), "D",
      "defines {name}, a function of the MPI, OpenMP or CUDA libraries: it would replace the "
-     "library's own (and the kit's measurement of it); give your function another name", False),
+     "library's own (and the kit's measurement of it); give your function another name"),
     (re.compile(r"plab_\w+$"), "D",
      "defines {name}, a name of the kit's own measurements (the OpenMP counter's loops' clock, "
-     "say): it would replace the kit's; give yours another name", False),
+     "say): it would replace the kit's; give yours another name"),
     (re.compile(r"plab_\w+$"), "U",
      "uses {name}, a name of the kit's own measurements (the OpenMP counter's loops' clock, say), "
-     "which only the kit reads: a stage's work does not depend on whether it is measured", False),
+     "which only the kit reads: a stage's work does not depend on whether it is measured"),
     (re.compile(r"cupti\w*$"), "U",
-     "calls {name}: CUPTI is how the kit traces the GPU's work, not for a stage", False),
+     "calls {name}: CUPTI is how the kit traces the GPU's work, not for a stage"),
     (re.compile(r".*mpi_stage_any_cut"), "U",
      "calls the instructor's engine's driver (mpi_stage_any_cut), which does not check that each "
-     "rank owns its slab's particles: call plab::dist::mpi_stage()", False),
+     "rank owns its slab's particles: call plab::dist::mpi_stage()"),
     (re.compile(r"(dlopen|dlsym|dlvsym|dlmopen|dladdr|dladdr1|dlinfo|dl_iterate_phdr|_r_debug)$"),
      "U", "calls {name}: looking functions or loaded libraries up by name or address passes by "
-     "the kit's measurements; call them by name in the code", True),
+     "the kit's measurements; call them by name in the code"),
 ]
 GLOBAL = set("TWDBRVGSiu")  # nm -P types of a global symbol the object defines
 # nm -P types of a symbol the object uses and does not define: undefined, or weak undefined (a
@@ -117,7 +119,7 @@ CALL_GROUPS = {
         r"tmpfile64|truncate|ftruncate|rename|unlink|syscall|dup|dup2|dup3|mprotect|"
         r"pkey_mprotect|process_vm_readv|process_vm_writev|opendir|fdopendir)$"
         # the C library's other doors to a file (__open_2, _IO_fopen, fts_open, __mmap, ...);
-        # not dlopen (RULES refuses it, but in CUDA objects, whose NVTX start-up code calls it)
+        # (not dlopen: RULES refuses it, with its own reason)
         r"|(?!_Z)(?!dl)\w*(open|mmap)\w*$"
         r"|.*(basic_ofstream|basic_ifstream|basic_fstream|basic_filebuf|St10filesystem).*"
         # the kit's own functions that read or write files: a red-team stage 08 read the scene on
@@ -200,11 +202,11 @@ def problems(nm_lines, mpi_kit=None, refuse_calls=()):
                 said.add((source, group[0]))
                 found.append(f"{source} " + group[2].format(name=demangled(name)))
             continue
-        for pattern, want, reason, not_cuda in RULES:
+        for pattern, want, reason in RULES:
             if not pattern.match(name) or ((kind in UNDEFINED) == (want == "D")):
                 continue
-            if (want == "D" and kind not in GLOBAL) or (not_cuda and member.endswith(".cu.o")):
-                continue  # a local symbol replaces nothing; CUDA's start-up code calls dlsym
+            if want == "D" and kind not in GLOBAL:
+                continue  # a local symbol replaces nothing
             plain = name[1:] if name.startswith("PMPI_") else name
             found.append(f"{source} " + reason.format(name=name, plain=plain))
             break
