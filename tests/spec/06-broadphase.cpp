@@ -44,6 +44,17 @@ TEST(Stage06Spec, AFastDiskFindsItsPartnerInAFarCell) {
   EXPECT_STATE(expected, run({100, 1}, start));
 }
 
+// The same pair the other way round: the fast disk now has the higher index (401), so the pair is
+// found only if the faster particle of a pair searches for it whatever their indices (a search
+// that tests a pair only from its lower index, 400 at rest here, with 3 x 3 cells, misses it).
+// Exchange: v401 = 0 at x = 26.5, v400 = 86; on 0.75: x400 = 93.
+TEST(Stage06Spec, AFastDiskOfHigherIndexFindsItsPartner) {
+  const plab::Particles start = fine_lattice_and({{28.5, 50, 0, 0}, {5, 50, 86, 0}});
+  plab::Particles expected = fine_lattice_and({{93, 50, 86, 0}, {26.5, 50, 0, 0}});
+  expected.pc[400] = expected.pc[401] = 1;
+  EXPECT_STATE(expected, run({100, 1}, start));
+}
+
 // The overlap rule holds in the grid: two disks 1 apart, moving apart, meet at time 0 (t1 = -1.5,
 // t2 = 0.5) and cross: 44 -> 45, 45 -> 44.
 TEST(Stage06Spec, AnOverlappingPairMovingApartIsFound) {
