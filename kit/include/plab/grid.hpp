@@ -108,6 +108,9 @@ inline Grid choose(const Box& box, const std::vector<double>& speed2,
   const double slabs = std::ceil(alpha * std::sqrt(std::max(active, 1)) * v_cut / box.L);
   g.slabs = static_cast<int>(std::clamp(slabs, 1.0, 256.0));
   g.half = 0.5 / g.slabs;
+  // The cell side: the bound above for two particles of speed v_cut (reach, then one margin for
+  // the rounded midpoints), and one margin more of slack for the cells' own arithmetic. That slack
+  // is the grid's: a search's distance is the bound, not the cell side.
   const double cell = (g.reach + 2 * g.margin + 2 * g.half * v_cut) * (1 + 1e-9);
   const int most = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(active))));
   g.side = std::clamp(static_cast<int>(std::min(std::floor(box.L / cell), 1e9)), 1, most);
