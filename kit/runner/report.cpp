@@ -6,6 +6,7 @@
 
 #include "plab/event_order.hpp"
 #include "plab/io.hpp"
+#include "plab/plan.hpp"
 #include "plab/runtime.hpp"
 #include "runner.hpp"
 
@@ -59,7 +60,9 @@ void report(const Options& o, const RunStats& stats) {
         // epochs), and their later events summed; the grader compares them with plab-rounds'
         {"order_step_comparisons", EventOrder::in_step_by_thread()},
         {"order_balanced_comparisons", EventOrder::balanced(threads)},
-        {"order_later_sum", EventOrder::hex(EventOrder::later_sum())}};
+        {"order_later_sum", EventOrder::hex(EventOrder::later_sum())},
+        // plab::pair_candidate()'s calls on every thread (stage 06's spec: a broad phase's few)
+        {"pair_tests", pair_tests()}};
     const std::string text = j.dump(2) + "\n";
     std::fputs(text.c_str(), file.get());
     file.commit();

@@ -15,7 +15,7 @@
 ///   threads shared them loop by loop (balanced(), by the kit's OpenMP counter's clock): a
 ///   selection on one thread, or a round in `single`, makes each loop's on one thread.
 ///
-/// The tallies live in the kit's library (kit/src/event_order.cpp), out of this header: a
+/// The tallies live in the kit's library (kit/src/tallies.cpp), out of this header: a
 /// comparison adds to them, and nothing else a stage can name writes them.
 #pragma once
 

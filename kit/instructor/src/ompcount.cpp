@@ -24,8 +24,8 @@
 #include <cstdlib>
 #include <cstring>
 
-/// The loops' clock that plab::EventOrder reads (kit/src/event_order.cpp, a weak reference: absent,
-/// it keeps no epochs): one more as each parallel region starts and ends and as thread 0 of a team
+/// The loops' clock that plab::EventOrder reads (kit/src/tallies.cpp, a weak reference: absent, it
+/// keeps no epochs): one more as each parallel region starts and ends and as thread 0 of a team
 /// leaves a barrier or the end of a work-sharing loop, so that the comparisons one loop makes share
 /// an epoch and the next loop's, or serial code's after it, do not.
 extern "C" {

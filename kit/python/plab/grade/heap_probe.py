@@ -234,14 +234,14 @@ def run_probe(probe, seed, ops, timeout=60):
 def compiler_command(cxx, include, stage_dir, out):
     """The probe compiled beside the stage's heap.hpp in `stage_dir` (the stage build's own flags
     and definitions, cmake/PlabStage.cmake: a header cannot tell the probe from the stage), with
-    the kit's EventOrder tallies (kit/src/event_order.cpp, beside `include`)."""
+    the kit's EventOrder tallies (kit/src/tallies.cpp, beside `include`)."""
     # _GLIBCXX_ASSERTIONS: a read past the array's end (a child's bound off by one) stops the
     # probe with the library's message, where it would read a stale copy and pass
     return [str(cxx), "-std=c++17", "-O2", "-DNDEBUG", "-D_GLIBCXX_ASSERTIONS",
             '-DPLAB_STAGE_ID="02"',
             "-DPLAB_STAGE_NUMBER=2", "-I", str(stage_dir), "-I", str(include),
             f"{stage_dir}/heap_probe.cpp",
-            str(pathlib.Path(include).parent / "src" / "event_order.cpp"), "-o", str(out)]
+            str(pathlib.Path(include).parent / "src" / "tallies.cpp"), "-o", str(out)]
 
 
 def grade_probe(g, st, idea):

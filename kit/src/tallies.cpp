@@ -1,7 +1,10 @@
-/// \file event_order.cpp
-/// \brief plab::EventOrder's tallies (event_order.hpp): one a thread, on a cache line of its own,
-/// kept here in the kit's library so that a stage's code reaches them only by comparing events.
+/// \file tallies.cpp
+/// \brief What the kit counts of a stage's work, one tally a thread on a cache line of its own:
+/// plab::EventOrder's comparisons (event_order.hpp) and the pair tests of plab::pair_candidate()
+/// (plan.hpp). Kept here in the kit's library, so that a stage's code reaches them only by
+/// comparing events and testing pairs.
 #include "plab/event_order.hpp"
+#include "plab/plan.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -28,6 +31,7 @@ struct alignas(64) Tally {
   std::uint64_t later = 0;                      //!< their later events, summed
   long long epoch = -1;                         //!< the loops' clock at the last of them
   long long in_epoch = 0;                       //!< how many of them in that epoch
+  long long pair_tests = 0;                     //!< pair_candidate() calls
   std::vector<std::pair<long long, long long>> runs;  //!< (epoch, how many) of earlier epochs
 
   /// One more of them, in `now`'s epoch.
@@ -122,6 +126,14 @@ long long EventOrder::balanced(int threads) {
 std::uint64_t EventOrder::later_sum() {
   std::uint64_t sum = 0;
   for (int k = 0; k < used(); ++k) sum += slots()[k].later;
+  return sum;
+}
+
+long long* detail::pair_tests_here() { return &mine().pair_tests; }
+
+long long pair_tests() {
+  long long sum = 0;
+  for (int k = 0; k < used(); ++k) sum += slots()[k].pair_tests;
   return sum;
 }
 
