@@ -1068,14 +1068,7 @@ void heap_step(const Box& box, Particles& p) {
       if (model::in_step(e.t)) heap.push(e);
     }
   }
-  Plan plan;
-  plan.reset(n);
-  while (!heap.empty()) {
-    const model::Event e = heap.top();
-    heap.pop();
-    if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
-  }
-  for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);
+""" + SELECT_03 + """  for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);
 }
 }  // namespace
 
@@ -1269,6 +1262,18 @@ def stage_folder(root, sid, source):
     return dest / "step.cpp"
 
 
+# Stage 02's selection, on one thread: the events in the step popped from a heap in key order, each
+# pair accepted when both its particles are still free (the red team's stage 03 cheats' own).
+SELECT_03 = """  Plan plan;
+  plan.reset(n);
+  while (!heap.empty()) {
+    const model::Event e = heap.top();
+    heap.pop();
+    if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
+  }
+"""
+
+
 # Stage 03 without its rounds, its count padded: the event times in parallel, split into 64
 # work-sharing loops a step (each a real share of the work: the loop ends outnumber the rounds),
 # then stage 02's heap selects the events on one thread. It passes as many synchronisations on a
@@ -1315,14 +1320,7 @@ void step(const Box& box, Particles& p) {
   std::priority_queue<model::Event, std::vector<model::Event>, Later> heap;
   for (auto& v : found)
     for (const auto& e : v) heap.push(e);
-  Plan plan;
-  plan.reset(n);
-  while (!heap.empty()) {
-    const model::Event e = heap.top();
-    heap.pop();
-    if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
-  }
-#pragma omp parallel for schedule(static)
+""" + SELECT_03 + r"""#pragma omp parallel for schedule(static)
   for (int i = 0; i < n; ++i) apply_one(box, p, plan, i);
 }
 
