@@ -1046,6 +1046,18 @@ void step(const Box& box, Particles& p) {
 
 /// Stage 03's entry point"""
 
+# Stage 02's selection, on one thread: the events in the step popped from a heap in key order, each
+# pair accepted when both its particles are still free (the red team's stage 03 cheats' own).
+SELECT_03 = """  Plan plan;
+  plan.reset(n);
+  while (!heap.empty()) {
+    const model::Event e = heap.top();
+    heap.pop();
+    if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
+  }
+"""
+
+
 # Stage 03 whose rounds run only where it guesses the idea test counts them (COND), and stage 02's
 # heap selects on one thread everywhere else (ORDER: the heap's comparator). Its own rounds keep
 # the idea test's measures; the correctness scenes' comparisons must then be the rounds' too.
@@ -1260,18 +1272,6 @@ def stage_folder(root, sid, source):
     dest = root / "stages" / FOLDERS[sid]
     shutil.copytree(kit / source, dest)
     return dest / "step.cpp"
-
-
-# Stage 02's selection, on one thread: the events in the step popped from a heap in key order, each
-# pair accepted when both its particles are still free (the red team's stage 03 cheats' own).
-SELECT_03 = """  Plan plan;
-  plan.reset(n);
-  while (!heap.empty()) {
-    const model::Event e = heap.top();
-    heap.pop();
-    if (!plan.taken(e.lo) && !plan.taken(e.hi)) plan.accept(e);
-  }
-"""
 
 
 # Stage 03 without its rounds, its count padded: the event times in parallel, split into 64
