@@ -127,15 +127,6 @@ inline model::Event wall_candidate(const Box& box, const ParticlesOf<Real>& p, i
 namespace detail {
 /// This thread's count of pair tests, in the kit's tallies (kit/src/tallies.cpp), taken once.
 long long* pair_tests_here();
-/// One more pair test on this thread, in stage 06's code only (PLAB_STAGE_NUMBER, set by the
-/// kit's CMake for a stage's own files): stages 01 to 03 test every pair, and the count's cost
-/// there, most of their pair tests rejected at once, was a fifth of stage 03's time.
-inline void tally_pair_test() {
-#if defined(PLAB_STAGE_NUMBER) && PLAB_STAGE_NUMBER == 6
-  thread_local long long* const mine = pair_tests_here();
-  ++*mine;
-#endif
-}
 }  // namespace detail
 
 /// The pair tests that stage 06's code made so far (its pair_candidate() calls), summed over the
@@ -143,14 +134,31 @@ inline void tally_pair_test() {
 /// broad phase test far fewer than every pair. Read it when no thread tests pairs.
 long long pair_tests();
 
+// Stage 06's own code counts its pair tests (PLAB_STAGE_NUMBER, set by the kit's CMake for a
+// stage's files); no other code does: stages 01 to 03 test every pair, most of them rejected at
+// once, and the count cost stage 03 a fifth of its time. The two pair_candidate()s live in two
+// inline namespaces, so that they are two functions to the linker: a program holding both (a stage
+// 06 program with the kit's oracle) keeps each where it is called.
+#if defined(PLAB_STAGE_NUMBER) && PLAB_STAGE_NUMBER == 6
+#define PLAB_COUNT_PAIR_TESTS 1
+inline namespace counted {
+#else
+#define PLAB_COUNT_PAIR_TESTS 0
+inline namespace uncounted {
+#endif
 /// The pair event of particles `i < j` as a candidate, from their start-of-step state (counted in
 /// stage 06: pair_tests()).
 template <class Real>
 inline model::Event pair_candidate(const Box& box, const ParticlesOf<Real>& p, int i, int j) {
-  detail::tally_pair_test();
+#if PLAB_COUNT_PAIR_TESTS
+  thread_local long long* const mine = detail::pair_tests_here();
+  ++*mine;
+#endif
   return model::pair_event_key(model::pair_time(p.x[i], p.y[i], p.vx[i], p.vy[i], p.x[j], p.y[j],
                                                 p.vx[j], p.vy[j], static_cast<Real>(box.r)),
                                i, j);
 }
+}  // namespace counted or uncounted
+#undef PLAB_COUNT_PAIR_TESTS
 
 }  // namespace plab
