@@ -80,6 +80,15 @@ class Ideas:
                                ranks=idea.get("ranks", st.ranks),
                                extra_ro=counter.mounts() if counter else None)
         problem = self.idea_run_problem(run, what, limit, own_seconds, expected, idea["hint"])
+        probe = heap_probe if "heap_probe" in idea else queue_probe if "queue_probe" in idea else None
+        if problem is not None and probe is not None:
+            # A wrong or failed run of a stage whose idea is a data structure of its own: the
+            # structure driven alone names what is wrong in it, where the scene's first wrong
+            # line does not (an instructor's trial: a heap that sank towards the left child lost
+            # stage 02 with only "its output differs" to say why)
+            found, _ = probe.grade_probe(self, st, idea)
+            if found:
+                problem = f"{found}\n(and so {problem})"
         text = f"the {what}: {run.seconds:.2f} s (the kit's solution: {own_seconds:.2f} s)"
         if problem is None and kind == "ranks" and "max_bytes_per_particle_step" in idea:
             problem, text = self.bytes_sent(idea, run, text, own_report)  # counted: first
