@@ -140,17 +140,15 @@ long long pair_tests();
 // inline namespaces, so that they are two functions to the linker: a program holding both (a stage
 // 06 program with the kit's oracle) keeps each where it is called.
 #if defined(PLAB_STAGE_NUMBER) && PLAB_STAGE_NUMBER == 6
-#define PLAB_COUNT_PAIR_TESTS 1
 inline namespace counted {
 #else
-#define PLAB_COUNT_PAIR_TESTS 0
 inline namespace uncounted {
 #endif
 /// The pair event of particles `i < j` as a candidate, from their start-of-step state (counted in
 /// stage 06: pair_tests()).
 template <class Real>
 inline model::Event pair_candidate(const Box& box, const ParticlesOf<Real>& p, int i, int j) {
-#if PLAB_COUNT_PAIR_TESTS
+#if defined(PLAB_STAGE_NUMBER) && PLAB_STAGE_NUMBER == 6
   thread_local long long* const mine = detail::pair_tests_here();
   ++*mine;
 #endif
@@ -159,6 +157,5 @@ inline model::Event pair_candidate(const Box& box, const ParticlesOf<Real>& p, i
                                i, j);
 }
 }  // namespace counted or uncounted
-#undef PLAB_COUNT_PAIR_TESTS
 
 }  // namespace plab
