@@ -10,8 +10,7 @@ import subprocess
 import tempfile
 import time
 
-from plab.grade import heap_probe, queue_probe
-from plab.grade import rounds_count
+from plab.grade import heap_probe, queue_probe, rounds_count
 from plab.grade.rounds_count import SCHEDULE, RoundsCount
 from plab.grade.build import unbuilt
 from plab.grade.run import stderr_tail
@@ -80,7 +79,8 @@ class Ideas:
                                ranks=idea.get("ranks", st.ranks),
                                extra_ro=counter.mounts() if counter else None)
         problem = self.idea_run_problem(run, what, limit, own_seconds, expected, idea["hint"])
-        probe = heap_probe if "heap_probe" in idea else queue_probe if "queue_probe" in idea else None
+        probe = (heap_probe if "heap_probe" in idea else
+                 queue_probe if "queue_probe" in idea else None)
         if problem is not None and probe is not None:
             # A wrong or failed run of a stage whose idea is a data structure of its own: the
             # structure driven alone names what is wrong in it, where the scene's first wrong
